@@ -1,0 +1,26 @@
+//! # ragdoll-sim
+//!
+//! The simulation core of ragdoll-lab: a plain-data scene description with a Doom 3
+//! articulated-figure reader, two ragdoll methods built from it, and the metrics that
+//! compare them. No GPU, no window: glam and parry3d only.
+//!
+//! - [`scene`]: `SceneDesc`, mass properties, the `.af` and `.md5mesh` readers.
+//! - [`particle`]: the particle (Verlet) ragdoll, `paper` and `improved` solvers.
+//! - [`rigid`]: the impulse-based multibody solver.
+//! - [`method`]: the trait both methods implement for the app.
+//! - [`snapshot`]: what a method shows, the same way for both.
+//! - [`metrics`]: energy gain, joint gap, limit violation, penetration.
+
+#![warn(missing_docs)]
+
+pub mod method;
+pub mod metrics;
+pub mod particle;
+pub mod rigid;
+pub mod scene;
+pub mod snapshot;
+
+pub use glam;
+pub use method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+pub use scene::SceneDesc;
+pub use snapshot::RenderSnapshot;

@@ -1,0 +1,186 @@
+//! The metrics of DESIGN.md ("Metrics"), accumulated over a run of [`Sample`]s.
+//!
+//! Methods report instantaneous values ([`Sample`]); this module owns the definitions
+//! that span time (energy gain against the running minimum, maxima, first sleep) and the
+//! energy scale, so both methods are measured by the same code.
+
+use crate::method::Sample;
+use crate::scene::{scene_mass_props, SceneDesc, SceneError};
+use glam::Vec3;
+
+/// Potential energy that is there to lose (J):
+/// `g · Σ m · max(h₀ − h_rest, 0.1 m)` over dynamic bodies, where h₀ is the initial
+/// centre-of-mass height above the ground and h_rest the body's smallest half extent.
+pub fn energy_scale_j(scene: &SceneDesc) -> Result<f64, SceneError> {
+    let props = scene_mass_props(scene)?;
+    let g = scene.settings.gravity.length() as f64;
+    let mut total = 0.0;
+    for (body, mp) in scene.bodies.iter().zip(&props) {
+        if body.is_fixed() {
+            continue;
+        }
+        let com = body.pose.transform_point(mp.local_com);
+        let h0 = height_above_ground(scene, com) as f64;
+        let h_rest = body.shape.local_half_extents().min_element() as f64;
+        total += mp.mass as f64 * (h0 - h_rest).max(0.1);
+    }
+    Ok(g * total)
+}
+
+/// Height of a point above the ground plane along gravity's opposite (or above y = 0
+/// when the scene has no ground).
+pub fn height_above_ground(scene: &SceneDesc, p: Vec3) -> f32 {
+    match &scene.settings.ground {
+        Some(g) => g.height_of(p),
+        None => p.y,
+    }
+}
+
+/// Gravitational potential of mass `m` at point `p` (J), zero on the ground plane.
+pub fn potential_energy(scene: &SceneDesc, m: f32, p: Vec3) -> f64 {
+    let g = scene.settings.gravity;
+    // m g h with h along -g: for gravity (0, -9.81, 0) and a flat ground this is m·9.81·y.
+    let up = -g.normalize_or_zero();
+    let base = match &scene.settings.ground {
+        Some(gr) => Vec3::new(0.0, gr.height, 0.0),
+        None => Vec3::ZERO,
+    };
+    m as f64 * g.length() as f64 * up.dot(p - base) as f64
+}
+
+/// The per-method summary printed by `ragdoll-lab stats`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodStats {
+    /// `energy_scale_j` (J).
+    pub energy_scale_j: f64,
+    /// Largest rise of E above its running minimum, over the energy scale.
+    pub energy_gain: f64,
+    /// Kinetic energy at the end, over the energy scale.
+    pub final_kinetic: f64,
+    /// Deepest penetration over the run (m).
+    pub max_penetration_m: f32,
+    /// Largest joint gap over the run (m).
+    pub max_joint_gap_m: f32,
+    /// Largest limit violation over the run (degrees).
+    pub max_limit_violation_deg: f32,
+    /// Largest relative bone stretch (particle method).
+    pub max_bone_stretch: Option<f32>,
+    /// First time every body was asleep (s).
+    pub asleep_at_s: Option<f64>,
+    /// Every sample was finite.
+    pub finite: bool,
+    /// Number of samples recorded.
+    pub frames: usize,
+}
+
+/// Accumulates samples into [`MethodStats`].
+#[derive(Clone, Debug)]
+pub struct MetricsRecorder {
+    scale: f64,
+    running_min: f64,
+    gain: f64,
+    last_kinetic: f64,
+    max_pen: f32,
+    max_gap: f32,
+    max_limit: f32,
+    max_stretch: Option<f32>,
+    asleep_at: Option<f64>,
+    finite: bool,
+    frames: usize,
+}
+
+impl MetricsRecorder {
+    /// A recorder for a scene; the energy scale comes from the scene's initial state.
+    pub fn new(scene: &SceneDesc) -> Result<Self, SceneError> {
+        Ok(MetricsRecorder {
+            scale: energy_scale_j(scene)?,
+            running_min: f64::INFINITY,
+            gain: 0.0,
+            last_kinetic: 0.0,
+            max_pen: 0.0,
+            max_gap: 0.0,
+            max_limit: 0.0,
+            max_stretch: None,
+            asleep_at: None,
+            finite: true,
+            frames: 0,
+        })
+    }
+
+    /// Records the sample taken at simulated time `t` (s).
+    pub fn record(&mut self, t: f64, s: &Sample) {
+        self.frames += 1;
+        let values_finite = s.energy.is_finite()
+            && s.kinetic.is_finite()
+            && s.max_penetration.is_finite()
+            && s.max_joint_gap.is_finite()
+            && s.max_limit_violation_deg.is_finite()
+            && s.max_bone_stretch.is_none_or(f32::is_finite);
+        if !values_finite {
+            self.finite = false;
+            return;
+        }
+        // energy_gain = max_t (E(t) - min_{s<=t} E(s)) / scale
+        self.running_min = self.running_min.min(s.energy);
+        self.gain = self.gain.max(s.energy - self.running_min);
+        self.last_kinetic = s.kinetic;
+        self.max_pen = self.max_pen.max(s.max_penetration);
+        self.max_gap = self.max_gap.max(s.max_joint_gap);
+        self.max_limit = self.max_limit.max(s.max_limit_violation_deg);
+        if let Some(st) = s.max_bone_stretch {
+            self.max_stretch = Some(self.max_stretch.unwrap_or(0.0).max(st));
+        }
+        if s.all_asleep && self.asleep_at.is_none() {
+            self.asleep_at = Some(t);
+        }
+    }
+
+    /// The summary so far.
+    pub fn stats(&self) -> MethodStats {
+        MethodStats {
+            energy_scale_j: self.scale,
+            energy_gain: self.gain / self.scale,
+            final_kinetic: self.last_kinetic / self.scale,
+            max_penetration_m: self.max_pen,
+            max_joint_gap_m: self.max_gap,
+            max_limit_violation_deg: self.max_limit,
+            max_bone_stretch: self.max_stretch,
+            asleep_at_s: self.asleep_at,
+            finite: self.finite,
+            frames: self.frames,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(e: f64) -> Sample {
+        Sample {
+            energy: e,
+            kinetic: 0.0,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn gain_is_rise_above_running_minimum() {
+        let scene = SceneDesc::default();
+        let mut r = MetricsRecorder::new(&scene).unwrap();
+        r.scale = 10.0;
+        for e in [5.0, 3.0, 4.0, 1.0, 1.5, 0.5] {
+            r.record(0.0, &sample(e));
+        }
+        // Largest rise: 3 -> 4 = 1.0 (1 -> 1.5 is only 0.5).
+        assert!((r.stats().energy_gain - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nan_marks_run_not_finite() {
+        let scene = SceneDesc::default();
+        let mut r = MetricsRecorder::new(&scene).unwrap();
+        r.record(0.0, &sample(f64::NAN));
+        assert!(!r.stats().finite);
+    }
+}

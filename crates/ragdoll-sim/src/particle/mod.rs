@@ -1,0 +1,1 @@
+//! The particle (Verlet) ragdoll — being written (issue 3).

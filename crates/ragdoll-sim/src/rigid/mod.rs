@@ -1,0 +1,1 @@
+//! The impulse-based multibody solver — being written (issue 4).

@@ -1,0 +1,1 @@
+//! Doom 3 .af reader — being written (issue 2).

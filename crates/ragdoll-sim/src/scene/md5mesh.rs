@@ -1,0 +1,1 @@
+//! md5mesh joints reader — being written (issue 2).

@@ -1,0 +1,48 @@
+//! Scene description (the seam between file formats and methods) and its readers.
+//!
+//! - [`desc`]: `SceneDesc` and everything in it, plain data.
+//! - [`mass`]: mass properties from shapes, shared by both methods.
+//! - [`af`]: the Doom 3 articulated-figure reader with our extensions.
+//! - [`md5mesh`]: the joints section of an `.md5mesh` bind pose for `joint("name")`.
+
+pub mod af;
+pub mod desc;
+pub mod mass;
+pub mod md5mesh;
+mod validate;
+
+pub use desc::*;
+pub use mass::{mass_props, scene_mass_props, MassProps};
+pub use validate::validate;
+
+use thiserror::Error;
+
+/// Why a `SceneDesc` cannot be simulated. The `.af` reader has its own positioned
+/// error type; this one is for descriptions built in code or after reading.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SceneError {
+    /// A body's shape or mass is unusable.
+    #[error("body \"{body}\" is degenerate: {what}")]
+    Degenerate {
+        /// Body name.
+        body: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// A constraint is unusable.
+    #[error("constraint \"{constraint}\" is invalid: {what}")]
+    BadConstraint {
+        /// Constraint name.
+        constraint: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// A setting is out of range.
+    #[error("setting {setting} is invalid: {what}")]
+    BadSetting {
+        /// Setting name.
+        setting: &'static str,
+        /// What is wrong.
+        what: String,
+    },
+}

@@ -1,0 +1,178 @@
+//! The command line (DESIGN.md, "Command line"). Tests and checks call it; keep it stable.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Particle (Verlet) and impulse-based multibody ragdolls, side by side.
+#[derive(Parser, Debug)]
+#[command(name = "ragdoll-lab", version, about)]
+pub struct Cli {
+    /// What to do; the window (`view`) when omitted.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Options of `view`, usable without the subcommand name.
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Open the split-screen window (the default).
+    View(ViewArgs),
+    /// Render offscreen to PNG, no window.
+    Capture(CaptureArgs),
+    /// Run a scene headless and print its metrics as JSON.
+    Stats(StatsArgs),
+    /// Read an .af file and print a summary, or the first error with its position.
+    Check(CheckArgs),
+    /// Performance tables (the paper's tests 9-12, scale).
+    Bench(BenchArgs),
+}
+
+/// Which scene to load: a built-in one by number or name, or any .af file.
+#[derive(Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// Scene number (1-10) or name (collision, ball-chain, ..., pile).
+    #[arg(long, short = 's')]
+    pub scene: Option<String>,
+    /// Variant (the paper's keys 1/2/3).
+    #[arg(long, short = 'v')]
+    pub variant: Option<u32>,
+    /// Load this .af file instead of a built-in scene.
+    #[arg(long, conflicts_with = "scene")]
+    pub af: Option<PathBuf>,
+    /// The .md5mesh bind pose for joint("name") references (overrides the file's `mesh`).
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+    /// Number of humans for the pile scene.
+    #[arg(long)]
+    pub count: Option<u32>,
+}
+
+/// The particle method's solver.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ParticleSolverArg {
+    /// Section 3 of the paper, as written.
+    Paper,
+    /// Ours: particulated bones, inverse-mass weighting, substeps.
+    #[default]
+    Improved,
+}
+
+/// `view` options.
+#[derive(Args, Debug, Clone, Default)]
+pub struct ViewArgs {
+    /// The scene.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The particle method's solver.
+    #[arg(long, value_enum, default_value_t)]
+    pub particle_solver: ParticleSolverArg,
+}
+
+/// `capture` options.
+#[derive(Args, Debug, Clone)]
+pub struct CaptureArgs {
+    /// The scene.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The particle method's solver.
+    #[arg(long, value_enum, default_value_t)]
+    pub particle_solver: ParticleSolverArg,
+    /// Frames to simulate before the (last) capture.
+    #[arg(long, default_value_t = 0)]
+    pub frames: u32,
+    /// Image size, WxH.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Output PNG (single capture).
+    #[arg(long, required_unless_present = "out_dir")]
+    pub out: Option<PathBuf>,
+    /// Capture every K frames into --out-dir.
+    #[arg(long, requires = "out_dir")]
+    pub every: Option<u32>,
+    /// Directory for a frame sequence.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// Draw the egui overlay too.
+    #[arg(long)]
+    pub ui: bool,
+}
+
+/// Which methods `stats` runs.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MethodArg {
+    /// The particle method only.
+    Particle,
+    /// The multibody method only.
+    Multibody,
+    /// Both.
+    #[default]
+    Both,
+}
+
+/// `stats` options.
+#[derive(Args, Debug, Clone)]
+pub struct StatsArgs {
+    /// The scene.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Which method(s).
+    #[arg(long, value_enum, default_value_t)]
+    pub method: MethodArg,
+    /// The particle method's solver.
+    #[arg(long, value_enum, default_value_t)]
+    pub particle_solver: ParticleSolverArg,
+    /// Override the scene's timestep (s).
+    #[arg(long)]
+    pub timestep: Option<f32>,
+    /// Override the scene's iterations.
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Override the scene's substeps.
+    #[arg(long)]
+    pub substeps: Option<u32>,
+    /// Write a JSON-lines trace of every frame here.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+}
+
+/// `check` options.
+#[derive(Args, Debug, Clone)]
+pub struct CheckArgs {
+    /// The .af file.
+    pub file: PathBuf,
+    /// The .md5mesh bind pose for joint("name") references.
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+}
+
+/// Which benchmark.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BenchKind {
+    /// Test 9: bytes per simulation as bones grow.
+    Memory,
+    /// Test 10: t_real/t_sim against the timestep.
+    Timestep,
+    /// Test 11: t_real/t_sim against the number of bones.
+    Bones,
+    /// Test 12: t_real/t_sim against the iterations.
+    Iterations,
+    /// The pile of humans: ms per frame, 1 and all threads.
+    Scale,
+}
+
+/// `bench` options.
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Which table.
+    #[arg(value_enum)]
+    pub kind: BenchKind,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}

@@ -1,0 +1,15 @@
+//! The ragdoll-lab app: command line, scene registry, window, renderer, offscreen
+//! capture, stats and benchmarks. The physics lives in the `ragdoll-sim` crate; the app
+//! drives it only through `ragdoll_sim::Method` and draws only `RenderSnapshot`s.
+
+pub mod bench;
+pub mod capture;
+pub mod check;
+pub mod cli;
+pub mod error;
+pub mod methods;
+pub mod scenes;
+pub mod stats;
+pub mod view;
+
+pub use error::AppError;

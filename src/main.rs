@@ -1,0 +1,27 @@
+//! `ragdoll-lab`: particle and multibody ragdolls side by side.
+//!
+//! The command line is the contract with tests and users (DESIGN.md, "Command line");
+//! each subcommand lives in its own module.
+
+use clap::Parser;
+use ragdoll_lab::cli::{Cli, Command};
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match cli.command.unwrap_or(Command::View(cli.view)) {
+        Command::View(args) => ragdoll_lab::view::run(args),
+        Command::Capture(args) => ragdoll_lab::capture::run(args),
+        Command::Stats(args) => ragdoll_lab::stats::run(args),
+        Command::Check(args) => ragdoll_lab::check::run(args),
+        Command::Bench(args) => ragdoll_lab::bench::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+    }
+}
