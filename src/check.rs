@@ -1,7 +1,7 @@
 //! `ragdoll-lab check FILE.af [--mesh M]`.
 
-use crate::cli::CheckArgs;
 use crate::AppError;
+use crate::cli::CheckArgs;
 
 /// Prints a summary of the file or its first error.
 pub fn run(args: CheckArgs) -> Result<(), AppError> {

@@ -4,8 +4,8 @@
 //! the binary so `ragdoll-lab` works from any directory. `R` in the viewer re-reads the
 //! file from disk when it is there.
 
-use crate::cli::SceneArgs;
 use crate::AppError;
+use crate::cli::SceneArgs;
 use ragdoll_sim::SceneDesc;
 use std::path::PathBuf;
 
@@ -23,5 +23,7 @@ pub struct LoadedScene {
 /// Loads the scene the arguments name (default: scene 8, the human).
 pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
     let _ = args;
-    Err(AppError::Other("scene loading is not built yet (issue 2)".into()))
+    Err(AppError::Other(
+        "scene loading is not built yet (issue 2)".into(),
+    ))
 }
