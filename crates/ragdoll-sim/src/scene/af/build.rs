@@ -571,21 +571,26 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
         .count
         .or(replicate.as_ref().map(|r| r.count))
         .unwrap_or(1);
-    if count == 0 {
+    if count == 0 || count > MAX_COPIES {
+        let pos = replicate
+            .as_ref()
+            .map_or(Pos { line: 1, col: 1 }, |r| r.pos);
         return Err(err(
-            Pos { line: 1, col: 1 },
-            "the number of copies must be at least 1".into(),
+            pos,
+            format!("the number of copies must be from 1 to {MAX_COPIES}; found {count}"),
         ));
     }
     if count > 1 || replicate.is_some() {
         let grid = replicate.unwrap_or_default();
         replicate_figure(&mut desc, &grid, count);
     }
-    Ok(AfScene {
-        desc,
-        ignored: ctx.ignored,
-    })
+    let mut ignored = ctx.ignored;
+    ignored.sort_by_key(|i| (i.line, i.col));
+    Ok(AfScene { desc, ignored })
 }
+
+/// Most copies `replicate` or `--count` may ask for (160 000 bodies of the human).
+const MAX_COPIES: u32 = 10_000;
 
 fn unknown_block(kind: &str) -> String {
     format!(
@@ -777,6 +782,8 @@ struct Grid {
     /// figure's size.
     spacing: Option<Vec3>,
     layer_yaw: f32,
+    /// Where the block starts, for errors about the count.
+    pos: Pos,
 }
 
 impl Default for Grid {
@@ -788,20 +795,27 @@ impl Default for Grid {
             layers: 1,
             spacing: None,
             layer_yaw: 0.0,
+            pos: Pos { line: 1, col: 1 },
         }
     }
 }
 
 fn read_replicate(ctx: &mut Ctx, b: &Block) -> R<Grid> {
-    let mut g = Grid::default();
+    let mut g = Grid {
+        pos: b.pos,
+        ..Grid::default()
+    };
     let whole = |ctx: &Ctx, e: &Entry| -> R<u32> {
         let v = ctx.one(e)?;
-        if v >= 1.0 && v.fract() == 0.0 && v <= 1e6 {
+        if v >= 1.0 && v.fract() == 0.0 && v <= MAX_COPIES as f32 {
             Ok(v as u32)
         } else {
             Err(ctx.err(
                 e.values[0].pos(),
-                format!("`{}` takes a whole number ≥ 1; found {v}", e.key),
+                format!(
+                    "`{}` takes a whole number from 1 to {MAX_COPIES}; found {v}",
+                    e.key
+                ),
             ))
         }
     };
@@ -1533,7 +1547,10 @@ fn replicate_figure(desc: &mut SceneDesc, g: &Grid, count: u32) {
     ));
     let layers = g.layers.max(1);
     let (mut cols, mut rows) = (g.columns, g.rows);
-    if cols == 0 || rows == 0 || count > cols * rows * layers {
+    if cols == 0
+        || rows == 0
+        || u64::from(count) > u64::from(cols) * u64::from(rows) * u64::from(layers)
+    {
         // Grow the floor grid, keeping it square, until the copies fit in `layers`.
         let per_layer = count.div_ceil(layers);
         let side = (per_layer as f64).sqrt().ceil() as u32;
@@ -1545,7 +1562,7 @@ fn replicate_figure(desc: &mut SceneDesc, g: &Grid, count: u32) {
     desc.bodies.reserve(n * count as usize);
     desc.constraints.reserve(constraints.len() * count as usize);
     for i in 0..count {
-        let (c, r, l) = (i % cols, (i / cols) % rows, i / (cols * rows));
+        let (c, r, l) = (i % cols, (i / cols) % rows, i / cols / rows);
         let offset = Vec3::new(
             (c as f32 - (cols - 1) as f32 * 0.5) * spacing.x,
             l as f32 * spacing.y,
