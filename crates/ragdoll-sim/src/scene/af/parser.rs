@@ -93,6 +93,24 @@ impl Block {
     }
 }
 
+/// Every block kind: Doom 3's and ours.
+const KINDS: [&str; 14] = [
+    "articulatedFigure",
+    "settings",
+    "body",
+    "ballAndSocketJoint",
+    "universalJoint",
+    "hinge",
+    "spring",
+    "slider",
+    "fixed",
+    "variant",
+    "ground",
+    "camera",
+    "transform",
+    "replicate",
+];
+
 /// Block kinds whose contents are blocks, not entries.
 fn is_container(kind: &str) -> bool {
     kind.eq_ignore_ascii_case("articulatedFigure") || kind.eq_ignore_ascii_case("variant")
@@ -160,6 +178,18 @@ impl<'a> Parser<'a> {
             ));
         };
         let (kind, pos) = (kind.clone(), t.pos);
+        if !KINDS.iter().any(|k| k.eq_ignore_ascii_case(&kind)) {
+            // A block opens with a name or `{`; anything else suggests a key that an
+            // extra `}` has pushed out of its block.
+            let hint = match self.peek().tok {
+                Tok::Str(_) | Tok::LBrace => "",
+                _ => " (is it a key after an extra `}` that closed its block too soon?)",
+            };
+            return Err(self.err(
+                pos,
+                format!("`{kind}` is not a block; expected one of {}{hint}", KINDS.join(", ")),
+            ));
+        }
         let mut header = Vec::new();
         loop {
             let t = self.peek();
