@@ -1,7 +1,7 @@
 //! `ragdoll-lab capture`: offscreen rendering to PNG through the same renderer.
 
-use crate::AppError;
 use crate::cli::CaptureArgs;
+use crate::AppError;
 
 /// Simulates and renders offscreen, writing PNGs.
 pub fn run(args: CaptureArgs) -> Result<(), AppError> {

@@ -1,7 +1,7 @@
 //! Builds the two methods from a scene, behind the common `Method` trait.
 
-use crate::AppError;
 use crate::cli::ParticleSolverArg;
+use crate::AppError;
 use ragdoll_sim::{Method, SceneDesc};
 
 /// The particle method (left, blue) with the chosen solver.
@@ -10,15 +10,11 @@ pub fn build_particle(
     solver: ParticleSolverArg,
 ) -> Result<Box<dyn Method>, AppError> {
     let _ = (scene, solver);
-    Err(AppError::Other(
-        "the particle method is not built yet (issue 3)".into(),
-    ))
+    Err(AppError::Other("the particle method is not built yet (issue 3)".into()))
 }
 
 /// The multibody method (right, red).
 pub fn build_multibody(scene: &SceneDesc) -> Result<Box<dyn Method>, AppError> {
     let _ = scene;
-    Err(AppError::Other(
-        "the multibody method is not built yet (issue 4)".into(),
-    ))
+    Err(AppError::Other("the multibody method is not built yet (issue 4)".into()))
 }
