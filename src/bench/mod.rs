@@ -77,6 +77,22 @@ pub enum Size {
     Quick,
 }
 
+/// Which rows of a table to run: all, or those whose key (first column) is listed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RowFilter(Vec<f64>);
+
+impl RowFilter {
+    /// Keeps only the rows whose key is in `keys`; every row when `keys` is empty.
+    pub fn new(keys: Vec<f64>) -> RowFilter {
+        RowFilter(keys)
+    }
+
+    /// Whether the row with this key runs.
+    pub fn keeps(&self, key: f64) -> bool {
+        self.0.is_empty() || self.0.iter().any(|k| (k - key).abs() <= 1e-9 * key.abs().max(1.0))
+    }
+}
+
 /// Wall-clock cost of running a method for some simulated time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RunTiming {
@@ -88,6 +104,8 @@ pub struct RunTiming {
     pub t_real: f64,
     /// Median wall-clock time of one step (ms).
     pub median_step_ms: f64,
+    /// Slowest step (ms).
+    pub max_step_ms: f64,
     /// The state was still finite at the end (a blown-up run is fast for the wrong reason).
     pub finite: bool,
 }
@@ -117,6 +135,7 @@ impl RunTiming {
             "percent_of_realtime": self.percent_of_realtime(),
             "mean_step_ms": self.mean_step_ms(),
             "median_step_ms": self.median_step_ms,
+            "max_step_ms": self.max_step_ms,
             "finite": self.finite,
         })
     }
@@ -138,11 +157,13 @@ pub fn time_method(method: &mut dyn Method, steps: usize) -> RunTiming {
         per_step.push(t0.elapsed().as_secs_f64());
     }
     let t_real = per_step.iter().sum();
+    let max = per_step.iter().copied().fold(0.0, f64::max);
     RunTiming {
         steps,
         t_sim: steps as f64 * dt,
         t_real,
         median_step_ms: 1e3 * median(&mut per_step),
+        max_step_ms: 1e3 * max,
         finite: method.sample().energy.is_finite(),
     }
 }
@@ -200,12 +221,13 @@ pub struct Report {
 /// `ragdoll-lab bench ...`.
 pub fn run(args: BenchArgs) -> Result<(), AppError> {
     let size = if args.quick { Size::Quick } else { Size::Full };
+    let only = RowFilter::new(args.only);
     let report = match args.kind {
-        BenchKind::Memory => memory::run(size)?,
-        BenchKind::Timestep => timestep::run(size)?,
-        BenchKind::Bones => bones::run(size)?,
-        BenchKind::Iterations => iterations::run(size)?,
-        BenchKind::Scale => scale::run(size)?,
+        BenchKind::Memory => memory::run(size, &only)?,
+        BenchKind::Timestep => timestep::run(size, &only)?,
+        BenchKind::Bones => bones::run(size, &only)?,
+        BenchKind::Iterations => iterations::run(size, &only)?,
+        BenchKind::Scale => scale::run(size, &only)?,
     };
     if args.json {
         println!("{}", report.json);
@@ -239,6 +261,7 @@ mod tests {
             t_sim: 3.3,
             t_real: 10.0,
             median_step_ms: 0.0,
+            max_step_ms: 0.0,
             finite: true,
         };
         assert_eq!(t.percent_of_realtime().round(), 303.0);

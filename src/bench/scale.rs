@@ -9,7 +9,7 @@
 //! single-threaded one.
 
 use super::table::Table;
-use super::{Flavor, Report, Size, progress, time_method};
+use super::{Flavor, Report, RowFilter, Size, progress, time_method};
 use crate::cli::SceneArgs;
 use crate::{AppError, scenes};
 use serde_json::json;
@@ -58,6 +58,8 @@ pub struct FrameCost {
     pub mean_ms: f64,
     /// Median frame (ms).
     pub median_ms: f64,
+    /// Slowest frame (ms).
+    pub max_ms: f64,
     /// Still finite at the end.
     pub finite: bool,
 }
@@ -73,12 +75,13 @@ pub fn measure(
     Ok(FrameCost {
         mean_ms: t.mean_step_ms(),
         median_ms: t.median_step_ms,
+        max_ms: t.max_step_ms,
         finite: t.finite,
     })
 }
 
 /// Runs the scale table.
-pub fn run(size: Size) -> Result<Report, AppError> {
+pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let (humans, frames): (&[u32], usize) = match size {
         Size::Full => (&HUMANS, FRAMES),
         Size::Quick => (&[1, 2], 5),
@@ -100,6 +103,9 @@ pub fn run(size: Size) -> Result<Report, AppError> {
     );
     let mut rows = Vec::new();
     for &n in humans {
+        if !only.keeps(n as f64) {
+            continue;
+        }
         let scene = pile(n)?;
         let bones = scene.dynamic_body_count();
         for threads in thread_counts() {
@@ -137,6 +143,7 @@ pub fn run(size: Size) -> Result<Report, AppError> {
             ]);
             let ms = |c: Option<FrameCost>| c.map(|c| c.mean_ms);
             let median = |c: Option<FrameCost>| c.map(|c| c.median_ms);
+            let max = |c: Option<FrameCost>| c.map(|c| c.max_ms);
             rows.push(json!({
                 "humans": n,
                 "bones": bones,
@@ -145,6 +152,8 @@ pub fn run(size: Size) -> Result<Report, AppError> {
                 "multibody_ms_per_frame": ms(costs[1]),
                 "particle_median_ms": median(costs[0]),
                 "multibody_median_ms": median(costs[1]),
+                "particle_max_ms": max(costs[0]),
+                "multibody_max_ms": max(costs[1]),
             }));
         }
     }

@@ -27,10 +27,12 @@ fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec
     }
     let finite = r.world.bodies.iter().all(|(_, b)| b.translation().is_finite());
     let mean_ms = per_frame.iter().sum::<f64>() / frames as f64;
+    let max_ms = per_frame.iter().copied().fold(0.0, f64::max);
     (
         FrameCost {
             mean_ms,
             median_ms: median(&mut per_frame),
+            max_ms,
             finite,
         },
         r.approximations,
