@@ -8,9 +8,7 @@
 //! and the log-log slope of the cost (1 = linear, 2 = every pair).
 
 use super::table::{Table, opt, pct};
-use super::{
-    Flavor, Report, RowFilter, RunTiming, Size, pct_cell, progress, scenes, time_flavors,
-};
+use super::{Flavor, Report, RowFilter, RunTiming, Size, pct_cell, progress, scenes, time_flavors};
 use crate::AppError;
 use serde_json::{Value, json};
 
@@ -67,7 +65,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let mut table = Table::new(
         format!(
             "Test 11 (table 3): 100% * t_real/t_sim against bones, dt = {TIMESTEP} s, \
-             {ITERATIONS} iterations, two joints per three bones; us = microseconds per bone per step"
+             {ITERATIONS} iterations, two joints per three bones; us = CPU microseconds per bone per step"
         ),
         &[
             "Bones",

@@ -33,7 +33,8 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let mut table = Table::new(
         format!(
             "Test 10 (table 2): 100% * t_real/t_sim, three bones, one hinge, one ball joint, \
-             {seconds} s simulated per run (below 100% is faster than real time)"
+             {seconds} s simulated per run (below 100% is faster than real time; t_real is the \
+             stepping thread's CPU time)"
         ),
         &[
             "Timestep",
