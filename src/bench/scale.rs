@@ -64,6 +64,11 @@ pub struct FrameCost {
     pub max_ms: f64,
     /// Still finite at the end.
     pub finite: bool,
+    /// Mean height of the bodies' centres of mass at the end (m): a sanity check that
+    /// two engines simulated the same thing (the pile fell and came to rest).
+    pub final_mean_height: f64,
+    /// Every body is asleep at the end.
+    pub asleep_at_end: bool,
 }
 
 /// Builds `flavor` on `scene` and times `frames` frames.
@@ -74,7 +79,13 @@ pub fn measure(
 ) -> Result<FrameCost, AppError> {
     let mut method = flavor.build(scene)?;
     let t = time_method(method.as_mut(), frames);
+    let mut states = Vec::new();
+    method.body_states(&mut states);
+    let final_mean_height =
+        states.iter().map(|b| b.com.y as f64).sum::<f64>() / states.len().max(1) as f64;
     Ok(FrameCost {
+        final_mean_height,
+        asleep_at_end: method.sample().all_asleep,
         mean_ms: t.mean_step_ms(),
         wall_ms: 1e3 * t.t_wall / t.steps as f64,
         median_ms: t.median_step_ms,
