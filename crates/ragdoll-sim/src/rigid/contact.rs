@@ -276,29 +276,15 @@ impl Contacts {
         }
     }
 
-    /// One Gauss–Seidel pass: friction, then soft non-penetration.
+    /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
+    /// impulse just computed (Box2D v3's order; friction first would cap it with a
+    /// normal impulse the relax pass is about to raise, and slide too easily).
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
         for pair in Self::active(&mut self.pairs, awake) {
             let (a, b) = (pair.a as usize, pair.b as usize);
             let (qa, qb) = (s.rot[a], s.rot[b]);
             let (ca, cb) = (s.com[a], s.com[b]);
             for p in &mut pair.points {
-                // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
-                let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
-                let old = p.tangent_impulse;
-                let mut new = old;
-                for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
-                    new -= *t * (m * t.dot(dv));
-                }
-                let cap = pair.friction * p.normal_impulse;
-                if new.length_squared() > cap * cap {
-                    new = new.normalize_or_zero() * cap;
-                }
-                p.tangent_impulse = new;
-                let d = new - old;
-                s.apply_impulse(a, p.ra, -d);
-                s.apply_impulse(b, p.rb, d);
-
                 // Non-penetration at the current separation.
                 let sep = current_separation(p, ca, qa, cb, qb);
                 let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
@@ -318,6 +304,23 @@ impl Contacts {
                 p.max_normal_impulse = p.max_normal_impulse.max(new);
                 s.apply_impulse(a, p.ra, -p.normal * d);
                 s.apply_impulse(b, p.rb, p.normal * d);
+
+                // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
+                let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
+                let old = p.tangent_impulse;
+                let mut new = old;
+                for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
+                    new -= *t * (m * t.dot(dv));
+                }
+                let cap = pair.friction * p.normal_impulse;
+                if new.length_squared() > cap * cap {
+                    new = new.normalize_or_zero() * cap;
+                }
+                p.tangent_impulse = new;
+                let d = new - old;
+                s.apply_impulse(a, p.ra, -d);
+                s.apply_impulse(b, p.rb, d);
+
             }
         }
     }
@@ -325,6 +328,14 @@ impl Contacts {
     /// Box2D's restitution pass, after the substeps: points that were approaching faster
     /// than `threshold` and carried load get the normal velocity `−e · v_before`.
     pub fn restitution(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
+        // Block-free Gauss–Seidel over a face's points: one pass under-shoots, so
+        // the pass is run a few times (the clamp keeps it from over-shooting).
+        for _ in 0..4 {
+            self.restitution_pass(s, awake, threshold);
+        }
+    }
+
+    fn restitution_pass(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
         for pair in Self::active(&mut self.pairs, awake) {
             if pair.restitution == 0.0 {
                 continue;
