@@ -132,13 +132,18 @@ impl MultibodyWorld {
             }
             let (a, b) = (p.a as usize, p.b as usize);
             let pa = shape_pose(&self.states, &self.info, a);
-            let (pb, gb) = if b == n {
+            if b == n {
+                // Against the plane: depth of the shape's support point along −n.
                 let g = self.contacts.ground.as_ref().expect("ground pair without ground");
-                (g.pose, &g.shape)
-            } else {
-                (shape_pose(&self.states, &self.info, b), &self.info[b].collider)
-            };
-            if let Ok(Some(c)) = query::contact(&pa, &*self.info[a].collider, &pb, &**gb, 0.0) {
+                if let Some(sm) = self.info[a].collider.as_support_map() {
+                    let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
+                    let p = pa.transform_point(local);
+                    deepest = deepest.max(-g.normal.dot(p - g.origin));
+                }
+                continue;
+            }
+            let pb = shape_pose(&self.states, &self.info, b);
+            if let Ok(Some(c)) = query::contact(&pa, &*self.info[a].collider, &pb, &*self.info[b].collider, 0.0) {
                 deepest = deepest.max(-c.dist);
             }
         }
