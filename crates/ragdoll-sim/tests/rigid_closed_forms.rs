@@ -9,7 +9,9 @@ use ragdoll_sim::{BodyState, Method};
 fn cube(name: &str, half: f32, pos: Vec3, mass: f32) -> BodyDesc {
     BodyDesc::new(
         name,
-        Shape::Box { half_extents: Vec3::splat(half) },
+        Shape::Box {
+            half_extents: Vec3::splat(half),
+        },
         Pose::from_position(pos),
         MassSpec::Mass(mass),
     )
@@ -19,7 +21,10 @@ fn scene(bodies: Vec<BodyDesc>, ground: Option<Ground>) -> SceneDesc {
     SceneDesc {
         name: "test".into(),
         bodies,
-        settings: Settings { ground, ..Settings::default() },
+        settings: Settings {
+            ground,
+            ..Settings::default()
+        },
         ..SceneDesc::default()
     }
 }
@@ -50,7 +55,11 @@ fn free_fall_matches_closed_form() {
 /// A box resting on a slope of angle θ with μ: returns its acceleration along the slope
 /// measured between t = 0.5 s and 1.5 s.
 fn slope_acceleration(theta: f32, mu: f32) -> f32 {
-    let ground = Ground { tilt: theta, friction: mu, ..Ground::default() };
+    let ground = Ground {
+        tilt: theta,
+        friction: mu,
+        ..Ground::default()
+    };
     let n = ground.normal();
     let half = 0.1;
     let mut b = cube("b", half, n * (half + 1e-4), 1.0);
@@ -84,7 +93,10 @@ fn box_on_slope_slides_above_friction_angle() {
     let theta = 30f32.to_radians();
     let a = slope_acceleration(theta, mu);
     let expected = 9.81 * (theta.sin() - mu * theta.cos());
-    assert!((a - expected).abs() < 0.05 * expected, "a = {a}, expected {expected}");
+    assert!(
+        (a - expected).abs() < 0.05 * expected,
+        "a = {a}, expected {expected}"
+    );
 }
 
 #[test]
@@ -94,14 +106,23 @@ fn hinge_pendulum_small_angle_period() {
     let (l, half) = (1.0f32, 0.05f32);
     let theta0 = 0.05f32;
     let pivot = Vec3::new(0.0, 2.0, 0.0);
-    let mut b = cube("bob", half, pivot + Vec3::new(theta0.sin(), -theta0.cos(), 0.0) * l, 1.0);
+    let mut b = cube(
+        "bob",
+        half,
+        pivot + Vec3::new(theta0.sin(), -theta0.cos(), 0.0) * l,
+        1.0,
+    );
     b.pose.rotation = Quat::from_rotation_z(theta0);
     let mut sc = scene(vec![b], None);
     sc.constraints.push(ConstraintDesc {
         name: "hinge".into(),
         body1: BodyId(0),
         body2: BodyRef::World,
-        kind: JointKind::Hinge { anchor: pivot, axis: Vec3::Z, limit: None },
+        kind: JointKind::Hinge {
+            anchor: pivot,
+            axis: Vec3::Z,
+            limit: None,
+        },
         friction: 0.0,
     });
     sc.settings.sleep.time = 1e9;
@@ -133,7 +154,9 @@ fn spinning_box_keeps_angular_momentum() {
     // the implicit gyroscopic term should keep it within 1 % for 10 s.
     let mut b = BodyDesc::new(
         "spinner",
-        Shape::Box { half_extents: Vec3::new(0.1, 0.3, 0.5) },
+        Shape::Box {
+            half_extents: Vec3::new(0.1, 0.3, 0.5),
+        },
         Pose::from_position(Vec3::ZERO),
         MassSpec::Mass(2.0),
     );
@@ -151,7 +174,10 @@ fn spinning_box_keeps_angular_momentum() {
     for _ in 0..600 {
         w.step();
         let l = momentum(&state(&w, 0));
-        assert!((l - l0).length() < 0.01 * l0.length(), "L drifted from {l0} to {l}");
+        assert!(
+            (l - l0).length() < 0.01 * l0.length(),
+            "L drifted from {l0} to {l}"
+        );
     }
 }
 
@@ -177,5 +203,8 @@ fn restitution_bounce_height() {
     }
     let expected = e * e * h0;
     assert!(bounced);
-    assert!((apex - expected).abs() < 0.1 * expected, "apex {apex}, expected {expected}");
+    assert!(
+        (apex - expected).abs() < 0.1 * expected,
+        "apex {apex}, expected {expected}"
+    );
 }

@@ -59,8 +59,14 @@ impl JointSolve for BallJoint {
     }
 
     fn limit_violation(&self, s: &BodyStates) -> f32 {
-        let sw = self.swing.as_ref().map_or(0.0, |l| l.violation(&self.frame, s));
-        let tw = self.twist.as_ref().map_or(0.0, |l| l.violation(&self.frame, s));
+        let sw = self
+            .swing
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s));
+        let tw = self
+            .twist
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s));
         sw.max(tw)
     }
 }

@@ -112,7 +112,9 @@ pub struct BodyInfo {
 /// ours; a cone's base is at −half_height and its apex at +half_height in both.
 pub fn collider(shape: &Shape) -> Option<SharedShape> {
     Some(match shape {
-        Shape::Box { half_extents } => SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
+        Shape::Box { half_extents } => {
+            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
+        }
         Shape::Capsule {
             half_height,
             radius,
@@ -142,7 +144,11 @@ impl BodyInfo {
             local_com: mp.local_com,
             mass: mp.mass,
             inertia: mp.inertia,
-            inv_inertia_local: if fixed { Mat3::ZERO } else { mp.inverse_inertia() },
+            inv_inertia_local: if fixed {
+                Mat3::ZERO
+            } else {
+                mp.inverse_inertia()
+            },
             inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
             fixed,
             linear_damping: desc.friction.linear,

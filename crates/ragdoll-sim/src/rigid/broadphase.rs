@@ -20,7 +20,11 @@ impl BroadPhase {
         self.order.extend(0..aabbs.len() as u32);
         // Ties broken by index: the order, hence the pair list, is reproducible.
         self.order.sort_unstable_by(|&i, &j| {
-            aabbs[i as usize].mins.x.total_cmp(&aabbs[j as usize].mins.x).then(i.cmp(&j))
+            aabbs[i as usize]
+                .mins
+                .x
+                .total_cmp(&aabbs[j as usize].mins.x)
+                .then(i.cmp(&j))
         });
         let start = out.len();
         for (k, &i) in self.order.iter().enumerate() {

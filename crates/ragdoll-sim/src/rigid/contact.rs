@@ -9,19 +9,24 @@
 //! effective masses for the step. Separation is then tracked through the substeps from
 //! the bodies' motion (`s = s₀ + n·(Δp_b − Δp_a)`), as Box2D does.
 
+// Several per-body arrays are walked together by index.
+#![allow(clippy::needless_range_loop)]
+
 use super::body::{BodyInfo, BodyStates};
 use super::broadphase::BroadPhase;
 use super::soft::StepContext;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
-use parry3d::query::{ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher};
+use parry3d::query::{
+    ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
 use parry3d::shape::SharedShape;
 
 /// Distance within which contacts are created before touching (speculative margin, m).
 pub const SPECULATIVE_DISTANCE: f32 = 0.02;
 /// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
-pub const LINEAR_SLOP: f32 = 0.002;
+pub const LINEAR_SLOP: f32 = 0.0005;
 
 /// One contact point with its solver state.
 #[derive(Clone, Copy, Debug, Default)]
@@ -144,7 +149,8 @@ impl Contacts {
         for i in 0..n {
             let motion = s.lin_vel[i].length() * dt;
             let aabb = info[i].collider.compute_aabb(&shape_pose(s, info, i));
-            self.aabbs.push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
+            self.aabbs
+                .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
         }
         self.candidates.clear();
         self.broad.pairs(&self.aabbs, &mut self.candidates);
@@ -216,7 +222,10 @@ impl Contacts {
             }
             let pose_a = shape_pose(s, info, a);
             let (pose_b, shape_b) = if b == n {
-                let g = self.ground.as_ref().expect("ground pairs exist only with a ground");
+                let g = self
+                    .ground
+                    .as_ref()
+                    .expect("ground pairs exist only with a ground");
                 (g.pose, &g.shape)
             } else {
                 (shape_pose(s, info, b), &info[b].collider)
@@ -240,7 +249,10 @@ impl Contacts {
     }
 
     /// Pairs with points where at least one body is awake.
-    fn active<'a>(pairs: &'a mut [ContactPair], awake: &'a [bool]) -> impl Iterator<Item = &'a mut ContactPair> {
+    fn active<'a>(
+        pairs: &'a mut [ContactPair],
+        awake: &'a [bool],
+    ) -> impl Iterator<Item = &'a mut ContactPair> {
         pairs
             .iter_mut()
             .filter(move |p| p.touching() && (awake[p.a as usize] || awake[p.b as usize]))
@@ -253,13 +265,18 @@ impl Contacts {
             for p in &mut pair.points {
                 let k = |d: Vec3| {
                     let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
-                    s.inv_mass[a] + s.inv_mass[b] + ja.dot(s.inv_inertia[a] * ja) + jb.dot(s.inv_inertia[b] * jb)
+                    s.inv_mass[a]
+                        + s.inv_mass[b]
+                        + ja.dot(s.inv_inertia[a] * ja)
+                        + jb.dot(s.inv_inertia[b] * jb)
                 };
                 let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
                 p.normal_mass = inv(k(p.normal));
                 p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
                 p.max_normal_impulse = 0.0;
-                p.relative_velocity = p.normal.dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+                p.relative_velocity = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
             }
         }
     }
@@ -292,12 +309,19 @@ impl Contacts {
                     (sep * ctx.inv_h, 1.0, 0.0)
                 } else if use_bias {
                     let c = (sep + LINEAR_SLOP).min(0.0);
-                    ((ctx.contact.bias_rate * c).max(-ctx.max_push_out), ctx.contact.mass_scale, ctx.contact.impulse_scale)
+                    (
+                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
+                        ctx.contact.mass_scale,
+                        ctx.contact.impulse_scale,
+                    )
                 } else {
                     (0.0, 1.0, 0.0)
                 };
-                let vn = p.normal.dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-                let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+                let vn = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+                let l =
+                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
                 let new = (p.normal_impulse + l).max(0.0);
                 let d = new - p.normal_impulse;
                 p.normal_impulse = new;
@@ -320,7 +344,6 @@ impl Contacts {
                 let d = new - old;
                 s.apply_impulse(a, p.ra, -d);
                 s.apply_impulse(b, p.rb, d);
-
             }
         }
     }
@@ -345,7 +368,9 @@ impl Contacts {
                 if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
                     continue;
                 }
-                let vn = p.normal.dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+                let vn = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
                 let l = -p.normal_mass * (vn + pair.restitution * p.relative_velocity);
                 let new = (p.normal_impulse + l).max(0.0);
                 let d = new - p.normal_impulse;

@@ -55,6 +55,8 @@ impl JointSolve for HingeJoint {
     }
 
     fn limit_violation(&self, s: &BodyStates) -> f32 {
-        self.limit.as_ref().map_or(0.0, |l| l.violation(&self.frame, s))
+        self.limit
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s))
     }
 }

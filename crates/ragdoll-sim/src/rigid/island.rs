@@ -9,6 +9,9 @@
 //! and wakes as a whole when an awake body touches it. `minMoveTime` delays sleep,
 //! `maxMoveTime` forces it.
 
+// Several per-body arrays are walked together by index.
+#![allow(clippy::needless_range_loop)]
+
 use super::body::BodyStates;
 use crate::scene::SleepSettings;
 use glam::{Quat, Vec3};
@@ -107,7 +110,14 @@ impl Islands {
 
     /// Updates stillness after a step of `dt` at time `t` and puts islands to sleep.
     /// `dynamic[i]` is false for fixed bodies. Returns whether any island fell asleep.
-    pub fn update_sleep(&mut self, s: &mut BodyStates, dynamic: &[bool], cfg: &SleepSettings, dt: f32, t: f32) -> bool {
+    pub fn update_sleep(
+        &mut self,
+        s: &mut BodyStates,
+        dynamic: &[bool],
+        cfg: &SleepSettings,
+        dt: f32,
+        t: f32,
+    ) -> bool {
         let n = self.parent.len();
         for i in 0..n {
             if !dynamic[i] || self.asleep[i] {
@@ -119,8 +129,15 @@ impl Islands {
             self.prev_lin[i] = v;
             self.prev_ang[i] = w;
             let moved = s.com[i].distance(self.rest_com[i]);
-            let turned = (s.rot[i] * self.rest_rot[i].inverse()).normalize().to_axis_angle().1;
-            let turned = if turned > std::f32::consts::PI { std::f32::consts::TAU - turned } else { turned };
+            let turned = (s.rot[i] * self.rest_rot[i].inverse())
+                .normalize()
+                .to_axis_angle()
+                .1;
+            let turned = if turned > std::f32::consts::PI {
+                std::f32::consts::TAU - turned
+            } else {
+                turned
+            };
             let still = v.length() <= cfg.linear_velocity
                 && w.length() <= cfg.angular_velocity
                 && lin_acc <= cfg.linear_acceleration
@@ -140,7 +157,9 @@ impl Islands {
         }
         let forced = cfg.max_move_time > 0.0 && t >= cfg.max_move_time;
         // Island minimum of still time (fixed bodies do not take part).
-        self.island_min_still.iter_mut().for_each(|m| *m = f32::INFINITY);
+        self.island_min_still
+            .iter_mut()
+            .for_each(|m| *m = f32::INFINITY);
         for i in 0..n {
             if dynamic[i] && !self.asleep[i] {
                 let r = self.find(i as u32) as usize;

@@ -7,6 +7,9 @@
 //! are measured on the current state (Box2D v3 measures them from delta positions; in 3D
 //! with substeps this is the same quantity).
 
+// `!(k > ε)` on purpose: it is also true for NaN, which must skip the row too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::body::BodyStates;
 use super::soft::{Softness, Spring, StepContext};
 use glam::{Mat3, Quat, Vec3};
@@ -108,7 +111,8 @@ impl PointPart {
         let soft = bilateral(ctx, use_bias);
         let k = point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb);
         let Some(k_inv) = invert(k) else { return };
-        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c)) - soft.impulse_scale * self.impulse;
+        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c))
+            - soft.impulse_scale * self.impulse;
         self.impulse += p;
         s.apply_impulse(f.a, ra, -p);
         s.apply_impulse(f.b, rb, p);
@@ -168,8 +172,11 @@ impl AngularLock3 {
         let c = self.error(f, s);
         let cdot = f.rel_ang_vel(s);
         let soft = bilateral(ctx, use_bias);
-        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else { return };
-        let l = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c)) - soft.impulse_scale * self.impulse;
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+            return;
+        };
+        let l = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c))
+            - soft.impulse_scale * self.impulse;
         self.impulse += l;
         f.apply_angular(s, l);
     }
@@ -223,8 +230,14 @@ impl AlignPart {
             return;
         }
         let soft = bilateral(ctx, use_bias);
-        let r = [u.dot(w) + soft.bias_rate * u.dot(e), v.dot(w) + soft.bias_rate * v.dot(e)];
-        let sol = [(k22 * r[0] - k12 * r[1]) / det, (k11 * r[1] - k12 * r[0]) / det];
+        let r = [
+            u.dot(w) + soft.bias_rate * u.dot(e),
+            v.dot(w) + soft.bias_rate * v.dot(e),
+        ];
+        let sol = [
+            (k22 * r[0] - k12 * r[1]) / det,
+            (k11 * r[1] - k12 * r[0]) / det,
+        ];
         let l0 = -soft.mass_scale * sol[0] - soft.impulse_scale * self.impulse[0];
         let l1 = -soft.mass_scale * sol[1] - soft.impulse_scale * self.impulse[1];
         self.impulse[0] += l0;
@@ -318,7 +331,11 @@ impl AxisRow {
                     (0.0, Softness::RIGID)
                 };
                 let l = -m * soft.mass_scale * (cdot + bias) - soft.impulse_scale * old;
-                if self.kind == RowKind::Limit { (old + l).max(0.0) } else { old + l }
+                if self.kind == RowKind::Limit {
+                    (old + l).max(0.0)
+                } else {
+                    old + l
+                }
             }
             RowKind::SoftLimit { k: stiffness } => {
                 if self.c >= 0.0 {
@@ -372,7 +389,9 @@ impl FrictionMotor {
         if self.max_torque <= 0.0 {
             return;
         }
-        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else { return };
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+            return;
+        };
         let old = self.impulse;
         let mut new = old - k_inv * f.rel_ang_vel(s);
         let cap = self.max_torque * ctx.h;

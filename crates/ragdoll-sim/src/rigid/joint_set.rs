@@ -5,7 +5,9 @@ use super::ball::BallJoint;
 use super::body::{BodyInfo, BodyStates};
 use super::fixed::FixedJoint;
 use super::hinge::HingeJoint;
-use super::joint::{AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind};
+use super::joint::{
+    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind,
+};
 use super::limits::{AngleGauge, AngleLimit, Swing};
 use super::slider::SliderJoint;
 use super::soft::StepContext;
@@ -53,31 +55,61 @@ pub struct JointSet {
 /// Runs `$body` with `$j` bound to every joint of every type.
 macro_rules! for_each_joint {
     ($set:expr, $j:ident => $body:expr) => {{
-        for $j in $set.ball.iter_mut() { $body }
-        for $j in $set.hinge.iter_mut() { $body }
-        for $j in $set.universal.iter_mut() { $body }
-        for $j in $set.fixed.iter_mut() { $body }
-        for $j in $set.slider.iter_mut() { $body }
-        for $j in $set.spring.iter_mut() { $body }
+        for $j in $set.ball.iter_mut() {
+            $body
+        }
+        for $j in $set.hinge.iter_mut() {
+            $body
+        }
+        for $j in $set.universal.iter_mut() {
+            $body
+        }
+        for $j in $set.fixed.iter_mut() {
+            $body
+        }
+        for $j in $set.slider.iter_mut() {
+            $body
+        }
+        for $j in $set.spring.iter_mut() {
+            $body
+        }
     }};
 }
 
 /// Runs `$body` with `$j` bound to every joint, read-only.
 macro_rules! for_each_joint_ref {
     ($set:expr, $j:ident => $body:expr) => {{
-        for $j in $set.ball.iter() { $body }
-        for $j in $set.hinge.iter() { $body }
-        for $j in $set.universal.iter() { $body }
-        for $j in $set.fixed.iter() { $body }
-        for $j in $set.slider.iter() { $body }
-        for $j in $set.spring.iter() { $body }
+        for $j in $set.ball.iter() {
+            $body
+        }
+        for $j in $set.hinge.iter() {
+            $body
+        }
+        for $j in $set.universal.iter() {
+            $body
+        }
+        for $j in $set.fixed.iter() {
+            $body
+        }
+        for $j in $set.slider.iter() {
+            $body
+        }
+        for $j in $set.spring.iter() {
+            $body
+        }
     }};
 }
 
 impl JointSet {
     /// Builds the joints of `constraints` on bodies at their rest pose. `anchor` is the
     /// index of the static anchor (the world).
-    pub fn build(constraints: &[ConstraintDesc], s: &BodyStates, info: &[BodyInfo], anchor: usize, g: f32) -> JointSet {
+    pub fn build(
+        constraints: &[ConstraintDesc],
+        s: &BodyStates,
+        info: &[BodyInfo],
+        anchor: usize,
+        g: f32,
+    ) -> JointSet {
         let mut set = JointSet::default();
         for c in constraints {
             let a = c.body1.index();
@@ -85,7 +117,9 @@ impl JointSet {
                 BodyRef::Body(id) => id.index(),
                 BodyRef::World => anchor,
             };
-            let friction = |frame: &JointFrame| FrictionMotor::new(c.friction, info[a].mass, frame.local_a.length(), g);
+            let friction = |frame: &JointFrame| {
+                FrictionMotor::new(c.friction, info[a].mass, frame.local_a.length(), g)
+            };
             match &c.kind {
                 JointKind::BallAndSocket {
                     anchor: p,
@@ -102,14 +136,19 @@ impl JointSet {
                         friction: friction(&frame),
                     });
                 }
-                JointKind::Hinge { anchor: p, axis, limit } => {
+                JointKind::Hinge {
+                    anchor: p,
+                    axis,
+                    limit,
+                } => {
                     let frame = JointFrame::new(s, a, b, *p);
                     set.hinge.push(HingeJoint {
                         frame,
                         point: PointPart::default(),
                         align: AlignPart::new(&frame, s, *axis),
                         gauge: AngleGauge::new(&frame, s, *axis),
-                        limit: limit.map(|r| AngleLimit::new(&frame, s, *axis, r, LimitStyle::Hard)),
+                        limit: limit
+                            .map(|r| AngleLimit::new(&frame, s, *axis, r, LimitStyle::Hard)),
                         friction: friction(&frame),
                     });
                 }
@@ -185,7 +224,12 @@ impl JointSet {
 
     /// Number of joints.
     pub fn len(&self) -> usize {
-        self.ball.len() + self.hinge.len() + self.universal.len() + self.fixed.len() + self.slider.len() + self.spring.len()
+        self.ball.len()
+            + self.hinge.len()
+            + self.universal.len()
+            + self.fixed.len()
+            + self.slider.len()
+            + self.spring.len()
     }
 
     /// True without joints.
@@ -235,17 +279,28 @@ impl JointSet {
                 let (axis, half_angle) = sw.draw_cone(&j.frame, s);
                 LimitShape::Cone { axis, half_angle }
             });
-            out.push(JointInstance { anchor, anchor2, limit });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
+            });
         }
         for j in &self.hinge {
             let (anchor, anchor2) = j.frame.anchors(s);
-            let limit = j.limit.as_ref().map_or(LimitShape::None, |l| LimitShape::Arc {
-                axis: s.rot[j.frame.b] * j.gauge.axis_b,
-                reference: s.rot[j.frame.b] * j.gauge.ref_b,
-                min: l.range.min,
-                max: l.range.max,
+            let limit = j
+                .limit
+                .as_ref()
+                .map_or(LimitShape::None, |l| LimitShape::Arc {
+                    axis: s.rot[j.frame.b] * j.gauge.axis_b,
+                    reference: s.rot[j.frame.b] * j.gauge.ref_b,
+                    min: l.range.min,
+                    max: l.range.max,
+                });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
             });
-            out.push(JointInstance { anchor, anchor2, limit });
         }
         for j in &self.universal {
             let (anchor, anchor2) = j.frame.anchors(s);
@@ -253,15 +308,27 @@ impl JointSet {
                 let (axis, half_angle) = sw.draw_cone(&j.frame, s);
                 LimitShape::Cone { axis, half_angle }
             });
-            out.push(JointInstance { anchor, anchor2, limit });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
+            });
         }
         for j in &self.fixed {
             let (anchor, anchor2) = j.frame.anchors(s);
-            out.push(JointInstance { anchor, anchor2, limit: LimitShape::None });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit: LimitShape::None,
+            });
         }
         for j in &self.spring {
             let (anchor, anchor2) = j.frame.anchors(s);
-            out.push(JointInstance { anchor, anchor2, limit: LimitShape::None });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit: LimitShape::None,
+            });
         }
     }
 }

@@ -7,7 +7,7 @@
 //! the *shaft* to body1.
 
 use super::body::BodyStates;
-use super::joint::{unwrap_angle, AlignPart, AxisRow, JointFrame, RowKind};
+use super::joint::{AlignPart, AxisRow, JointFrame, RowKind, unwrap_angle};
 use super::soft::StepContext;
 use crate::scene::{AngleRange, LimitStyle, SwingLimit, TwistLimit};
 use glam::{Quat, Vec3};
@@ -132,7 +132,11 @@ impl Swing {
                 let phi = a.dot(sh).clamp(-1.0, 1.0).acos();
                 // φ̇ = n · (ω_a − ω_b) with n the unit rotation axis from `a` to the shaft.
                 let n = a.cross(sh);
-                let n = if n.length_squared() > 1e-12 { n.normalize() } else { a.any_orthonormal_vector() };
+                let n = if n.length_squared() > 1e-12 {
+                    n.normalize()
+                } else {
+                    a.any_orthonormal_vector()
+                };
                 row.set(-n, *half_angle - phi, MARGIN);
             }
             Swing::Tight(_) => {}
@@ -145,7 +149,8 @@ impl Swing {
                 rows,
             } => {
                 let rb = s.rot[f.b];
-                let normals = Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half);
+                let normals =
+                    Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half);
                 let sh = s.rot[f.a] * *shaft_a;
                 for (row, n) in rows.iter_mut().zip(normals) {
                     // d(shaft·n)/dt = (ω_a − ω_b)·(shaft × n).
@@ -206,14 +211,18 @@ impl Swing {
         match self {
             Swing::Cone { row, .. } => row.solve(f, s, ctx, use_bias),
             Swing::Tight(p) => p.solve(f, s, ctx, use_bias),
-            Swing::Pyramid { rows, .. } => rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias)),
+            Swing::Pyramid { rows, .. } => {
+                rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias))
+            }
         }
     }
 
     /// World axis and half-angle for drawing (the pyramid drawn as its wider cone).
     pub fn draw_cone(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
         match self {
-            Swing::Cone { axis_b, half_angle, .. } => (s.rot[f.b] * *axis_b, *half_angle),
+            Swing::Cone {
+                axis_b, half_angle, ..
+            } => (s.rot[f.b] * *axis_b, *half_angle),
             Swing::Tight(p) => (s.rot[f.b] * p.local_b, 0.0),
             Swing::Pyramid { axis_b, half, .. } => (s.rot[f.b] * *axis_b, half[0].max(half[1])),
         }
@@ -276,7 +285,13 @@ pub struct AngleLimit {
 
 impl AngleLimit {
     /// A limit about the world `axis` at rest.
-    pub fn new(f: &JointFrame, s: &BodyStates, axis: Vec3, range: AngleRange, style: LimitStyle) -> AngleLimit {
+    pub fn new(
+        f: &JointFrame,
+        s: &BodyStates,
+        axis: Vec3,
+        range: AngleRange,
+        style: LimitStyle,
+    ) -> AngleLimit {
         let kind = row_kind(style);
         AngleLimit {
             gauge: AngleGauge::new(f, s, axis),
@@ -287,7 +302,16 @@ impl AngleLimit {
 
     /// From a twist limit.
     pub fn twist(f: &JointFrame, s: &BodyStates, t: &TwistLimit, style: LimitStyle) -> AngleLimit {
-        AngleLimit::new(f, s, t.axis, AngleRange { min: t.min, max: t.max }, style)
+        AngleLimit::new(
+            f,
+            s,
+            t.axis,
+            AngleRange {
+                min: t.min,
+                max: t.max,
+            },
+            style,
+        )
     }
 
     /// Measures the angle (remembering it for unwrapping) and sets the rows.
@@ -311,6 +335,8 @@ impl AngleLimit {
 
     /// One update of both rows.
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        self.rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias));
+        self.rows
+            .iter_mut()
+            .for_each(|r| r.solve(f, s, ctx, use_bias));
     }
 }

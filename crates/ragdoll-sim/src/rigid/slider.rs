@@ -1,6 +1,9 @@
 //! Slider (prismatic) joint: no relative rotation, relative translation only along an
 //! axis fixed in body1. The anchor is body1's centre of mass at rest.
 
+// `!(k > ε)` on purpose: it is also true for NaN, which must skip the row too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::body::BodyStates;
 use super::joint::{AngularLock3, JointFrame};
 use super::joint_set::JointSolve;
@@ -70,12 +73,18 @@ impl JointSolve for SliderJoint {
         let soft = if use_bias { ctx.joint } else { Softness::RIGID };
         for (k, u) in uv.into_iter().enumerate() {
             let (ja, jb) = (rad.cross(u), rb.cross(u));
-            let kk = s.inv_mass[f.a] + s.inv_mass[f.b] + ja.dot(s.inv_inertia[f.a] * ja) + jb.dot(s.inv_inertia[f.b] * jb);
+            let kk = s.inv_mass[f.a]
+                + s.inv_mass[f.b]
+                + ja.dot(s.inv_inertia[f.a] * ja)
+                + jb.dot(s.inv_inertia[f.b] * jb);
             if !(kk > 1e-20) {
                 continue;
             }
-            let cdot = u.dot(s.lin_vel[f.b]) + jb.dot(s.ang_vel[f.b]) - u.dot(s.lin_vel[f.a]) - ja.dot(s.ang_vel[f.a]);
-            let l = -soft.mass_scale / kk * (cdot + soft.bias_rate * u.dot(d)) - soft.impulse_scale * self.impulse[k];
+            let cdot = u.dot(s.lin_vel[f.b]) + jb.dot(s.ang_vel[f.b])
+                - u.dot(s.lin_vel[f.a])
+                - ja.dot(s.ang_vel[f.a]);
+            let l = -soft.mass_scale / kk * (cdot + soft.bias_rate * u.dot(d))
+                - soft.impulse_scale * self.impulse[k];
             self.impulse[k] += l;
             self.apply(s, u, rad, rb, l);
         }

@@ -106,7 +106,13 @@ pub fn step(
 
 /// `awake` and the solver inverse masses from the sleep flags: sleeping bodies act as
 /// static until woken.
-pub fn refresh_awake(s: &mut BodyStates, info: &[BodyInfo], islands: &Islands, awake: &mut [bool], dynamic: &[bool]) {
+pub fn refresh_awake(
+    s: &mut BodyStates,
+    info: &[BodyInfo],
+    islands: &Islands,
+    awake: &mut [bool],
+    dynamic: &[bool],
+) {
     for i in 0..info.len() {
         awake[i] = dynamic[i] && !islands.asleep[i];
         s.inv_mass[i] = if awake[i] { info[i].inv_mass } else { 0.0 };

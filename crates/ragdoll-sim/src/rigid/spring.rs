@@ -2,6 +2,9 @@
 //! the rest length and `compress` when shorter, viscous `damping`, and optional hard
 //! minimum and maximum lengths.
 
+// `!(k > ε)` on purpose: it is also true for NaN, which must skip the row too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::body::BodyStates;
 use super::joint::JointFrame;
 use super::joint_set::JointSolve;
@@ -63,7 +66,10 @@ impl JointSolve for SpringJoint {
         let f = self.frame;
         let (n, len, ra, rb) = self.geometry(s);
         let (ja, jb) = (ra.cross(n), rb.cross(n));
-        let k = s.inv_mass[f.a] + s.inv_mass[f.b] + ja.dot(s.inv_inertia[f.a] * ja) + jb.dot(s.inv_inertia[f.b] * jb);
+        let k = s.inv_mass[f.a]
+            + s.inv_mass[f.b]
+            + ja.dot(s.inv_inertia[f.a] * ja)
+            + jb.dot(s.inv_inertia[f.b] * jb);
         if !(k > 1e-20) {
             return;
         }

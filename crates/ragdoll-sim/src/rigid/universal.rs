@@ -41,7 +41,8 @@ impl JointSolve for UniversalJoint {
         let f = &self.frame;
         let s1 = s.rot[f.a] * self.shaft_a;
         let s2 = s.rot[f.b] * self.shaft_b;
-        self.cross_row.set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
+        self.cross_row
+            .set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
         if let Some(sw) = &mut self.swing {
             sw.update(f, s);
         }

@@ -1,14 +1,16 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{collider, BodyInfo, BodyStates};
-use super::contact::{may_collide, shape_pose, Contacts, GroundCollider};
+use super::body::{BodyInfo, BodyStates, collider};
+use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
 use super::solver;
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
-use crate::scene::{mass_props, validate, BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings};
+use crate::scene::{
+    BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, mass_props, validate,
+};
 use crate::snapshot::{BodyInstance, BodyRole, ContactInstance, RenderSnapshot};
 use glam::{Quat, Vec3};
 use parry3d::math::Pose as PPose;
@@ -61,7 +63,11 @@ impl MultibodyWorld {
             let fig = root(&mut figure, i as u32);
             info.push(BodyInfo::new(b, &mp, shape, fig));
             let com = b.pose.transform_point(mp.local_com);
-            let (v, w) = if b.is_fixed() { (Vec3::ZERO, Vec3::ZERO) } else { (b.linear_velocity, b.angular_velocity) };
+            let (v, w) = if b.is_fixed() {
+                (Vec3::ZERO, Vec3::ZERO)
+            } else {
+                (b.linear_velocity, b.angular_velocity)
+            };
             states.push(com, b.pose.rotation, v, w);
         }
         // The static anchor: the world and the ground.
@@ -134,7 +140,11 @@ impl MultibodyWorld {
             let pa = shape_pose(&self.states, &self.info, a);
             if b == n {
                 // Against the plane: depth of the shape's support point along −n.
-                let g = self.contacts.ground.as_ref().expect("ground pair without ground");
+                let g = self
+                    .contacts
+                    .ground
+                    .as_ref()
+                    .expect("ground pair without ground");
                 if let Some(sm) = self.info[a].collider.as_support_map() {
                     let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
                     let p = pa.transform_point(local);
@@ -143,7 +153,13 @@ impl MultibodyWorld {
                 continue;
             }
             let pb = shape_pose(&self.states, &self.info, b);
-            if let Ok(Some(c)) = query::contact(&pa, &*self.info[a].collider, &pb, &*self.info[b].collider, 0.0) {
+            if let Ok(Some(c)) = query::contact(
+                &pa,
+                &*self.info[a].collider,
+                &pb,
+                &*self.info[b].collider,
+                0.0,
+            ) {
                 deepest = deepest.max(-c.dist);
             }
         }
@@ -167,7 +183,10 @@ impl Method for MultibodyWorld {
 
     fn solver_label(&self) -> String {
         let s = &self.scene.settings;
-        format!("soft step, {} substeps × {} iterations", s.substeps, s.iterations)
+        format!(
+            "soft step, {} substeps × {} iterations",
+            s.substeps, s.iterations
+        )
     }
 
     fn time(&self) -> f64 {
@@ -259,7 +278,8 @@ impl Method for MultibodyWorld {
             let q = self.states.rot[i];
             // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
             let wb = q.inverse() * w;
-            kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64 + 0.5 * wb.dot(b.inertia * wb) as f64;
+            kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
+                + 0.5 * wb.dot(b.inertia * wb) as f64;
             potential += potential_energy(&self.scene, b.mass, self.states.com[i]);
         }
         Sample {
@@ -302,15 +322,14 @@ impl Method for MultibodyWorld {
         let mut best: Option<RayHit> = None;
         for (i, b) in self.info.iter().enumerate() {
             let pose = shape_pose(&self.states, &self.info, i);
-            if let Some(t) = b.collider.cast_ray(&pose, &ray, f32::MAX, true) {
-                if best.is_none_or(|h| t < h.distance) {
-                    let p = origin + dir * t;
-                    best = Some(RayHit {
-                        body: BodyId(i as u32),
-                        distance: t,
-                        local_point: self.pose(i).inverse_transform_point(p),
-                    });
-                }
+            if let Some(t) = b.collider.cast_ray(&pose, &ray, f32::MAX, true)
+                && best.is_none_or(|h| t < h.distance)
+            {
+                best = Some(RayHit {
+                    body: BodyId(i as u32),
+                    distance: t,
+                    local_point: self.pose(i).inverse_transform_point(origin + dir * t),
+                });
             }
         }
         best
@@ -346,7 +365,13 @@ impl Method for MultibodyWorld {
         let new_anchor = i + 1;
         self.joints_retarget(old_anchor, new_anchor);
         self.contacts.pairs.clear();
-        solver::refresh_awake(&mut self.states, &self.info, &self.islands, &mut self.awake, &self.dynamic);
+        solver::refresh_awake(
+            &mut self.states,
+            &self.info,
+            &self.islands,
+            &mut self.awake,
+            &self.dynamic,
+        );
         BodyId(i as u32)
     }
 }
@@ -359,11 +384,29 @@ impl MultibodyWorld {
                 *b = new;
             }
         };
-        self.joints.ball.iter_mut().for_each(|j| fix(&mut j.frame.b));
-        self.joints.hinge.iter_mut().for_each(|j| fix(&mut j.frame.b));
-        self.joints.universal.iter_mut().for_each(|j| fix(&mut j.frame.b));
-        self.joints.fixed.iter_mut().for_each(|j| fix(&mut j.frame.b));
-        self.joints.slider.iter_mut().for_each(|j| fix(&mut j.frame.b));
-        self.joints.spring.iter_mut().for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .ball
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .hinge
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .universal
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .fixed
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .slider
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .spring
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
     }
 }
