@@ -185,34 +185,34 @@ impl Contacts {
         self.candidates.sort_unstable();
         self.candidates.dedup();
 
-        // Merge the sorted candidate list with the sorted cache.
+        // Merge the sorted candidate list with the sorted cache: surviving pairs move over
+        // with their parry workspace and impulses, new ones start empty.
         std::mem::swap(&mut self.pairs, &mut self.spare);
         self.pairs.clear();
-        let mut old = std::mem::take(&mut self.spare).into_iter().peekable();
+        let mut k = 0;
         for &(a, b) in &self.candidates {
-            while old.peek().is_some_and(|p| (p.a, p.b) < (a, b)) {
-                old.next();
+            while k < self.spare.len() && (self.spare[k].a, self.spare[k].b) < (a, b) {
+                k += 1;
             }
-            let pair = match old.peek() {
-                Some(p) if (p.a, p.b) == (a, b) => old.next().expect("peeked"),
-                _ => {
-                    let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
-                    let (fb, rb) = match (&self.ground, b == anchor) {
-                        (Some(g), true) => (g.friction, g.restitution),
-                        _ => (info[b as usize].friction, info[b as usize].restitution),
-                    };
-                    ContactPair {
-                        a,
-                        b,
-                        friction: (fa * fb).sqrt(),
-                        restitution: ra.max(rb),
-                        ..Default::default()
-                    }
+            let pair = if k < self.spare.len() && (self.spare[k].a, self.spare[k].b) == (a, b) {
+                k += 1;
+                std::mem::take(&mut self.spare[k - 1])
+            } else {
+                let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
+                let (fb, rb) = match (&self.ground, b == anchor) {
+                    (Some(g), true) => (g.friction, g.restitution),
+                    _ => (info[b as usize].friction, info[b as usize].restitution),
+                };
+                ContactPair {
+                    a,
+                    b,
+                    friction: (fa * fb).sqrt(),
+                    restitution: ra.max(rb),
+                    ..Default::default()
                 }
             };
             self.pairs.push(pair);
         }
-        self.spare = old.collect();
         self.spare.clear();
 
         for pair in &mut self.pairs {
