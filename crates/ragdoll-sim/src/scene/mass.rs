@@ -127,7 +127,12 @@ impl SceneDesc {
             MassSpec::Mass(m) | MassSpec::Density(m) => m,
         };
         if let Some(total) = self.settings.total_mass {
-            let sum: f32 = self.bodies.iter().filter(|b| !b.is_fixed()).map(|b| kg(b.mass)).sum();
+            let sum: f32 = self
+                .bodies
+                .iter()
+                .filter(|b| !b.is_fixed())
+                .map(|b| kg(b.mass))
+                .sum();
             if sum > 0.0 {
                 let k = total / sum;
                 for b in self.bodies.iter_mut().filter(|b| !b.is_fixed()) {
