@@ -664,6 +664,11 @@ fn read_settings(
                 }
             }
             "selfcollision" => d.self_collision = ctx.flag(e)?,
+            // The one-value forms of the friction keys.
+            "linearfriction" => d.friction.linear = ctx.nonneg(e)?,
+            "angularfriction" => d.friction.angular = ctx.nonneg(e)?,
+            "contactfriction" => d.friction.contact = ctx.nonneg(e)?,
+            "constraintfriction" => d.constraint_friction = ctx.nonneg(e)?,
             "totalmass" => {
                 let m = ctx.one(e)?;
                 s.total_mass = (m > 0.0).then_some(m);
@@ -693,7 +698,7 @@ fn read_settings(
             "dampingratio" => s.damping_ratio = ctx.nonneg(e)?,
             "maxpushoutspeed" => s.max_push_out_speed = ctx.nonneg(e)? * scale,
             "restitutionthreshold" => s.restitution_threshold = ctx.nonneg(e)? * scale,
-            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
+            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, linearFriction, angularFriction, contactFriction, constraintFriction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
         }
     }
     Ok(())
@@ -901,6 +906,9 @@ fn read_body(ctx: &mut Ctx, b: &Block, name: &str, d: &Defaults) -> R<BodyDesc> 
                 body.friction = Friction { linear: ctx.arg(e, 0)?, angular: ctx.arg(e, 1)?, contact: ctx.arg(e, 2)? };
             }
             "selfcollision" => body.self_collision = ctx.flag(e)?,
+            "linearfriction" => body.friction.linear = ctx.nonneg(e)?,
+            "angularfriction" => body.friction.angular = ctx.nonneg(e)?,
+            "contactfriction" => body.friction.contact = ctx.nonneg(e)?,
             "contents" | "clipmask" => ctx.ignore(e, "Doom 3's collision groups: every body collides with the ground and other figures, and with its own figure per selfCollision"),
             "containedjoints" => ctx.ignore(e, "maps projectile hits on the skinned mesh to bodies; there is no skinned mesh"),
             "frictiondirection" => ctx.ignore(e, "anisotropic contact friction is not simulated; friction is isotropic"),
@@ -925,7 +933,7 @@ fn read_body(ctx: &mut Ctx, b: &Block, name: &str, d: &Defaults) -> R<BodyDesc> 
                 particles = Some((p, e.pos));
             }
             _ => {
-                return Err(unknown_key(ctx, e, &format!("body \"{name}\""), "joint, mod, model, origin, angles, density, inertiaScale, friction, selfCollision, contents, clipMask, containedJoints, frictionDirection, contactMotorDirection; ours: mass, fixed, restitution, linearVelocity, angularVelocity, particles"));
+                return Err(unknown_key(ctx, e, &format!("body \"{name}\""), "joint, mod, model, origin, angles, density, inertiaScale, friction, linearFriction, angularFriction, contactFriction, selfCollision, contents, clipMask, containedJoints, frictionDirection, contactMotorDirection; ours: mass, fixed, restitution, linearVelocity, angularVelocity, particles"));
             }
         }
     }
