@@ -136,6 +136,13 @@ fn unknown_and_reserved_bodies() {
         6,
         "may not be named \"world\"",
     );
+    check(
+        "body \"b\"",
+        "body \"Origin\"",
+        10,
+        6,
+        "may not be named \"origin\"",
+    );
     check("body2 \"a\"", "body2 \"b\"", 15, 1, "to itself");
     check("\tbody2 \"a\"\n", "", 15, 1, "missing `body2`");
     check("\tanchor ( 0, 1.1, 0 )\n", "", 15, 1, "missing `anchor`");

@@ -499,6 +499,14 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
                     .into(),
             ));
         }
+        if bname.eq_ignore_ascii_case("origin") {
+            // Doom 3 refuses it too: "origin" names the skeleton's root joint.
+            return Err(err(
+                npos,
+                "a body may not be named \"origin\": Doom 3 reserves it for the skeleton's root"
+                    .into(),
+            ));
+        }
         if let Some(prev) = body_pos.get(bname) {
             return Err(err(
                 npos,
