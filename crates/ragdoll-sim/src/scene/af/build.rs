@@ -41,7 +41,172 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
     let fname = file.display().to_string();
     let err = |pos: Pos, m: String| AfError::at(&fname, pos, m);
 
-    // 1. Unwrap `articulatedFigure name { ... }` and check every kind.
+    let (figure_name, merged, variant_info) = select_variant(blocks, opts, &fname)?;
+    let (conv, mesh_key) = read_units(&merged, &fname)?;
+    let mut ctx = Ctx {
+        file: fname.clone(),
+        dir: file.parent().map(Path::to_path_buf).unwrap_or_default(),
+        conv,
+        opts,
+        mesh_key,
+        mesh: None,
+        ignored: Vec::new(),
+    };
+
+    let mut settings = Settings::default();
+    let mut defaults = Defaults {
+        friction: Friction::default(),
+        self_collision: true,
+        constraint_friction: 0.0,
+    };
+    let mut name = figure_name.unwrap_or_else(|| {
+        file.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    let mut transform = Pose::IDENTITY;
+    let mut replicate = None;
+    let mut settings_pos = Pos { line: 1, col: 1 };
+    for b in &merged {
+        match canonical(&b.kind).unwrap_or("") {
+            "settings" => {
+                settings_pos = b.pos;
+                read_settings(&mut ctx, b, &mut settings, &mut defaults, &mut name)?
+            }
+            "ground" => read_ground(&mut ctx, b, &mut settings)?,
+            "camera" => read_camera(&mut ctx, b, &mut settings.camera)?,
+            "transform" => transform = read_transform(&mut ctx, b)?,
+            "replicate" => replicate = Some(read_replicate(&mut ctx, b)?),
+            _ => {}
+        }
+    }
+
+    // Bodies, then constraints (which may name bodies declared after them).
+    let mut desc = SceneDesc {
+        name,
+        settings,
+        variant: opts.variant.max(1),
+        variants: variant_info,
+        ..Default::default()
+    };
+    let mut body_pos: HashMap<String, Pos> = HashMap::new();
+    for b in merged.iter().filter(|b| canonical(&b.kind) == Some("body")) {
+        let (bname, npos) = b
+            .name()
+            .ok_or_else(|| err(b.pos, "expected `body \"name\" {`".into()))?;
+        if bname.eq_ignore_ascii_case("world") {
+            return Err(err(
+                npos,
+                "a body may not be named \"world\": that name means the static world in body2"
+                    .into(),
+            ));
+        }
+        if bname.eq_ignore_ascii_case("origin") {
+            // Doom 3 refuses it too: "origin" names the skeleton's root joint.
+            return Err(err(
+                npos,
+                "a body may not be named \"origin\": Doom 3 reserves it for the skeleton's root"
+                    .into(),
+            ));
+        }
+        if let Some(prev) = body_pos.get(bname) {
+            return Err(err(
+                npos,
+                format!(
+                    "a body named \"{bname}\" is already defined at line {}",
+                    prev.line
+                ),
+            ));
+        }
+        body_pos.insert(bname.to_string(), npos);
+        let body = read_body(&mut ctx, b, bname, &defaults)?;
+        desc.bodies.push(body);
+    }
+    let ids: HashMap<&str, BodyId> = desc
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.name.as_str(), BodyId(i as u32)))
+        .collect();
+    let mut constraint_pos: HashMap<String, Pos> = HashMap::new();
+    let mut constraints = Vec::new();
+    for b in merged
+        .iter()
+        .filter(|b| CONSTRAINTS.contains(&canonical(&b.kind).unwrap_or("")))
+    {
+        let kind = canonical(&b.kind).expect("filtered");
+        let (cname, npos) = b
+            .name()
+            .ok_or_else(|| err(b.pos, format!("expected `{kind} \"name\" {{`")))?;
+        if let Some(prev) = constraint_pos.get(cname) {
+            return Err(err(
+                npos,
+                format!(
+                    "a constraint named \"{cname}\" is already defined at line {}",
+                    prev.line
+                ),
+            ));
+        }
+        constraint_pos.insert(cname.to_string(), npos);
+        constraints.push(read_constraint(&mut ctx, b, kind, cname, &ids, &defaults)?);
+    }
+    desc.constraints = constraints;
+    if desc.bodies.is_empty() {
+        return Err(err(
+            Pos { line: 1, col: 1 },
+            "the file defines no bodies; expected at least one `body \"name\" { ... }`".into(),
+        ));
+    }
+
+    // Validate, resolve masses (with totalMass), place the figure.
+    let locate = |e: SceneError| -> AfError {
+        let pos = match &e {
+            SceneError::Degenerate { body, .. } => body_pos.get(body).copied(),
+            SceneError::BadConstraint { constraint, .. } => constraint_pos.get(constraint).copied(),
+            SceneError::BadSetting { .. } => Some(settings_pos),
+        };
+        err(pos.unwrap_or(Pos { line: 1, col: 1 }), e.to_string())
+    };
+    validate(&desc).map_err(locate)?;
+    desc.resolve_masses().map_err(locate)?;
+    if transform != Pose::IDENTITY {
+        for body in &mut desc.bodies {
+            place_body(body, &transform);
+        }
+        for c in &mut desc.constraints {
+            place_joint(&mut c.kind, &transform);
+        }
+    }
+    let count = opts
+        .count
+        .or(replicate.as_ref().map(|r| r.count))
+        .unwrap_or(1);
+    if count == 0 || count > MAX_COPIES {
+        let pos = replicate
+            .as_ref()
+            .map_or(Pos { line: 1, col: 1 }, |r| r.pos);
+        return Err(err(
+            pos,
+            format!("the number of copies must be from 1 to {MAX_COPIES}; found {count}"),
+        ));
+    }
+    if count > 1 || replicate.is_some() {
+        let grid = replicate.unwrap_or_default();
+        replicate_figure(&mut desc, &grid, count);
+    }
+    let mut ignored = ctx.ignored;
+    ignored.sort_by_key(|i| (i.line, i.col));
+    Ok(AfScene { desc, ignored })
+}
+
+/// Unwraps `articulatedFigure name { ... }`, then applies the chosen variant's blocks
+/// over the base ones. Returns the figure's name, the merged blocks and the variant list.
+fn select_variant(
+    blocks: Vec<Block>,
+    opts: &AfOptions,
+    fname: &str,
+) -> R<(Option<String>, Vec<Block>, Vec<VariantInfo>)> {
+    let err = |pos: Pos, m: String| AfError::at(fname, pos, m);
     let mut figure_name = None;
     let mut items = Vec::new();
     for b in blocks {
@@ -55,7 +220,6 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
         }
     }
 
-    // 2. Variants: base blocks plus the chosen variant's overrides.
     let mut variants: Vec<(u32, String, Pos, Vec<Block>)> = Vec::new();
     let mut base = Vec::new();
     for b in items {
@@ -136,9 +300,14 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
         }
         v
     };
-    let merged = merge(base, chosen, &fname)?;
+    let merged = merge(base, chosen, fname)?;
+    Ok((figure_name, merged, variant_info))
+}
 
-    // 3. Settings first: units and axes decide how everything else is read.
+/// Reads `units`, `up` and the mesh path from the settings first: they decide how every
+/// other value is read.
+fn read_units(merged: &[Block], fname: &str) -> R<(Conv, Option<(String, Pos)>)> {
+    let err = |pos: Pos, m: String| AfError::at(fname, pos, m);
     let mut conv = Conv {
         scale: 0.0254,
         z_up: true,
@@ -196,160 +365,7 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
             }
         }
     }
-    let mut ctx = Ctx {
-        file: fname.clone(),
-        dir: file.parent().map(Path::to_path_buf).unwrap_or_default(),
-        conv,
-        opts,
-        mesh_key,
-        mesh: None,
-        ignored: Vec::new(),
-    };
-
-    let mut settings = Settings::default();
-    let mut defaults = Defaults {
-        friction: Friction::default(),
-        self_collision: true,
-        constraint_friction: 0.0,
-    };
-    let mut name = figure_name.unwrap_or_else(|| {
-        file.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    });
-    let mut transform = Pose::IDENTITY;
-    let mut replicate = None;
-    let mut settings_pos = Pos { line: 1, col: 1 };
-    for b in &merged {
-        match canonical(&b.kind).unwrap_or("") {
-            "settings" => {
-                settings_pos = b.pos;
-                read_settings(&mut ctx, b, &mut settings, &mut defaults, &mut name)?
-            }
-            "ground" => read_ground(&mut ctx, b, &mut settings)?,
-            "camera" => read_camera(&mut ctx, b, &mut settings.camera)?,
-            "transform" => transform = read_transform(&mut ctx, b)?,
-            "replicate" => replicate = Some(read_replicate(&mut ctx, b)?),
-            _ => {}
-        }
-    }
-
-    // 4. Bodies, then constraints (which may name bodies declared after them).
-    let mut desc = SceneDesc {
-        name,
-        settings,
-        variant: wanted,
-        variants: variant_info,
-        ..Default::default()
-    };
-    let mut body_pos: HashMap<String, Pos> = HashMap::new();
-    for b in merged.iter().filter(|b| canonical(&b.kind) == Some("body")) {
-        let (bname, npos) = b
-            .name()
-            .ok_or_else(|| err(b.pos, "expected `body \"name\" {`".into()))?;
-        if bname.eq_ignore_ascii_case("world") {
-            return Err(err(
-                npos,
-                "a body may not be named \"world\": that name means the static world in body2"
-                    .into(),
-            ));
-        }
-        if bname.eq_ignore_ascii_case("origin") {
-            // Doom 3 refuses it too: "origin" names the skeleton's root joint.
-            return Err(err(
-                npos,
-                "a body may not be named \"origin\": Doom 3 reserves it for the skeleton's root"
-                    .into(),
-            ));
-        }
-        if let Some(prev) = body_pos.get(bname) {
-            return Err(err(
-                npos,
-                format!(
-                    "a body named \"{bname}\" is already defined at line {}",
-                    prev.line
-                ),
-            ));
-        }
-        body_pos.insert(bname.to_string(), npos);
-        let body = read_body(&mut ctx, b, bname, &defaults)?;
-        desc.bodies.push(body);
-    }
-    let ids: HashMap<&str, BodyId> = desc
-        .bodies
-        .iter()
-        .enumerate()
-        .map(|(i, b)| (b.name.as_str(), BodyId(i as u32)))
-        .collect();
-    let mut constraint_pos: HashMap<String, Pos> = HashMap::new();
-    let mut constraints = Vec::new();
-    for b in merged
-        .iter()
-        .filter(|b| CONSTRAINTS.contains(&canonical(&b.kind).unwrap_or("")))
-    {
-        let kind = canonical(&b.kind).expect("filtered");
-        let (cname, npos) = b
-            .name()
-            .ok_or_else(|| err(b.pos, format!("expected `{kind} \"name\" {{`")))?;
-        if let Some(prev) = constraint_pos.get(cname) {
-            return Err(err(
-                npos,
-                format!(
-                    "a constraint named \"{cname}\" is already defined at line {}",
-                    prev.line
-                ),
-            ));
-        }
-        constraint_pos.insert(cname.to_string(), npos);
-        constraints.push(read_constraint(&mut ctx, b, kind, cname, &ids, &defaults)?);
-    }
-    desc.constraints = constraints;
-    if desc.bodies.is_empty() {
-        return Err(err(
-            Pos { line: 1, col: 1 },
-            "the file defines no bodies; expected at least one `body \"name\" { ... }`".into(),
-        ));
-    }
-
-    // 5. Validate, resolve masses (with totalMass), place the figure.
-    let locate = |e: SceneError| -> AfError {
-        let pos = match &e {
-            SceneError::Degenerate { body, .. } => body_pos.get(body).copied(),
-            SceneError::BadConstraint { constraint, .. } => constraint_pos.get(constraint).copied(),
-            SceneError::BadSetting { .. } => Some(settings_pos),
-        };
-        err(pos.unwrap_or(Pos { line: 1, col: 1 }), e.to_string())
-    };
-    validate(&desc).map_err(locate)?;
-    desc.resolve_masses().map_err(locate)?;
-    if transform != Pose::IDENTITY {
-        for body in &mut desc.bodies {
-            place_body(body, &transform);
-        }
-        for c in &mut desc.constraints {
-            place_joint(&mut c.kind, &transform);
-        }
-    }
-    let count = opts
-        .count
-        .or(replicate.as_ref().map(|r| r.count))
-        .unwrap_or(1);
-    if count == 0 || count > MAX_COPIES {
-        let pos = replicate
-            .as_ref()
-            .map_or(Pos { line: 1, col: 1 }, |r| r.pos);
-        return Err(err(
-            pos,
-            format!("the number of copies must be from 1 to {MAX_COPIES}; found {count}"),
-        ));
-    }
-    if count > 1 || replicate.is_some() {
-        let grid = replicate.unwrap_or_default();
-        replicate_figure(&mut desc, &grid, count);
-    }
-    let mut ignored = ctx.ignored;
-    ignored.sort_by_key(|i| (i.line, i.col));
-    Ok(AfScene { desc, ignored })
+    Ok((conv, mesh_key))
 }
 
 /// Most copies `replicate` or `--count` may ask for (160 000 bodies of the human).
