@@ -1,0 +1,108 @@
+//! Contact response of the improved solver: position-level normal and static friction,
+//! velocity-level kinetic friction and restitution (Müller et al. 2020, "Detailed rigid
+//! body simulation with extended position based dynamics", sections 3.5 and 3.6).
+//!
+//! Static friction is a positional constraint that cancels the tangential slip of the
+//! contact points during the substep, allowed only while its multiplier stays inside
+//! the Coulomb cone, `λ_t ≤ μ λ_n`. Kinetic friction and restitution then adjust the
+//! velocities derived from the positions: the tangential impulse is capped by `μ` times
+//! the normal impulse `λ_n / h`, and the normal velocity is set to `−e v_n` (before the
+//! solve) — or to zero below the restitution threshold, which also removes any velocity
+//! the position projection created: pushing out of a penetration must not add energy.
+
+use super::bone::{point_inv_mass, positional, side_world, Bone, Side};
+use super::contacts::Contact;
+use glam::Vec3;
+
+fn side_prev(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
+    match s {
+        Some(i) => bones[i].world_prev(local),
+        None => local,
+    }
+}
+
+/// Velocity of a side's material point at world `p`.
+pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
+    match s {
+        Some(i) if !bones[i].is_static() => {
+            let b = &bones[i];
+            b.lin_vel + b.ang_vel.cross(p - b.com)
+        }
+        _ => Vec3::ZERO,
+    }
+}
+
+/// Position pass for one contact: push apart along the normal, then hold it by static
+/// friction if the Coulomb cone allows. Accumulates `lambda_n`.
+pub(crate) fn solve_position(bones: &mut [Bone], c: &mut Contact) {
+    let a = Some(c.a);
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let depth = (pa - pb).dot(c.n);
+    if depth <= 0.0 {
+        return;
+    }
+    c.lambda_n += positional(bones, a, c.b, pa, pb, -c.n * depth, 0.0);
+    // Slip of the contact points since the start of the substep, tangential part.
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let slip = (pa - bones[c.a].world_prev(c.ra)) - (pb - side_prev(bones, c.b, c.rb));
+    let slip_t = slip - c.n * slip.dot(c.n);
+    let len = slip_t.length();
+    if len < 1e-9 {
+        return;
+    }
+    let t = slip_t / len;
+    let w = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, c.b, pb, t);
+    if w <= 0.0 {
+        return;
+    }
+    if len / w <= c.mu * c.lambda_n {
+        positional(bones, a, c.b, pa, pb, -slip_t, 0.0);
+    }
+}
+
+/// Applies a velocity impulse `p` at world point `at` to a side.
+fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
+    if let Some(i) = s {
+        let b = &mut bones[i];
+        if b.is_static() {
+            return;
+        }
+        let dw = b.inv_inertia() * (at - b.com).cross(p);
+        b.lin_vel += p * b.inv_mass();
+        b.ang_vel += dw;
+    }
+}
+
+/// Velocity pass for one contact that was active this substep.
+pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitution_threshold: f32) {
+    if c.lambda_n <= 0.0 {
+        return;
+    }
+    let a = Some(c.a);
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let v = point_velocity(bones, a, pa) - point_velocity(bones, c.b, pb);
+    let vn = v.dot(c.n);
+    let vt = v - c.n * vn;
+    // Normal: restitution on the approach speed before the solve, never more.
+    let target = if c.vn_before > restitution_threshold { -c.e * c.vn_before } else { 0.0 };
+    let wn = point_inv_mass(bones, a, pa, c.n) + point_inv_mass(bones, c.b, pb, c.n);
+    if wn > 0.0 {
+        let p = c.n * ((target - vn) / wn);
+        apply_velocity_impulse(bones, a, pa, p);
+        apply_velocity_impulse(bones, c.b, pb, -p);
+    }
+    // Kinetic friction: an impulse against the slip, at most μ times the normal impulse.
+    let lt = vt.length();
+    if lt > 1e-9 {
+        let t = vt / lt;
+        let wt = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, c.b, pb, t);
+        if wt > 0.0 {
+            let mag = (lt / wt).min(c.mu * c.lambda_n / h);
+            apply_velocity_impulse(bones, a, pa, -t * mag);
+            apply_velocity_impulse(bones, c.b, pb, t * mag);
+        }
+    }
+}
