@@ -31,8 +31,13 @@ pub(crate) struct Bone {
     pub rest: [Vec3; 4],
     /// Rest lengths of the six sticks (`EDGES`).
     pub stick_rest: [f32; 6],
-    /// Bone frame: origin (the centre of mass in improved mode).
+    /// Bone frame: origin (the centre of mass in improved mode) at the start of the
+    /// substep; the frame's origin is `com + dcom`.
     pub com: Vec3,
+    /// Displacement of the origin during the current substep. Kept apart from `com` so
+    /// that velocities, `dcom / h`, come from small numbers: differences of f32
+    /// positions 50 m from the origin would round to a biased 1e-3 m/s per substep.
+    pub dcom: Vec3,
     /// Bone frame: orientation.
     pub rot: Quat,
     /// Frame at the start of the current substep (for static friction).
@@ -91,10 +96,20 @@ impl Bone {
         r * Mat3::from_diagonal(self.inv_inertia_local) * r.transpose()
     }
 
+    /// The frame origin now.
+    pub fn center(&self) -> Vec3 {
+        self.com + self.dcom
+    }
+
+    /// Motion of a bone-frame point during the current substep.
+    pub fn displacement(&self, local: Vec3) -> Vec3 {
+        self.dcom + (self.rot * local - self.prev_rot * local)
+    }
+
     /// World pose of the shape frame.
     pub fn shape_pose(&self) -> Pose {
         Pose {
-            position: self.com,
+            position: self.center(),
             rotation: self.rot,
         }
         .mul_pose(&self.shape_in_bone)
@@ -108,12 +123,7 @@ impl Bone {
 
     /// World position of a point given in the bone frame.
     pub fn world(&self, local: Vec3) -> Vec3 {
-        self.com + self.rot * local
-    }
-
-    /// The same point at the start of the substep.
-    pub fn world_prev(&self, local: Vec3) -> Vec3 {
-        self.prev_com + self.prev_rot * local
+        self.com + (self.dcom + self.rot * local)
     }
 
     /// Largest relative stick-length error of the bone now.
@@ -141,8 +151,10 @@ impl Bone {
     /// is the rotational part of `A = Σ (x_i − c) r_iᵀ`, extracted by Müller et al. 2016
     /// ("A robust method to extract the rotational part of deformations"), warm-started
     /// from the previous frame so it stays continuous.
-    pub fn shape_match(&mut self, x: &[Vec3]) {
-        let p: [Vec3; 4] = std::array::from_fn(|k| x[self.particles[k] as usize]);
+    ///
+    /// `u` are the particle positions relative to `com`; the result goes to `dcom`.
+    pub fn shape_match(&mut self, u: &[Vec3; 4]) {
+        let p = u;
         let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
         let mut a = Mat3::ZERO;
         for k in 0..4 {
@@ -150,7 +162,7 @@ impl Bone {
             let r = self.rest[k];
             a += Mat3::from_cols(d * r.x, d * r.y, d * r.z);
         }
-        self.com = c;
+        self.dcom = c;
         self.rot = extract_rotation(a, self.rot);
     }
 
@@ -219,7 +231,7 @@ pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
             if b.is_static() {
                 return 0.0;
             }
-            let rn = (p - b.com).cross(n);
+            let rn = (p - b.center()).cross(n);
             b.inv_mass() + rn.dot(b.inv_inertia() * rn)
         }
         None => 0.0,
@@ -241,8 +253,8 @@ pub(crate) fn apply_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
         if b.is_static() {
             return;
         }
-        let dtheta = b.inv_inertia() * (at - b.com).cross(p);
-        b.com += p * b.inv_mass();
+        let dtheta = b.inv_inertia() * (at - b.center()).cross(p);
+        b.dcom += p * b.inv_mass();
         b.rot = rotate(b.rot, dtheta);
     }
 }

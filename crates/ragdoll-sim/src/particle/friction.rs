@@ -1,23 +1,27 @@
-//! Contact response of the improved solver: position-level normal and static friction,
-//! velocity-level kinetic friction and restitution (Müller et al. 2020, "Detailed rigid
-//! body simulation with extended position based dynamics", sections 3.5 and 3.6).
+//! Contact response of the improved solver (after Müller et al. 2020, "Detailed rigid
+//! body simulation with extended position based dynamics", sections 3.5–3.6).
 //!
-//! Static friction is a positional constraint that cancels the tangential slip of the
-//! contact points during the substep, allowed only while its multiplier stays inside
-//! the Coulomb cone, `λ_t ≤ μ λ_n`. Kinetic friction and restitution then adjust the
-//! velocities derived from the positions: the tangential impulse is capped by `μ` times
-//! the normal impulse `λ_n / h`, and the normal velocity is set to `−e v_n` (before the
-//! solve) — or to zero below the restitution threshold, which also removes any velocity
-//! the position projection created: pushing out of a penetration must not add energy.
+//! Position level, per substep: the normal constraint pushes the shapes apart; then the
+//! tangential slip of the contact points during the substep is cancelled entirely when
+//! its multiplier stays inside the Coulomb cone, `λ_t ≤ μ λ_n` (static friction), and
+//! otherwise only up to `λ_t = μ λ_n` (kinetic friction). Clamping rather than
+//! all-or-nothing lets Gauss–Seidel share the tangential load between the points of a
+//! manifold — with all-or-nothing each point sees the whole body's slip against a
+//! quarter of its normal load and a box creeps down a slope below the friction angle.
+//!
+//! Velocity level: the normal velocity is set to `−e v_n` (the approach speed before
+//! the solve) above the restitution threshold and to zero below it, which also removes
+//! any velocity the position projection created: pushing out of a penetration must not
+//! add energy.
 
 use super::bone::{point_inv_mass, positional, side_world, Bone, Side};
 use super::contacts::Contact;
 use glam::Vec3;
 
-fn side_prev(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
+fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
     match s {
-        Some(i) => bones[i].world_prev(local),
-        None => local,
+        Some(i) => bones[i].displacement(local),
+        None => Vec3::ZERO,
     }
 }
 
@@ -26,7 +30,7 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
     match s {
         Some(i) if !bones[i].is_static() => {
             let b = &bones[i];
-            b.lin_vel + b.ang_vel.cross(p - b.com)
+            b.lin_vel + b.ang_vel.cross(p - b.center())
         }
         _ => Vec3::ZERO,
     }
@@ -46,7 +50,7 @@ pub(crate) fn solve_position(bones: &mut [Bone], c: &mut Contact) {
     // Slip of the contact points since the start of the substep, tangential part.
     let pa = bones[c.a].world(c.ra);
     let pb = side_world(bones, c.b, c.rb);
-    let slip = (pa - bones[c.a].world_prev(c.ra)) - (pb - side_prev(bones, c.b, c.rb));
+    let slip = bones[c.a].displacement(c.ra) - side_displacement(bones, c.b, c.rb);
     let slip_t = slip - c.n * slip.dot(c.n);
     let len = slip_t.length();
     if len < 1e-9 {
@@ -57,8 +61,14 @@ pub(crate) fn solve_position(bones: &mut [Bone], c: &mut Contact) {
     if w <= 0.0 {
         return;
     }
-    if len / w <= c.mu * c.lambda_n {
-        positional(bones, a, c.b, pa, pb, -slip_t, 0.0);
+    // Hold the slip entirely if the cone allows (static), else as far as `μ λ_n`
+    // allows (kinetic): Gauss–Seidel over the manifold's points then shares the
+    // tangential load between them, as a Coulomb clamp does in impulse solvers.
+    let needed = len / w;
+    let allowed = c.mu * c.lambda_n;
+    if allowed > 0.0 {
+        let frac = (allowed / needed).min(1.0);
+        positional(bones, a, c.b, pa, pb, -slip_t * frac, 0.0);
     }
 }
 
@@ -69,14 +79,14 @@ fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
         if b.is_static() {
             return;
         }
-        let dw = b.inv_inertia() * (at - b.com).cross(p);
+        let dw = b.inv_inertia() * (at - b.center()).cross(p);
         b.lin_vel += p * b.inv_mass();
         b.ang_vel += dw;
     }
 }
 
 /// Velocity pass for one contact that was active this substep.
-pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitution_threshold: f32) {
+pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, restitution_threshold: f32) {
     if c.lambda_n <= 0.0 {
         return;
     }
@@ -85,7 +95,6 @@ pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitutio
     let pb = side_world(bones, c.b, c.rb);
     let v = point_velocity(bones, a, pa) - point_velocity(bones, c.b, pb);
     let vn = v.dot(c.n);
-    let vt = v - c.n * vn;
     // Normal: restitution on the approach speed before the solve, never more.
     let target = if c.vn_before > restitution_threshold { -c.e * c.vn_before } else { 0.0 };
     let wn = point_inv_mass(bones, a, pa, c.n) + point_inv_mass(bones, c.b, pb, c.n);
@@ -93,16 +102,5 @@ pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitutio
         let p = c.n * ((target - vn) / wn);
         apply_velocity_impulse(bones, a, pa, p);
         apply_velocity_impulse(bones, c.b, pb, -p);
-    }
-    // Kinetic friction: an impulse against the slip, at most μ times the normal impulse.
-    let lt = vt.length();
-    if lt > 1e-9 {
-        let t = vt / lt;
-        let wt = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, c.b, pb, t);
-        if wt > 0.0 {
-            let mag = (lt / wt).min(c.mu * c.lambda_n / h);
-            apply_velocity_impulse(bones, a, pa, -t * mag);
-            apply_velocity_impulse(bones, c.b, pb, t * mag);
-        }
     }
 }

@@ -8,7 +8,7 @@
 //! 3. `iterations` Gauss–Seidel passes over joints, limits and contacts, each a rigid
 //!    correction of the bone frames weighted by generalised inverse mass;
 //! 4. rewrite the particles from the frames and derive `v = (x − x_prev)/h`;
-//! 5. the velocity pass: kinetic friction, restitution, air friction.
+//! 5. the velocity pass: restitution, air friction.
 //!
 //! Energy: every step is a projection or a dissipative velocity change; the only source
 //! (push-out from a penetration) is cancelled by the velocity pass.
@@ -44,8 +44,8 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
             contacts.push(Contact {
                 a: i,
                 b: Some(j),
-                ra: bones[i].rot.inverse() * (pa - bones[i].com),
-                rb: bones[j].rot.inverse() * (pb - bones[j].com),
+                ra: bones[i].rot.inverse() * (pa - bones[i].center()),
+                rb: bones[j].rot.inverse() * (pb - bones[j].center()),
                 n,
                 mu,
                 e,
@@ -66,7 +66,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                 contacts.push(Contact {
                     a: i,
                     b: None,
-                    ra: b.rot.inverse() * (pa - b.com),
+                    ra: b.rot.inverse() * (pa - b.center()),
                     rb: pb,
                     n,
                     mu,
@@ -84,7 +84,6 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
 /// Derives each bone's velocity from its particles: `v = Σ m v_i / M` and
 /// `ω = I⁻¹ Σ m r_i × v_i` (angular momentum over inertia).
 fn bone_velocities(w: &mut ParticleWorld) {
-    let x = &w.particles.x;
     let v = &w.particles.v;
     for b in w.bones.iter_mut() {
         if b.is_static() {
@@ -92,12 +91,12 @@ fn bone_velocities(w: &mut ParticleWorld) {
             b.ang_vel = Vec3::ZERO;
             continue;
         }
-        let idx = b.particles.map(|p| p as usize);
-        let vc = idx.iter().map(|&i| v[i]).sum::<Vec3>() * 0.25;
+        let vi = b.particles.map(|p| v[p as usize]);
+        let vc = (vi[0] + vi[1] + vi[2] + vi[3]) * 0.25;
         let m = b.mass * 0.25;
         let mut l = Vec3::ZERO;
-        for &i in &idx {
-            l += (x[i] - b.com).cross(v[i] - vc) * m;
+        for k in 0..4 {
+            l += (b.rot * b.rest[k]).cross(vi[k] - vc) * m;
         }
         b.lin_vel = vc;
         b.ang_vel = b.inv_inertia() * l;
@@ -113,28 +112,22 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     w.particles.frame_start.clone_from(&w.particles.x);
     detect(w, dt);
     for _ in 0..n_sub {
+        // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
+        // and shape-match each moving bone to its rigid frame.
         for b in w.bones.iter_mut() {
             b.prev_com = b.com;
             b.prev_rot = b.rot;
-        }
-        // 1. integrate the particles of moving bones
-        for bi in 0..w.bones.len() {
-            let b = &w.bones[bi];
+            b.dcom = Vec3::ZERO;
             if b.is_static() {
                 continue;
             }
-            for &p in &b.particles {
-                let p = p as usize;
-                w.particles.x_prev[p] = w.particles.x[p];
+            let mut u = [Vec3::ZERO; 4];
+            for k in 0..4 {
+                let p = b.particles[k] as usize;
                 w.particles.v[p] += s.gravity * h;
-                w.particles.x[p] += w.particles.v[p] * h;
+                u[k] = b.rot * b.rest[k] + w.particles.v[p] * h;
             }
-        }
-        // 2. rigid frames by shape matching
-        for b in w.bones.iter_mut() {
-            if !b.is_static() {
-                b.shape_match(&w.particles.x);
-            }
+            b.shape_match(&u);
         }
         // relative normal velocity before the solve, for restitution
         for c in w.contacts.iter_mut() {
@@ -155,21 +148,27 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                 super::grab_improved(&mut w.bones, g, h);
             }
         }
-        // 4. particles from frames, velocities from positions
-        for b in &w.bones {
+        // 4. velocities from the particles' displacements, particles from the frames
+        for b in w.bones.iter_mut() {
             if b.is_static() {
                 continue;
             }
-            b.write_particles(&mut w.particles.x);
-            for &p in &b.particles {
-                let p = p as usize;
-                w.particles.v[p] = (w.particles.x[p] - w.particles.x_prev[p]) / h;
+            for k in 0..4 {
+                let p = b.particles[k] as usize;
+                w.particles.v[p] = b.displacement(b.rest[k]) / h;
             }
+            b.com += b.dcom;
+            b.dcom = Vec3::ZERO;
+            for k in 0..4 {
+                let p = b.particles[k] as usize;
+                w.particles.x_prev[p] = b.prev_com + b.prev_rot * b.rest[k];
+            }
+            b.write_particles(&mut w.particles.x);
         }
         bone_velocities(w);
-        // 5. velocity pass
+        // 5. velocity pass (contact points are relative to the updated frames)
         for c in &w.contacts {
-            solve_velocity(&mut w.bones, c, h, s.restitution_threshold);
+            solve_velocity(&mut w.bones, c, s.restitution_threshold);
         }
         for b in w.bones.iter_mut() {
             if b.is_static() {

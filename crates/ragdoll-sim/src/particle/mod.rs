@@ -152,6 +152,7 @@ impl ParticleWorld {
             rest: [Vec3::ZERO; 4],
             stick_rest: [0.0; 6],
             com: desc.pose.position,
+            dcom: Vec3::ZERO,
             rot: desc.pose.rotation,
             prev_com: desc.pose.position,
             prev_rot: desc.pose.rotation,
