@@ -33,6 +33,8 @@ pub(crate) struct Contact {
     pub e: f32,
     /// Normal multiplier of the current substep (0 when not touching).
     pub lambda_n: f32,
+    /// Tangential (friction) multiplier spent in the current substep.
+    pub lambda_t: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
     pub vn_before: f32,
 }

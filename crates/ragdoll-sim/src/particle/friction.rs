@@ -64,11 +64,12 @@ pub(crate) fn solve_position(bones: &mut [Bone], c: &mut Contact) {
     // Hold the slip entirely if the cone allows (static), else as far as `μ λ_n`
     // allows (kinetic): Gauss–Seidel over the manifold's points then shares the
     // tangential load between them, as a Coulomb clamp does in impulse solvers.
+    // What earlier iterations of this substep spent counts against the cone.
     let needed = len / w;
-    let allowed = c.mu * c.lambda_n;
+    let allowed = c.mu * c.lambda_n - c.lambda_t;
     if allowed > 0.0 {
         let frac = (allowed / needed).min(1.0);
-        positional(bones, a, c.b, pa, pb, -slip_t * frac, 0.0);
+        c.lambda_t += positional(bones, a, c.b, pa, pb, -slip_t * frac, 0.0);
     }
 }
 

@@ -50,6 +50,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                 mu,
                 e,
                 lambda_n: 0.0,
+                    lambda_t: 0.0,
                 vn_before: 0.0,
             });
         });
@@ -72,6 +73,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                     mu,
                     e,
                     lambda_n: 0.0,
+                    lambda_t: 0.0,
                     vn_before: 0.0,
                 });
             });
@@ -132,6 +134,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         // relative normal velocity before the solve, for restitution
         for c in w.contacts.iter_mut() {
             c.lambda_n = 0.0;
+            c.lambda_t = 0.0;
             let pa = w.bones[c.a].world(c.ra);
             let pb = super::bone::side_world(&w.bones, c.b, c.rb);
             c.vn_before = (point_velocity(&w.bones, Some(c.a), pa) - point_velocity(&w.bones, c.b, pb)).dot(c.n);
