@@ -58,8 +58,12 @@ pub(crate) struct Bone {
     pub fixed: bool,
     /// Asleep bones are frozen until something wakes their island.
     pub asleep: bool,
-    /// Seconds this bone has been below the sleep thresholds.
+    /// Seconds this bone has been below the sleep speeds.
     pub sleep_time: f32,
+    /// Where the bone was when it last moved more than the no-move bounds.
+    pub still_anchor: (Vec3, Quat),
+    /// Seconds the bone has stayed within the no-move bounds of `still_anchor`.
+    pub still_time: f32,
     /// Linear velocity of the frame origin (m/s), from the particles.
     pub lin_vel: Vec3,
     /// Angular velocity (rad/s, world), from the particles.

@@ -141,11 +141,11 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         }
         // 3. constraints
         for _ in 0..s.iterations.max(1) {
-            for j in &w.joints {
-                j.solve(&mut w.bones, h);
-            }
             for c in w.contacts.iter_mut() {
                 solve_position(&mut w.bones, c);
+            }
+            for j in &w.joints {
+                j.solve(&mut w.bones, h);
             }
             if let Some(g) = w.grab {
                 super::grab_improved(&mut w.bones, g, h);

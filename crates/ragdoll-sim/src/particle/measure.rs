@@ -51,6 +51,14 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
             }
         }
     }
+    if std::env::var("JDBG").is_ok() {
+        for (k, j) in w.joints.iter().enumerate() {
+            let (g, l) = (j.gap(&w.bones), j.limit_violation(&w.bones).to_degrees());
+            if g > 0.005 || l > 3.0 {
+                eprintln!("t {:.3} joint {} ({}) gap {g:.4} lim {l:.2}", w.time, k, w.scene.constraints[k].name);
+            }
+        }
+    }
     let gap = w.joints.iter().map(|j| j.gap(&w.bones)).fold(0.0, f32::max);
     let limit = w.joints.iter().map(|j| j.limit_violation(&w.bones)).fold(0.0, f32::max);
     let stretch = w

@@ -164,6 +164,8 @@ impl ParticleWorld {
             fixed: desc.is_fixed(),
             asleep: false,
             sleep_time: 0.0,
+            still_anchor: (desc.pose.position, desc.pose.rotation),
+            still_time: 0.0,
             lin_vel: desc.linear_velocity,
             ang_vel: desc.angular_velocity,
             friction: desc.friction.contact,

@@ -1,8 +1,14 @@
 //! Sleeping (improved solver): islands of bones linked by joints or touching contacts
-//! go to sleep together once every bone has stayed below the scene's sleep speeds for
-//! `sleep.time` seconds (Doom 3's `suspendSpeed` and `noMoveTime`), and wake together
+//! go to sleep together once every bone has rested for `sleep.time` seconds, and wake
+//! together
 //! when any bone of the island moves — which includes an awake bone touching them, since
 //! contacts join islands.
+//!
+//! A bone rests when it is below the sleep speeds (Doom 3's `suspendSpeed`) or when it
+//! has not left a small box around where it was — `noMoveTranslation` and
+//! `noMoveRotation` over `noMoveTime`, Doom 3's second test. The second catches a foot
+//! trembling in place between a hard joint limit and the floor, whose speed alone never
+//! settles under the threshold.
 
 use super::bone::Bone;
 use super::contacts::Contact;
@@ -45,6 +51,15 @@ pub(crate) fn update(
         }
         let slow = b.asleep || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
         b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
+        let (p, q) = b.still_anchor;
+        let turned = (b.rot * q.inverse()).to_axis_angle().1;
+        let turned = turned.min(std::f32::consts::TAU - turned);
+        if b.asleep || ((b.center() - p).length() <= s.translation && turned <= s.rotation) {
+            b.still_time += dt;
+        } else {
+            b.still_anchor = (b.center(), b.rot);
+            b.still_time = 0.0;
+        }
     }
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
@@ -66,7 +81,7 @@ pub(crate) fn update(
     for i in 0..n {
         if dynamic(bones, i) {
             let r = find(&mut parent, i as u32) as usize;
-            min_time[r] = min_time[r].min(bones[i].sleep_time);
+            min_time[r] = min_time[r].min(bones[i].sleep_time.max(bones[i].still_time));
         }
     }
     let forced = s.max_move_time > 0.0 && time >= s.max_move_time as f64;
@@ -85,6 +100,7 @@ pub(crate) fn update(
             // A woken island starts its count again.
             if min_time[r] < s.time {
                 bones[i].sleep_time = bones[i].sleep_time.min(min_time[r]);
+                bones[i].still_time = bones[i].still_time.min(min_time[r]);
             }
         }
     }
