@@ -14,7 +14,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{point_inv_mass, positional, side_world, Bone, Side};
+use super::bone::{point_inv_mass, positional, rot_inv_mass, side_world, Bone, Side};
 use super::contacts::Contact;
 use glam::Vec3;
 
@@ -86,8 +86,13 @@ fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
     }
 }
 
+/// Radius of the contact patch a point contact stands for (m): the lever arm of its
+/// torsional friction. A box resting on one corner otherwise spins about the normal
+/// without losing energy, since a point cannot resist twist.
+const PATCH_RADIUS: f32 = 0.01;
+
 /// Velocity pass for one contact that was active this substep.
-pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, restitution_threshold: f32) {
+pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitution_threshold: f32) {
     if c.lambda_n <= 0.0 {
         return;
     }
@@ -103,5 +108,23 @@ pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, restitution_thresh
         let p = c.n * ((target - vn) / wn);
         apply_velocity_impulse(bones, a, pa, p);
         apply_velocity_impulse(bones, c.b, pb, -p);
+    }
+    // Torsional friction: twist about the normal, capped by μ r λ_n / h.
+    let twist = |bones: &[Bone], s: Side| match s {
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(c.n),
+        _ => 0.0,
+    };
+    let spin = twist(bones, a) - twist(bones, c.b);
+    let wr = rot_inv_mass(bones, a, c.n) + rot_inv_mass(bones, c.b, c.n);
+    if wr > 0.0 && spin != 0.0 {
+        let l = spin.signum() * (spin.abs() / wr).min(c.mu * PATCH_RADIUS * c.lambda_n / h);
+        for (s, sign) in [(a, -1.0f32), (c.b, 1.0)] {
+            if let Some(i) = s {
+                let b = &mut bones[i];
+                if !b.is_static() {
+                    b.ang_vel += b.inv_inertia() * (c.n * (sign * l));
+                }
+            }
+        }
     }
 }

@@ -7,8 +7,9 @@
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
 
 use super::bone::{angular, positional, side_rot, side_world, Bone, Side};
+
 use super::limits::{perpendicular, AngleLimit, Swing, SwingLimit};
-use crate::scene::{JointKind, LimitStyle, SwingLimit as SwingDesc};
+use crate::scene::{JointKind, SwingLimit as SwingDesc};
 use glam::{Quat, Vec3};
 
 /// Type-specific data, in the bones' frames.
@@ -162,11 +163,11 @@ impl Joint {
                 if let Some(t) = twist {
                     j.angle_limits.push(angle_limit(f, a, b, t.axis, t.min, t.max));
                 }
-                if let LimitStyle::Soft { torque } = limit_style {
-                    if *torque > 0.0 {
-                        j.limit_compliance = 1.0 / torque;
-                    }
-                }
+                // The PyODE tutorial softens its limits because explicit restoring
+                // torques cannot be stiff and stable at once; a position-level limit can,
+                // so the improved solver holds soft limits hard (the metric measures the
+                // limit itself). `limit_compliance` stays for springy limits.
+                let _ = limit_style;
             }
             JointKind::Universal { shaft1, shaft2, swing, axis_ranges, .. } => {
                 j.kind = JointType::Universal {

@@ -51,14 +51,6 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
             }
         }
     }
-    if std::env::var("JDBG").is_ok() {
-        for (k, j) in w.joints.iter().enumerate() {
-            let (g, l) = (j.gap(&w.bones), j.limit_violation(&w.bones).to_degrees());
-            if g > 0.005 || l > 3.0 {
-                eprintln!("t {:.3} joint {} ({}) gap {g:.4} lim {l:.2}", w.time, k, w.scene.constraints[k].name);
-            }
-        }
-    }
     let gap = w.joints.iter().map(|j| j.gap(&w.bones)).fold(0.0, f32::max);
     let limit = w.joints.iter().map(|j| j.limit_violation(&w.bones)).fold(0.0, f32::max);
     let stretch = w
@@ -77,6 +69,26 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         max_bone_stretch: Some(stretch),
         all_asleep,
     }
+}
+
+/// The state's energy: particle velocities as the integrator holds them (paper mode:
+/// Verlet's `(x − x_old)/Δt`; improved mode: the velocities after the last substep).
+pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
+    let p = &w.particles;
+    let dt = w.scene.settings.timestep;
+    let mut e = 0.0f64;
+    for i in 0..p.len() {
+        let m = p.mass[i];
+        if m <= 0.0 {
+            continue;
+        }
+        let v = match w.solver {
+            ParticleSolver::Improved => p.v[i],
+            ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
+        };
+        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.scene, m, p.x[i]);
+    }
+    e
 }
 
 /// Kinematic state of every bone, as its frame implies.

@@ -195,7 +195,7 @@ impl ParticleWorld {
         bone.inv_inertia_local = p.principal_inertia.map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
         let s = &self.scene.settings;
         let (dt, g) = (s.timestep, s.gravity);
-        let h = if self.solver == ParticleSolver::Improved { dt / s.substeps.max(1) as f32 } else { dt };
+        let h = if self.solver == ParticleSolver::Improved { dt / improved::substeps(s) as f32 } else { dt };
         let movable = !desc.is_fixed();
         for k in 0..4 {
             let x = bone.world(p.rest[k]);
@@ -261,6 +261,15 @@ impl ParticleWorld {
         Ok(())
     }
 
+    /// Total energy with the integrator's own particle velocities (J): the state's
+    /// energy, `Σ ½ m_p |v_p|² + m_p g h_p` with `v_p` the velocity the next step starts
+    /// from. [`Method::sample`] follows DESIGN.md and differences positions over the
+    /// frame instead, which under-reads kinetic energy in a frame where a velocity turns
+    /// (an impact), so its `energy_gain` can show a rise the state never had.
+    pub fn state_energy(&self) -> f64 {
+        measure::state_energy(self)
+    }
+
     /// The scene this world was built from (with live settings applied).
     pub fn scene(&self) -> &SceneDesc {
         &self.scene
@@ -303,7 +312,7 @@ impl Method for ParticleWorld {
         let s = &self.scene.settings;
         match self.solver {
             ParticleSolver::Paper => format!("paper, {} iterations", s.iterations),
-            ParticleSolver::Improved => format!("improved, {} substeps × {} iterations", s.substeps, s.iterations),
+            ParticleSolver::Improved => format!("improved, {} substeps", improved::substeps(s)),
         }
     }
 
