@@ -707,7 +707,6 @@ impl Renderer {
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, size: (u32, u32)) {
-        let _ = size;
         pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
         for (i, side) in self.draws.iter().enumerate() {
             let Some(vp) = side.viewport else { continue };
@@ -737,6 +736,9 @@ impl Renderer {
                 self.draw_meshes(pass, &[(MeshKey::Sphere, side.particles.clone())]);
             }
         }
+        // GL resolves MSAA with a blit the scissor test still clips: open it to the whole
+        // target, or only the last half would be resolved.
+        pass.set_scissor_rect(0, 0, size.0, size.1);
     }
 
     fn draw_meshes(&self, pass: &mut wgpu::RenderPass<'_>, draws: &[(MeshKey, Range<u32>)]) {
