@@ -4,10 +4,11 @@
 //! the binary so `ragdoll-lab` works from any directory. `R` in the viewer re-reads the
 //! file from disk when it is there.
 
-use crate::cli::SceneArgs;
 use crate::AppError;
+use crate::cli::SceneArgs;
 use ragdoll_sim::SceneDesc;
-use std::path::PathBuf;
+use ragdoll_sim::scene::af::{self, AfOptions, AfScene};
+use std::path::{Path, PathBuf};
 
 /// A scene loaded for a run.
 #[derive(Clone, Debug)]
@@ -20,8 +21,107 @@ pub struct LoadedScene {
     pub ignored: Vec<String>,
 }
 
+/// One scene of the DESIGN.md table, shipped as a file and embedded in the binary.
+#[derive(Clone, Copy, Debug)]
+pub struct BuiltinScene {
+    /// Its number in the table (1-10), the `--scene` number.
+    pub number: u32,
+    /// Its name, the `--scene` name.
+    pub name: &'static str,
+    /// File name under `assets/scenes/`.
+    pub file: &'static str,
+    /// The file's text as built into the binary.
+    pub text: &'static str,
+}
+
+impl BuiltinScene {
+    /// The file on disk in this source tree (it may not exist where the binary runs).
+    pub fn asset_path(&self) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes")
+            .join(self.file)
+    }
+}
+
+macro_rules! builtin {
+    ($number:expr, $name:expr) => {
+        BuiltinScene {
+            number: $number,
+            name: $name,
+            file: concat!($name, ".af"),
+            text: include_str!(concat!("../assets/scenes/", $name, ".af")),
+        }
+    };
+}
+
+static BUILTIN: [BuiltinScene; 10] = [
+    builtin!(1, "collision"),
+    builtin!(2, "ball-chain"),
+    builtin!(3, "hinge-chain"),
+    builtin!(4, "box-masses"),
+    builtin!(5, "ball-limits"),
+    builtin!(6, "hinge-limits"),
+    builtin!(7, "spider"),
+    builtin!(8, "human"),
+    builtin!(9, "capsule-human"),
+    builtin!(10, "pile"),
+];
+
+/// The scenes of the DESIGN.md table, in order.
+pub fn builtin_scenes() -> &'static [BuiltinScene] {
+    &BUILTIN
+}
+
+/// The built-in scene with this number or name (case-insensitive).
+pub fn find_builtin(key: &str) -> Option<&'static BuiltinScene> {
+    let key = key.trim();
+    match key.parse::<u32>() {
+        Ok(n) => BUILTIN.iter().find(|s| s.number == n),
+        Err(_) => BUILTIN.iter().find(|s| s.name.eq_ignore_ascii_case(key)),
+    }
+}
+
 /// Loads the scene the arguments name (default: scene 8, the human).
 pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
-    let _ = args;
-    Err(AppError::Other("scene loading is not built yet (issue 2)".into()))
+    let opts = AfOptions {
+        variant: args.variant.unwrap_or(1),
+        mesh: args.mesh.clone(),
+        count: args.count,
+    };
+    if let Some(path) = &args.af {
+        let scene = af::load(path, &opts).map_err(|e| AppError::Scene(e.to_string()))?;
+        return Ok(loaded(scene, Some(path.clone())));
+    }
+    let key = args.scene.as_deref().unwrap_or("8");
+    let builtin = find_builtin(key).ok_or_else(|| {
+        let names: Vec<String> = BUILTIN
+            .iter()
+            .map(|s| format!("{} {}", s.number, s.name))
+            .collect();
+        AppError::Usage(format!(
+            "unknown scene \"{key}\"; expected one of: {}",
+            names.join(", ")
+        ))
+    })?;
+    load_builtin(builtin, &opts)
+}
+
+/// Reads a built-in scene from its embedded text (messages name its asset path).
+pub fn load_builtin(scene: &BuiltinScene, opts: &AfOptions) -> Result<LoadedScene, AppError> {
+    let shown = Path::new("assets/scenes").join(scene.file);
+    let parsed = af::parse(scene.text, &shown, opts).map_err(|e| AppError::Scene(e.to_string()))?;
+    Ok(loaded(parsed, Some(scene.asset_path())))
+}
+
+fn loaded(scene: AfScene, path: Option<PathBuf>) -> LoadedScene {
+    let ignored = scene
+        .ignored
+        .iter()
+        .map(|i| format!("{}:{}: `{}`: {}", i.line, i.col, i.key, i.reason))
+        .collect();
+    LoadedScene {
+        desc: scene.desc,
+        path,
+        ignored,
+    }
 }

@@ -375,9 +375,11 @@ pub enum JointKind {
     Universal {
         /// Joint anchor.
         anchor: Vec3,
-        /// Shaft attached to body1, pointing into or towards body1.
+        /// Rotation axis of the cross fixed in body1 (ODE's axis on body1). The `.af`
+        /// reader derives it from Doom 3's `shafts` (which run along the bones) so that
+        /// it is perpendicular to shaft 1 and to `shaft2`; see docs/af-format.md.
         shaft1: Vec3,
-        /// Shaft attached to body2, pointing into or towards body2.
+        /// Rotation axis of the cross fixed in body2, perpendicular to `shaft1` at rest.
         shaft2: Vec3,
         /// Optional swing limit on shaft1 (Doom 3 `conelimit` / `pyramidlimit`).
         swing: Option<SwingLimit>,

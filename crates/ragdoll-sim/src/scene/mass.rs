@@ -115,6 +115,30 @@ pub fn scene_mass_props(scene: &SceneDesc) -> Result<Vec<MassProps>, SceneError>
     scene.bodies.iter().map(mass_props).collect()
 }
 
+impl SceneDesc {
+    /// Turns every body's mass into kilograms ([`MassSpec::Mass`]) and applies Doom 3's
+    /// `totalMass`: dynamic bodies are scaled by one factor so that they sum to it;
+    /// fixed bodies keep their shape's mass. The `.af` reader calls this.
+    pub fn resolve_masses(&mut self) -> Result<(), SceneError> {
+        for b in &mut self.bodies {
+            b.mass = MassSpec::Mass(mass_props(b)?.mass);
+        }
+        let kg = |m: MassSpec| match m {
+            MassSpec::Mass(m) | MassSpec::Density(m) => m,
+        };
+        if let Some(total) = self.settings.total_mass {
+            let sum: f32 = self.bodies.iter().filter(|b| !b.is_fixed()).map(|b| kg(b.mass)).sum();
+            if sum > 0.0 {
+                let k = total / sum;
+                for b in self.bodies.iter_mut().filter(|b| !b.is_fixed()) {
+                    b.mass = MassSpec::Mass(kg(b.mass) * k);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

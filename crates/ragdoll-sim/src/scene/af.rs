@@ -1,1 +1,0 @@
-//! Doom 3 .af reader — being written (issue 2).

@@ -1,0 +1,228 @@
+//! Tokens of the `.af` syntax, each with its line and column.
+//!
+//! The syntax is Doom 3's: C-style `//` and `/* */` comments, double-quoted strings,
+//! numbers, identifiers (letters, digits, `_`, and `*`/`-`/`.` inside names that real
+//! files use in bare words), and the punctuation `{ } ( ) ,`. Newlines carry no meaning.
+
+use super::AfError;
+
+/// Where a token starts: 1-based line and column (columns count characters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Pos {
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column.
+    pub col: u32,
+}
+
+/// What a token is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tok {
+    /// A bare word: a keyword, key or function name.
+    Ident(String),
+    /// A double-quoted string, without the quotes.
+    Str(String),
+    /// A number (Doom 3 writes integers and decimals, optionally signed).
+    Num(f64),
+    /// `{`
+    LBrace,
+    /// `}`
+    RBrace,
+    /// `(`
+    LParen,
+    /// `)`
+    RParen,
+    /// `,`
+    Comma,
+    /// End of the text.
+    Eof,
+}
+
+impl Tok {
+    /// How the token reads in an error message.
+    pub fn describe(&self) -> String {
+        match self {
+            Tok::Ident(s) => format!("`{s}`"),
+            Tok::Str(s) => format!("string \"{s}\""),
+            Tok::Num(n) => format!("number {n}"),
+            Tok::LBrace => "`{`".into(),
+            Tok::RBrace => "`}`".into(),
+            Tok::LParen => "`(`".into(),
+            Tok::RParen => "`)`".into(),
+            Tok::Comma => "`,`".into(),
+            Tok::Eof => "the end of the file".into(),
+        }
+    }
+}
+
+/// A token and where it starts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Token {
+    /// The token.
+    pub tok: Tok,
+    /// Its position.
+    pub pos: Pos,
+}
+
+/// Splits `text` into tokens, ending with [`Tok::Eof`].
+pub fn tokenize(text: &str, file: &str) -> Result<Vec<Token>, AfError> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let (mut i, mut line, mut col) = (0usize, 1u32, 1u32);
+    let err = |pos: Pos, message: String| AfError::at(file, pos, message);
+    // Advances over one character, keeping line and column.
+    macro_rules! bump {
+        () => {{
+            if chars[i] == '\n' {
+                line += 1;
+                col = 1;
+            } else {
+                col += 1;
+            }
+            i += 1;
+        }};
+    }
+    while i < chars.len() {
+        let c = chars[i];
+        let pos = Pos { line, col };
+        if c.is_whitespace() {
+            bump!();
+            continue;
+        }
+        if c == '/' && chars.get(i + 1) == Some(&'/') {
+            while i < chars.len() && chars[i] != '\n' {
+                bump!();
+            }
+            continue;
+        }
+        if c == '/' && chars.get(i + 1) == Some(&'*') {
+            bump!();
+            bump!();
+            loop {
+                if i >= chars.len() {
+                    return Err(err(
+                        pos,
+                        "this `/*` comment is never closed with `*/`".into(),
+                    ));
+                }
+                if chars[i] == '*' && chars.get(i + 1) == Some(&'/') {
+                    bump!();
+                    bump!();
+                    break;
+                }
+                bump!();
+            }
+            continue;
+        }
+        let single = match c {
+            '{' => Some(Tok::LBrace),
+            '}' => Some(Tok::RBrace),
+            '(' => Some(Tok::LParen),
+            ')' => Some(Tok::RParen),
+            ',' => Some(Tok::Comma),
+            _ => None,
+        };
+        if let Some(tok) = single {
+            bump!();
+            out.push(Token { tok, pos });
+            continue;
+        }
+        if c == '"' {
+            bump!();
+            let mut s = String::new();
+            loop {
+                match chars.get(i) {
+                    None => return Err(err(pos, "this string is never closed with `\"`".into())),
+                    Some('\n') => {
+                        return Err(err(
+                            pos,
+                            "this string runs to the end of the line; close it with `\"`".into(),
+                        ));
+                    }
+                    Some('"') => {
+                        bump!();
+                        break;
+                    }
+                    Some(&ch) => {
+                        s.push(ch);
+                        bump!();
+                    }
+                }
+            }
+            out.push(Token {
+                tok: Tok::Str(s),
+                pos,
+            });
+            continue;
+        }
+        let starts_number = c.is_ascii_digit()
+            || ((c == '-' || c == '+' || c == '.')
+                && chars
+                    .get(i + 1)
+                    .is_some_and(|d| d.is_ascii_digit() || *d == '.'));
+        if starts_number {
+            let start = i;
+            bump!();
+            while i < chars.len() {
+                let d = chars[i];
+                let exp_sign = (d == '-' || d == '+') && matches!(chars[i - 1], 'e' | 'E');
+                if d.is_ascii_digit() || d == '.' || d == 'e' || d == 'E' || exp_sign {
+                    bump!();
+                } else {
+                    break;
+                }
+            }
+            let s: String = chars[start..i].iter().collect();
+            let n: f64 = s
+                .parse()
+                .map_err(|_| err(pos, format!("`{s}` is not a number")))?;
+            out.push(Token {
+                tok: Tok::Num(n),
+                pos,
+            });
+            continue;
+        }
+        if c.is_alphabetic() || c == '_' || c == '*' {
+            let start = i;
+            while i < chars.len()
+                && (chars[i].is_alphanumeric() || matches!(chars[i], '_' | '*' | '.' | '-'))
+            {
+                bump!();
+            }
+            let s: String = chars[start..i].iter().collect();
+            out.push(Token {
+                tok: Tok::Ident(s),
+                pos,
+            });
+            continue;
+        }
+        return Err(err(pos, format!("unexpected character `{c}`")));
+    }
+    out.push(Token {
+        tok: Tok::Eof,
+        pos: Pos { line, col },
+    });
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positions_count_lines_and_columns() {
+        let t = tokenize("body \"a\" {\n  origin ( 1, -2.5e1, .5 ) // c\n}", "f").unwrap();
+        assert_eq!(t[0].tok, Tok::Ident("body".into()));
+        assert_eq!(t[1].tok, Tok::Str("a".into()));
+        assert_eq!(t[3].pos, Pos { line: 2, col: 3 });
+        assert_eq!(t[7].tok, Tok::Num(-25.0));
+        assert_eq!(t[9].tok, Tok::Num(0.5));
+        assert_eq!(t.last().unwrap().tok, Tok::Eof);
+    }
+
+    #[test]
+    fn unclosed_string_is_an_error_at_its_start() {
+        let e = tokenize("x \"abc", "f").unwrap_err();
+        assert_eq!((e.line, e.col), (1, 3));
+    }
+}

@@ -1,0 +1,357 @@
+//! Syntax of an `.af` file: blocks of `key value, value, ...` entries.
+//!
+//! The grammar, which covers Doom 3's files and our extensions alike:
+//!
+//! ```text
+//! file    = block*
+//! block   = KIND header* "{" (block* | entry*) "}"     // blocks nest only in containers
+//! header  = STRING | NUMBER | IDENT                     // body "name", variant 2 "name"
+//! entry   = KEY value ("," value)*
+//! value   = NUMBER | STRING | IDENT | IDENT "(" list ")" | "(" list ")"
+//! list    = (value ","?)*                               // Doom 3 matrices omit commas
+//! ```
+//!
+//! The containers are `articulatedFigure` (real id files wrap everything in one) and
+//! our `variant`. What each key means is decided later, in [`super::build`]; this
+//! module only keeps every value with its position for the error messages.
+
+use super::AfError;
+use super::lexer::{Pos, Tok, Token};
+
+/// A value after a key, with where it starts.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    /// A number.
+    Num(f64, Pos),
+    /// A quoted string.
+    Str(String, Pos),
+    /// A bare word (`corpse`, `orientation`).
+    Ident(String, Pos),
+    /// A parenthesised list: a vector `( x, y, z )` or a matrix of them.
+    Group(Vec<Value>, Pos),
+    /// A function form: `box( ... )`, `joint( "name" )`, `bonecenter( "a", "b" )`.
+    Call(String, Vec<Value>, Pos),
+}
+
+impl Value {
+    /// Where the value starts.
+    pub fn pos(&self) -> Pos {
+        match self {
+            Value::Num(_, p)
+            | Value::Str(_, p)
+            | Value::Ident(_, p)
+            | Value::Group(_, p)
+            | Value::Call(_, _, p) => *p,
+        }
+    }
+
+    /// How the value reads in an error message.
+    pub fn describe(&self) -> String {
+        match self {
+            Value::Num(n, _) => format!("the number {n}"),
+            Value::Str(s, _) => format!("the string \"{s}\""),
+            Value::Ident(s, _) => format!("the word `{s}`"),
+            Value::Group(v, _) => format!("a ( ... ) list of {} values", v.len()),
+            Value::Call(name, _, _) => format!("`{name}( ... )`"),
+        }
+    }
+}
+
+/// `key value, value, ...`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// The key as written.
+    pub key: String,
+    /// Where the key starts.
+    pub pos: Pos,
+    /// Its values, at least one.
+    pub values: Vec<Value>,
+}
+
+/// `KIND header* { ... }`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// `settings`, `body`, `hinge`, `variant`, ...
+    pub kind: String,
+    /// Where the kind word starts.
+    pub pos: Pos,
+    /// The words between the kind and `{`.
+    pub header: Vec<Value>,
+    /// Entries (for non-containers).
+    pub entries: Vec<Entry>,
+    /// Nested blocks (for containers).
+    pub children: Vec<Block>,
+}
+
+impl Block {
+    /// The block's quoted or bare name, if its header has one.
+    pub fn name(&self) -> Option<(&str, Pos)> {
+        self.header.iter().find_map(|v| match v {
+            Value::Str(s, p) | Value::Ident(s, p) => Some((s.as_str(), *p)),
+            _ => None,
+        })
+    }
+}
+
+/// Every block kind: Doom 3's and ours.
+const KINDS: [&str; 14] = [
+    "articulatedFigure",
+    "settings",
+    "body",
+    "ballAndSocketJoint",
+    "universalJoint",
+    "hinge",
+    "spring",
+    "slider",
+    "fixed",
+    "variant",
+    "ground",
+    "camera",
+    "transform",
+    "replicate",
+];
+
+/// Block kinds whose contents are blocks, not entries.
+fn is_container(kind: &str) -> bool {
+    kind.eq_ignore_ascii_case("articulatedFigure") || kind.eq_ignore_ascii_case("variant")
+}
+
+/// Parses tokens into blocks.
+pub fn parse(tokens: &[Token], file: &str) -> Result<Vec<Block>, AfError> {
+    let mut p = Parser {
+        t: tokens,
+        i: 0,
+        file,
+    };
+    let mut blocks = Vec::new();
+    while p.peek().tok != Tok::Eof {
+        blocks.push(p.block(0)?);
+    }
+    Ok(blocks)
+}
+
+struct Parser<'a> {
+    t: &'a [Token],
+    i: usize,
+    file: &'a str,
+}
+
+/// Nesting deeper than this is certainly a mistake; the limit keeps a hostile file from
+/// overflowing the stack.
+const MAX_DEPTH: usize = 16;
+
+impl<'a> Parser<'a> {
+    fn peek(&self) -> &'a Token {
+        // The token list always ends with Eof, and `next` never moves past it.
+        &self.t[self.i.min(self.t.len() - 1)]
+    }
+
+    fn next(&mut self) -> &'a Token {
+        let t = self.peek();
+        if t.tok != Tok::Eof {
+            self.i += 1;
+        }
+        t
+    }
+
+    fn err(&self, pos: Pos, message: String) -> AfError {
+        AfError::at(self.file, pos, message)
+    }
+
+    fn expected(&self, what: &str) -> AfError {
+        let t = self.peek();
+        self.err(
+            t.pos,
+            format!("expected {what}, found {}", t.tok.describe()),
+        )
+    }
+
+    fn block(&mut self, depth: usize) -> Result<Block, AfError> {
+        if depth > MAX_DEPTH {
+            return Err(self.expected("fewer nested blocks"));
+        }
+        let t = self.next();
+        let Tok::Ident(kind) = &t.tok else {
+            self.i -= usize::from(t.tok != Tok::Eof);
+            return Err(self.expected(
+                "a block such as `settings {`, `body \"name\" {` or `hinge \"name\" {`",
+            ));
+        };
+        let (kind, pos) = (kind.clone(), t.pos);
+        if !KINDS.iter().any(|k| k.eq_ignore_ascii_case(&kind)) {
+            // A block opens with a name or `{`; anything else suggests a key that an
+            // extra `}` has pushed out of its block.
+            let hint = match self.peek().tok {
+                Tok::Str(_) | Tok::LBrace => "",
+                _ => " (is it a key after an extra `}` that closed its block too soon?)",
+            };
+            return Err(self.err(
+                pos,
+                format!("`{kind}` is not a block; expected one of {}{hint}", KINDS.join(", ")),
+            ));
+        }
+        let mut header = Vec::new();
+        loop {
+            let t = self.peek();
+            match &t.tok {
+                Tok::LBrace => {
+                    self.next();
+                    break;
+                }
+                Tok::Str(s) => header.push(Value::Str(s.clone(), t.pos)),
+                Tok::Ident(s) => header.push(Value::Ident(s.clone(), t.pos)),
+                Tok::Num(n) => header.push(Value::Num(*n, t.pos)),
+                _ => return Err(self.expected(&format!("`{{` to open the `{kind}` block"))),
+            }
+            if header.len() > 3 {
+                return Err(self.expected(&format!("`{{` to open the `{kind}` block")));
+            }
+            self.next();
+        }
+        let mut block = Block {
+            kind,
+            pos,
+            header,
+            entries: Vec::new(),
+            children: Vec::new(),
+        };
+        let container = is_container(&block.kind);
+        loop {
+            let t = self.peek();
+            match &t.tok {
+                Tok::RBrace => {
+                    self.next();
+                    return Ok(block);
+                }
+                Tok::Eof => {
+                    return Err(self.err(
+                        t.pos,
+                        format!(
+                            "the file ends inside the `{}` block opened at line {}; expected `}}`",
+                            block.kind, block.pos.line
+                        ),
+                    ));
+                }
+                Tok::Ident(_) if container => block.children.push(self.block(depth + 1)?),
+                Tok::Ident(key) => {
+                    self.next();
+                    let values = self.values(key, depth)?;
+                    block.entries.push(Entry {
+                        key: key.clone(),
+                        pos: t.pos,
+                        values,
+                    });
+                }
+                _ if container => return Err(self.expected("a block or `}`")),
+                _ => {
+                    return Err(
+                        self.expected(&format!("a key or `}}` closing the `{}` block", block.kind))
+                    );
+                }
+            }
+        }
+    }
+
+    fn values(&mut self, key: &str, depth: usize) -> Result<Vec<Value>, AfError> {
+        let mut values = vec![self.value(key, depth)?];
+        while self.peek().tok == Tok::Comma {
+            self.next();
+            values.push(self.value(key, depth)?);
+        }
+        Ok(values)
+    }
+
+    fn value(&mut self, key: &str, depth: usize) -> Result<Value, AfError> {
+        if depth > MAX_DEPTH {
+            return Err(self.expected("fewer nested parentheses"));
+        }
+        let t = self.peek();
+        let v = match &t.tok {
+            Tok::Num(n) => Value::Num(*n, t.pos),
+            Tok::Str(s) => Value::Str(s.clone(), t.pos),
+            Tok::Ident(s) => {
+                self.next();
+                if self.peek().tok == Tok::LParen {
+                    self.next();
+                    let list = self.list(key, depth)?;
+                    return Ok(Value::Call(s.clone(), list, t.pos));
+                }
+                return Ok(Value::Ident(s.clone(), t.pos));
+            }
+            Tok::LParen => {
+                self.next();
+                let list = self.list(key, depth)?;
+                return Ok(Value::Group(list, t.pos));
+            }
+            _ => return Err(self.expected(&format!("a value for `{key}`"))),
+        };
+        self.next();
+        Ok(v)
+    }
+
+    /// The inside of `( ... )` up to and including `)`; commas are optional separators.
+    fn list(&mut self, key: &str, depth: usize) -> Result<Vec<Value>, AfError> {
+        let mut out = Vec::new();
+        loop {
+            match self.peek().tok {
+                Tok::RParen => {
+                    self.next();
+                    return Ok(out);
+                }
+                Tok::Comma if !out.is_empty() => {
+                    self.next();
+                }
+                Tok::Eof | Tok::LBrace | Tok::RBrace => {
+                    return Err(self.expected(&format!("`)` closing a list in `{key}`")));
+                }
+                _ => out.push(self.value(key, depth + 1)?),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lexer::tokenize;
+    use super::*;
+
+    fn parse_str(s: &str) -> Result<Vec<Block>, AfError> {
+        parse(&tokenize(s, "t.af")?, "t.af")
+    }
+
+    #[test]
+    fn entries_keep_values_and_positions() {
+        let b = parse_str(
+            "body \"a\" {\n model box( (-1, -1, -1), (1, 1, 1) )\n clipMask solid, corpse\n}",
+        )
+        .unwrap();
+        assert_eq!(b.len(), 1);
+        assert_eq!(b[0].name().unwrap().0, "a");
+        assert_eq!(b[0].entries.len(), 2);
+        assert!(
+            matches!(&b[0].entries[0].values[0], Value::Call(n, args, _) if n == "box" && args.len() == 2)
+        );
+        assert_eq!(b[0].entries[1].values.len(), 2);
+        assert_eq!(b[0].entries[1].pos, Pos { line: 3, col: 2 });
+    }
+
+    #[test]
+    fn containers_hold_blocks() {
+        let b = parse_str("articulatedFigure x { settings { totalMass 5 } variant 2 \"v\" { settings { iterations 2 } } }").unwrap();
+        assert_eq!(b[0].children.len(), 2);
+        assert_eq!(b[0].children[1].children.len(), 1);
+    }
+
+    #[test]
+    fn truncated_block_names_its_opening_line() {
+        let e = parse_str("settings {\n totalMass 5\n").unwrap_err();
+        assert!(e.message.contains("opened at line 1"), "{e}");
+        assert_eq!(e.line, 3);
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        let s = format!("settings {{ x {} }}", "(".repeat(10_000));
+        assert!(parse_str(&s).is_err());
+    }
+}
