@@ -2,7 +2,7 @@
 //! two halves with the scene renderer, then the egui layer on top.
 
 use crate::app_state::{Action, AppState};
-use crate::render::{Frame, Renderer, SideView};
+use crate::render::{Frame, Renderer, SideView, Viewport};
 use crate::session::Session;
 use crate::ui::{self, UiModel};
 use ragdoll_sim::MethodKind;
@@ -11,6 +11,8 @@ use ragdoll_sim::MethodKind;
 pub struct Compositor {
     /// The egui context (kept across frames: panel sizes, plot state).
     pub ctx: egui::Context,
+    /// The two halves of the last frame (physical pixels), for picking and panning.
+    pub viewports: [Viewport; 2],
     egui: egui_wgpu::Renderer,
     scene: Renderer,
 }
@@ -31,6 +33,12 @@ impl Compositor {
                 },
             ),
             scene: Renderer::new(device, format, samples),
+            viewports: [Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: 1.0,
+                height: 1.0,
+            }; 2],
         }
     }
 
@@ -60,6 +68,7 @@ impl Compositor {
             area = ui::build(ui, &mut model);
         });
         let viewports = ui::viewports(area, pixels_per_point);
+        self.viewports = viewports;
         let sides = [
             SideView {
                 kind: MethodKind::Particle,
