@@ -53,6 +53,15 @@ impl Session {
             methods::build_particle(&loaded.desc, solver)?,
             methods::build_multibody(&loaded.desc)?,
         ];
+        Ok(Session::with_methods(loaded, solver, methods))
+    }
+
+    /// A session around methods built elsewhere (particle first).
+    pub fn with_methods(
+        loaded: LoadedScene,
+        solver: ParticleSolverArg,
+        methods: [Box<dyn Method>; 2],
+    ) -> Session {
         let mut session = Session {
             loaded,
             solver,
@@ -66,7 +75,7 @@ impl Session {
         };
         session.record();
         session.refresh();
-        Ok(session)
+        session
     }
 
     /// Settings in force (the particle method's; both get the same).
