@@ -323,7 +323,9 @@ fn validation_errors_point_at_the_body() {
     let e = err(&bouncy);
     assert_eq!((e.line, e.col), (5, 6), "{e}");
     assert!(e.message.contains("restitution"), "{e}");
-    let spring = format!("{GOOD}spring \"s\" {{ body1 \"a\" body2 \"world\" anchor1 ( 0, 0, 0 ) anchor2 ( 0, 1, 0 ) }}\n");
+    let spring = format!(
+        "{GOOD}spring \"s\" {{ body1 \"a\" body2 \"world\" anchor1 ( 0, 0, 0 ) anchor2 ( 0, 1, 0 ) }}\n"
+    );
     assert!(parse(&spring, Path::new("t.af"), &AfOptions::default()).is_ok());
     let e = err(&GOOD.replace("up \"y\"", "up \"y\"\n\ttimestep 5"));
     assert!(e.message.contains("timestep"), "{e}");

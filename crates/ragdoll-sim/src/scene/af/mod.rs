@@ -8,7 +8,7 @@
 //! explicit particles, a figure transform and a grid of copies. `docs/af-format.md` is
 //! the user's reference; this module is the implementation:
 //!
-//! - [`lexer`]: characters to positioned tokens.
+//! - `lexer`: characters to positioned tokens.
 //! - `parser`: tokens to blocks of `key value, ...` entries, all positions kept.
 //! - `build`: blocks to a validated [`SceneDesc`] — units, axes, variants, masses.
 //! - `models`: Doom 3 collision models to our [`crate::scene::Shape`]s.
