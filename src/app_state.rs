@@ -173,6 +173,8 @@ impl AppState {
                 self.pending_steps += 1;
             }
             Action::ToggleRun => self.running = !self.running,
+            // Esc first closes an open menu, as menus do; with none open it quits.
+            Action::Quit if self.menu.is_some() => self.menu = None,
             Action::Quit => self.quit = true,
             Action::Reset => self.restart(Rebuild::Restart),
             Action::Variant(v) => {

@@ -97,13 +97,14 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
         if state.running { "running" } else { "stopped" },
         state.time_scale()
     );
-    painter.text(
-        Pos2::new(area.center().x, area.max.y - 8.0),
-        Align2::CENTER_BOTTOM,
-        clock,
-        FontId::proportional(13.0),
-        Color32::from_gray(30),
+    let galley = painter.layout_no_wrap(clock, FontId::proportional(13.0), Color32::WHITE);
+    let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
+    painter.rect_filled(
+        Rect::from_min_size(pos, galley.size()).expand(5.0),
+        4.0,
+        Color32::from_black_alpha(150),
     );
+    painter.galley(pos, galley, Color32::WHITE);
     if state.show.names {
         let ppp = model.pixels_per_point;
         for (vp, snap) in viewports(area, ppp).iter().zip(&session.snapshots) {
@@ -164,9 +165,9 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
 
     ui.horizontal(|ui| {
         let (label, action) = if state.running {
-            ("⏸ Stop", Action::ToggleRun)
+            ("Stop", Action::ToggleRun)
         } else {
-            ("▶ Start", Action::Start)
+            ("Start", Action::Start)
         };
         if ui.button(label).clicked() {
             actions.push(action);
@@ -330,7 +331,7 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                 };
                 item(
                     ui,
-                    &format!("Particle solver: {:?} → {other:?}", state.particle_solver),
+                    &format!("Particle solver: {other:?}"),
                     Action::ParticleSolver(other),
                 );
                 let s = state.show;
@@ -342,7 +343,7 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                     ("names", ShowFlag::Names, s.names),
                 ];
                 for (name, flag, on) in toggles {
-                    let text = format!("{} {name}", if on { "☑" } else { "☐" });
+                    let text = format!("{} {name}", if on { "Hide" } else { "Show" });
                     item(ui, &text, Action::Show(flag.toggle(s)));
                 }
                 ui.separator();

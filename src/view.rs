@@ -335,7 +335,12 @@ impl ApplicationHandler for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(w) = self.window.as_mut() else { return };
-        let consumed = w.egui.on_window_event(&w.window, &event).consumed;
+        // Keys belong to the app (egui would move its focus on Tab and press focused
+        // buttons on Space) except while a slider's number field is being edited.
+        let editing = w.compositor.ctx.text_edit_focused();
+        let is_key = matches!(event, WindowEvent::KeyboardInput { .. });
+        let consumed =
+            (!is_key || editing) && w.egui.on_window_event(&w.window, &event).consumed;
         let action = match &event {
             WindowEvent::CloseRequested => {
                 event_loop.exit();
@@ -367,13 +372,17 @@ impl ApplicationHandler for App {
                 // A drag that started in the 3D view continues over the panel.
                 a.filter(|_| !consumed || self.grab_viewport.is_some())
             }
-            _ if consumed => None,
-            WindowEvent::KeyboardInput { event, .. } => self
+            WindowEvent::KeyboardInput { event, .. } if !editing => self
                 .input
                 .key(&event.logical_key, event.state == ElementState::Pressed),
-            WindowEvent::MouseInput { state, button, .. } => self
-                .input
-                .button(*button, *state == ElementState::Pressed),
+            // Releases always reach the mapper, or a drag ending over the panel would stick.
+            WindowEvent::MouseInput { state, button, .. }
+                if !consumed || *state == ElementState::Released =>
+            {
+                self.input
+                    .button(*button, *state == ElementState::Pressed)
+            }
+            _ if consumed => None,
             WindowEvent::MouseWheel { delta, .. } => self.input.wheel(match delta {
                 MouseScrollDelta::LineDelta(_, y) => *y,
                 MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,

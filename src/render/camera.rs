@@ -6,6 +6,9 @@ use ragdoll_sim::scene::CameraDesc;
 /// Vertical field of view (radians).
 const FOV_Y: f32 = 45.0 * std::f32::consts::PI / 180.0;
 
+/// Below this aspect ratio the vertical field of view widens (see `view_proj`).
+const MIN_ASPECT: f32 = 4.0 / 3.0;
+
 /// An orbit camera around `target`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OrbitCamera {
@@ -43,7 +46,15 @@ impl OrbitCamera {
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let view = glam::camera::rh::view::look_at_mat4(self.eye(), self.target, Vec3::Y);
         let near = (self.distance * 0.01).clamp(0.01, 0.5);
-        let proj = glam::camera::rh::proj::directx::perspective(FOV_Y, aspect.max(1e-3), near, 500.0);
+        let aspect = aspect.max(1e-3);
+        // A half of a split window is narrow: keep at least the horizontal field of view
+        // of a 4:3 view, so a scene framed for the whole window still fits in each half.
+        let fov = if aspect < MIN_ASPECT {
+            2.0 * ((FOV_Y * 0.5).tan() * MIN_ASPECT / aspect).atan()
+        } else {
+            FOV_Y
+        };
+        let proj = glam::camera::rh::proj::directx::perspective(fov, aspect, near, 500.0);
         proj * view
     }
 
