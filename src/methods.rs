@@ -2,6 +2,7 @@
 
 use crate::cli::ParticleSolverArg;
 use crate::AppError;
+use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::{Method, SceneDesc};
 
 /// The particle method (left, blue) with the chosen solver.
@@ -9,12 +10,14 @@ pub fn build_particle(
     scene: &SceneDesc,
     solver: ParticleSolverArg,
 ) -> Result<Box<dyn Method>, AppError> {
-    let _ = (scene, solver);
-    Err(AppError::Other("the particle method is not built yet (issue 3)".into()))
+    let solver = match solver {
+        ParticleSolverArg::Paper => ParticleSolver::Paper,
+        ParticleSolverArg::Improved => ParticleSolver::Improved,
+    };
+    Ok(Box::new(ParticleWorld::new(scene, solver)?))
 }
 
 /// The multibody method (right, red).
 pub fn build_multibody(scene: &SceneDesc) -> Result<Box<dyn Method>, AppError> {
-    let _ = scene;
-    Err(AppError::Other("the multibody method is not built yet (issue 4)".into()))
+    Ok(Box::new(ragdoll_sim::rigid::MultibodyWorld::new(scene)?))
 }

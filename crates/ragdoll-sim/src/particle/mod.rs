@@ -1,1 +1,504 @@
-//! The particle (Verlet) ragdoll — being written (issue 3).
+//! The particle (Verlet) ragdoll, left and blue: bones are tetrahedra of four particles
+//! and six sticks (Glimberg & Engel 2007, section 3), with two solvers.
+//!
+//! - [`ParticleSolver::Paper`]: section 3 as written ([`paper`](self) module doc).
+//! - [`ParticleSolver::Improved`] (default): particles placed automatically so every bone
+//!   has its rigid body's mass, centre of mass and inertia; joints between points in
+//!   the bones' frames; generalised-inverse-mass corrections; substeps; contact
+//!   manifolds with Coulomb friction and restitution; sleeping.
+//!
+//! Files, one concept each: `particles` (storage, Verlet), `bone` (tetrahedron, frame,
+//! rigid corrections), `placement` (particulation), `joints`, `limits`, `contacts`
+//! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
+//! `improved` and `paper` (the two solver loops), `measure` (the metrics).
+
+mod bone;
+mod contacts;
+mod friction;
+mod improved;
+mod joints;
+mod limits;
+mod measure;
+mod paper;
+mod particles;
+mod placement;
+mod sleeping;
+
+use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+use crate::scene::{mass_props, validate, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape};
+use crate::snapshot::{
+    BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance, ParticleRole,
+    RenderSnapshot, StickInstance, StickRole,
+};
+use bone::{Bone, EDGES};
+use contacts::{Contact, Filter};
+use glam::{Quat, Vec3};
+use joints::{Joint, RestFrames};
+use parry3d::query::{ContactManifold, Ray};
+use parry3d::shape::SharedShape;
+use particles::Particles;
+
+/// Which solver the particle method runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ParticleSolver {
+    /// The paper's section 3 as written.
+    Paper,
+    /// Ours: particulated bones, inverse-mass weighting, substeps, friction, sleeping.
+    #[default]
+    Improved,
+}
+
+impl ParticleSolver {
+    /// Lowercase name as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ParticleSolver::Paper => "paper",
+            ParticleSolver::Improved => "improved",
+        }
+    }
+}
+
+/// The particle ragdoll world, built from a [`SceneDesc`].
+pub struct ParticleWorld {
+    scene: SceneDesc,
+    solver: ParticleSolver,
+    particles: Particles,
+    bones: Vec<Bone>,
+    joints: Vec<Joint>,
+    filter: Filter,
+    contacts: Vec<Contact>,
+    pairs: Vec<(usize, usize)>,
+    manifolds: Vec<ContactManifold<(), ()>>,
+    paper: Option<paper::PaperState>,
+    grab: Option<Grab>,
+    projectiles: usize,
+    time: f64,
+}
+
+/// The parry3d shape of a scene shape.
+fn parry_shape(body: &BodyDesc) -> Result<SharedShape, SceneError> {
+    Ok(match &body.shape {
+        Shape::Box { half_extents } => SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
+        Shape::Capsule { half_height, radius } => SharedShape::capsule_y(*half_height, *radius),
+        Shape::Cylinder { half_height, radius, .. } => SharedShape::cylinder(*half_height, *radius),
+        Shape::Cone { half_height, radius, .. } => SharedShape::cone(*half_height, *radius),
+        Shape::ConvexHull { points } => SharedShape::convex_hull(points).ok_or_else(|| SceneError::Degenerate {
+            body: body.name.clone(),
+            what: "its convex hull could not be built".into(),
+        })?,
+    })
+}
+
+impl ParticleWorld {
+    /// Builds the world for a scene with the given solver. Fails with a [`SceneError`]
+    /// saying what and where when the description cannot be simulated.
+    pub fn new(scene: &SceneDesc, solver: ParticleSolver) -> Result<ParticleWorld, SceneError> {
+        validate(scene)?;
+        let mut w = ParticleWorld {
+            scene: scene.clone(),
+            solver,
+            particles: Particles::default(),
+            bones: Vec::new(),
+            joints: Vec::new(),
+            filter: Filter::default(),
+            contacts: Vec::new(),
+            pairs: Vec::new(),
+            manifolds: Vec::new(),
+            paper: None,
+            grab: None,
+            projectiles: 0,
+            time: 0.0,
+        };
+        let mut masses = Vec::with_capacity(scene.bodies.len());
+        for b in &scene.bodies {
+            masses.push(mass_props(b)?.mass);
+        }
+        // Shapes first so an unusable hull is reported before anything is built.
+        for b in &scene.bodies {
+            parry_shape(b)?;
+        }
+        match solver {
+            ParticleSolver::Improved => {
+                for (i, b) in scene.bodies.iter().enumerate() {
+                    let bone = w.particulated_bone(i, b)?;
+                    w.bones.push(bone);
+                }
+            }
+            ParticleSolver::Paper => {
+                let st = paper::build(&mut w, scene, &masses);
+                w.paper = Some(st);
+            }
+        }
+        w.assign_figures();
+        let frames: Vec<(Vec3, Quat)> = w.bones.iter().map(|b| (b.com, b.rot)).collect();
+        let rf = RestFrames { frames: &frames };
+        for c in &scene.constraints {
+            let a = Some(c.body1.index());
+            let b = c.body2.body().map(|b| b.index());
+            w.joints.push(Joint::new(&rf, a, b, &c.kind));
+            if let Some(b) = b {
+                w.filter.exclude(c.body1.index(), b);
+            }
+        }
+        w.exclude_rest_overlaps();
+        Ok(w)
+    }
+
+    /// A bone with everything but its particles (used by both placements).
+    fn make_bone(&self, body: usize, desc: &BodyDesc, mass: f32) -> Bone {
+        Bone {
+            body,
+            particles: [0; 4],
+            rest: [Vec3::ZERO; 4],
+            stick_rest: [0.0; 6],
+            com: desc.pose.position,
+            dcom: Vec3::ZERO,
+            rot: desc.pose.rotation,
+            prev_com: desc.pose.position,
+            prev_rot: desc.pose.rotation,
+            shape_in_bone: Pose::IDENTITY,
+            shape: parry_shape(desc).unwrap_or_else(|_| SharedShape::ball(0.01)),
+            shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
+            mass,
+            inv_inertia_local: Vec3::ZERO,
+            fixed: desc.is_fixed(),
+            asleep: false,
+            sleep_time: 0.0,
+            still_anchor: (desc.pose.position, desc.pose.rotation),
+            still_time: 0.0,
+            lin_vel: desc.linear_velocity,
+            ang_vel: desc.angular_velocity,
+            friction: desc.friction.contact,
+            restitution: desc.restitution,
+            air: (desc.friction.linear, desc.friction.angular),
+            figure: body as u32,
+            self_collision: desc.self_collision,
+        }
+    }
+
+    /// The improved placement of one body: particles reproducing its mass properties.
+    fn particulated_bone(&mut self, body: usize, desc: &BodyDesc) -> Result<Bone, SceneError> {
+        let mp = mass_props(desc)?;
+        let p = placement::particulate(&mp);
+        let mut bone = self.make_bone(body, desc, mp.mass);
+        let frame = desc.pose.mul_pose(&p.bone_in_shape);
+        bone.com = frame.position;
+        bone.rot = frame.rotation;
+        bone.prev_com = bone.com;
+        bone.prev_rot = bone.rot;
+        bone.shape_in_bone = Pose {
+            position: -(p.bone_in_shape.rotation.inverse() * p.bone_in_shape.position),
+            rotation: p.bone_in_shape.rotation.inverse(),
+        };
+        bone.rest = p.rest;
+        bone.stick_rest = EDGES.map(|(a, b)| p.rest[a].distance(p.rest[b]));
+        bone.inv_inertia_local = p.principal_inertia.map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
+        let s = &self.scene.settings;
+        let (dt, g) = (s.timestep, s.gravity);
+        let h = if self.solver == ParticleSolver::Improved { dt / improved::substeps(s) as f32 } else { dt };
+        let movable = !desc.is_fixed();
+        for k in 0..4 {
+            let x = bone.world(p.rest[k]);
+            let v = desc.linear_velocity + desc.angular_velocity.cross(x - bone.com);
+            bone.particles[k] = self.particles.push(x, v, g, dt, h, if movable { mp.mass * 0.25 } else { 0.0 }, movable);
+        }
+        Ok(bone)
+    }
+
+    /// Figures: connected components of the joint graph.
+    fn assign_figures(&mut self) {
+        let n = self.bones.len();
+        let mut fig: Vec<u32> = (0..n as u32).collect();
+        // Few constraints: relax labels to the minimum until stable.
+        loop {
+            let mut changed = false;
+            for c in &self.scene.constraints {
+                if let Some(b) = c.body2.body() {
+                    let (i, j) = (c.body1.index(), b.index());
+                    let m = fig[i].min(fig[j]);
+                    if fig[i] != m || fig[j] != m {
+                        fig[i] = m;
+                        fig[j] = m;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        for (b, f) in self.bones.iter_mut().zip(fig) {
+            b.figure = f;
+        }
+    }
+
+    /// Bodies that overlap in the rest pose never collide with each other.
+    fn exclude_rest_overlaps(&mut self) {
+        let margin = vec![0.0; self.bones.len()];
+        let mut pairs = Vec::new();
+        broad_all(&self.bones, &margin, &mut pairs);
+        let mut manifolds = Vec::new();
+        for (i, j) in pairs {
+            let mut overlap = false;
+            contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| overlap |= d < -1e-3);
+            if overlap {
+                self.filter.exclude(i, j);
+            }
+        }
+    }
+
+    /// The solver in use.
+    pub fn solver(&self) -> ParticleSolver {
+        self.solver
+    }
+
+    /// Switches solver, rebuilding from the scene (the state restarts).
+    pub fn set_solver(&mut self, solver: ParticleSolver) -> Result<(), SceneError> {
+        if solver != self.solver {
+            let scene = self.scene.clone();
+            *self = ParticleWorld::new(&scene, solver)?;
+        }
+        Ok(())
+    }
+
+    /// Total energy with the integrator's own particle velocities (J): the state's
+    /// energy, `Σ ½ m_p |v_p|² + m_p g h_p` with `v_p` the velocity the next step starts
+    /// from. [`Method::sample`] follows DESIGN.md and differences positions over the
+    /// frame instead, which under-reads kinetic energy in a frame where a velocity turns
+    /// (an impact), so its `energy_gain` can show a rise the state never had.
+    pub fn state_energy(&self) -> f64 {
+        measure::state_energy(self)
+    }
+
+    /// The scene this world was built from (with live settings applied).
+    pub fn scene(&self) -> &SceneDesc {
+        &self.scene
+    }
+}
+
+/// Broad phase ignoring the filter (used to find rest overlaps).
+fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
+    contacts::broad_phase(bones, margin, &Filter::default(), out);
+}
+
+/// The mouse grab in improved mode: a soft XPBD point constraint to the target.
+pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
+    let Some(i) = bones.iter().position(|b| b.body == g.body.index()) else { return };
+    let local = bones[i].shape_in_bone.transform_point(g.local_point);
+    let p = bones[i].world(local);
+    // Compliance 1e-3 m/N: a stiff but yielding spring, independent of the substep.
+    bone::positional(bones, Some(i), None, p, g.target, g.target - p, 1e-3 / (h * h));
+}
+
+/// The mouse grab in paper mode: pull the bone's particles towards the target.
+pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
+    let Some(i) = w.bones.iter().position(|b| b.body == g.body.index()) else { return };
+    let local = w.bones[i].shape_in_bone.transform_point(g.local_point);
+    let p = w.bones[i].world(local);
+    let d = (g.target - p) * 0.05;
+    for &k in &w.bones[i].particles {
+        if w.particles.inv_mass[k as usize] > 0.0 {
+            w.particles.x[k as usize] += d;
+        }
+    }
+}
+
+impl Method for ParticleWorld {
+    fn kind(&self) -> MethodKind {
+        MethodKind::Particle
+    }
+
+    fn solver_label(&self) -> String {
+        let s = &self.scene.settings;
+        match self.solver {
+            ParticleSolver::Paper => format!("paper, {} iterations", s.iterations),
+            ParticleSolver::Improved => format!("improved, {} substeps", improved::substeps(s)),
+        }
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn step(&mut self) {
+        match self.solver {
+            ParticleSolver::Improved => improved::step(self),
+            ParticleSolver::Paper => {
+                if let Some(st) = self.paper.take() {
+                    paper::step(self, &st);
+                    self.paper = Some(st);
+                }
+            }
+        }
+        self.time += self.scene.settings.timestep as f64;
+    }
+
+    fn set_settings(&mut self, settings: &Settings) {
+        let old = self.scene.settings.timestep;
+        if self.solver == ParticleSolver::Paper && old != settings.timestep && settings.timestep > 0.0 {
+            self.particles.rescale_verlet(old, settings.timestep);
+        }
+        self.scene.settings = settings.clone();
+    }
+
+    fn settings(&self) -> &Settings {
+        &self.scene.settings
+    }
+
+    fn snapshot(&self, out: &mut RenderSnapshot) {
+        out.clear();
+        for b in &self.bones {
+            let role = if b.fixed {
+                BodyRole::Fixed
+            } else if self.grab.is_some_and(|g| g.body.index() == b.body) {
+                BodyRole::Grabbed
+            } else if b.body >= self.scene.bodies.len() - self.projectiles {
+                BodyRole::Projectile
+            } else if b.asleep {
+                BodyRole::Asleep
+            } else {
+                BodyRole::Dynamic
+            };
+            out.bodies.push(BodyInstance {
+                body: BodyId(b.body as u32),
+                shape: self.scene.bodies[b.body].shape.clone(),
+                pose: b.shape_pose(),
+                role,
+            });
+            for (k, &(i, j)) in EDGES.iter().enumerate() {
+                let _ = k;
+                out.sticks.push(StickInstance {
+                    a: self.particles.x[b.particles[i] as usize],
+                    b: self.particles.x[b.particles[j] as usize],
+                    role: StickRole::Bone,
+                });
+            }
+        }
+        for i in 0..self.particles.len() {
+            out.particles.push(ParticleInstance {
+                position: self.particles.x[i],
+                role: if self.particles.inv_mass[i] == 0.0 {
+                    ParticleRole::Fixed
+                } else if self.particles.joint[i] {
+                    ParticleRole::Joint
+                } else {
+                    ParticleRole::Internal
+                },
+            });
+        }
+        for c in &self.contacts {
+            let pa = self.bones[c.a].world(c.ra);
+            let pb = bone::side_world(&self.bones, c.b, c.rb);
+            out.contacts.push(ContactInstance { point: pa, normal: c.n, depth: (pa - pb).dot(c.n) });
+        }
+        for j in &self.joints {
+            if !j.has_anchor {
+                continue;
+            }
+            let (a, b) = j.anchors(&self.bones);
+            let limit = match j.swing {
+                Some(s) => match s.kind {
+                    limits::Swing::Cone { half_angle } => LimitShape::Cone {
+                        axis: bone::side_rot(&self.bones, j.b) * s.axis_b,
+                        half_angle,
+                    },
+                    limits::Swing::Pyramid { h1, h2, .. } => LimitShape::Cone {
+                        axis: bone::side_rot(&self.bones, j.b) * s.axis_b,
+                        half_angle: h1.max(h2),
+                    },
+                },
+                None => match (j.kind, j.angle_limits.first()) {
+                    (joints::JointType::Hinge { .. }, Some(l)) => LimitShape::Arc {
+                        axis: bone::side_rot(&self.bones, j.a) * l.axis_a,
+                        reference: bone::side_rot(&self.bones, j.b) * l.ref_b,
+                        min: l.min,
+                        max: l.max,
+                    },
+                    _ => LimitShape::None,
+                },
+            };
+            out.joints.push(JointInstance { anchor: a, anchor2: b, limit });
+            out.sticks.push(StickInstance { a, b, role: StickRole::Joint });
+        }
+    }
+
+    fn sample(&self) -> Sample {
+        measure::sample(self)
+    }
+
+    fn body_count(&self) -> usize {
+        self.bones.len()
+    }
+
+    fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+
+    fn body_states(&self, out: &mut Vec<BodyState>) {
+        measure::body_states(self, out);
+    }
+
+    fn particle_positions(&self, out: &mut Vec<Vec3>) {
+        out.clear();
+        out.extend_from_slice(&self.particles.x);
+    }
+
+    fn raycast(&self, origin: Vec3, dir: Vec3) -> Option<RayHit> {
+        let ray = Ray::new(origin, dir);
+        let mut best: Option<RayHit> = None;
+        for b in &self.bones {
+            let pose = b.parry_pose();
+            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true) {
+                if best.is_none_or(|h| t < h.distance) {
+                    let local = b.shape_pose().inverse_transform_point(origin + dir * t);
+                    best = Some(RayHit { body: BodyId(b.body as u32), distance: t, local_point: local });
+                }
+            }
+        }
+        best
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        if let Some(g) = grab {
+            for b in self.bones.iter_mut() {
+                if b.body == g.body.index() {
+                    b.asleep = false;
+                    b.sleep_time = 0.0;
+                }
+            }
+        }
+        self.grab = grab;
+    }
+
+    fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
+        let id = self.scene.bodies.len();
+        let mut desc = desc.clone();
+        if self.scene.body_id(&desc.name).is_some() {
+            desc.name = format!("{}#{}", desc.name, id);
+        }
+        self.scene.bodies.push(desc.clone());
+        if let Ok(mut bone) = self.particulated_bone(id, &desc) {
+            bone.figure = id as u32;
+            if self.solver == ParticleSolver::Paper {
+                // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it.
+                let x = &self.particles.x;
+                let shape_pose = bone.shape_pose();
+                bone.paper_frame(x);
+                let frame = Pose { position: bone.com, rotation: bone.rot };
+                bone.rest = bone.particles.map(|p| frame.inverse_transform_point(x[p as usize]));
+                bone.shape_in_bone = Pose {
+                    position: frame.inverse_transform_point(shape_pose.position),
+                    rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
+                };
+                if let Some(st) = self.paper.as_mut() {
+                    for (k, &(a, b)) in EDGES.iter().enumerate() {
+                        st.sticks.push(paper::Stick { a: bone.particles[a], b: bone.particles[b], rest: bone.stick_rest[k] });
+                    }
+                }
+            }
+            self.bones.push(bone);
+            self.projectiles += 1;
+        }
+        BodyId(id as u32)
+    }
+}

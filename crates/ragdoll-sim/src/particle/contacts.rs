@@ -1,0 +1,153 @@
+//! Collision detection: which pairs may collide, a sort-and-sweep broad phase over parry
+//! AABBs, and parry3d contact manifolds between the shapes posed by the bone frames and
+//! against the ground half-space.
+//!
+//! Filtering (paper section 3.4, and the Doom 3 seed's advice on jumpy figures): no
+//! contacts between jointed bones, none between bones that overlap in the rest pose, none
+//! inside a figure when either bone has `self_collision` off, none between two static
+//! bones.
+
+use super::bone::{Bone, Side};
+use crate::scene::Ground;
+use glam::Vec3;
+use parry3d::bounding_volume::BoundingVolume;
+use parry3d::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
+use parry3d::shape::HalfSpace;
+
+/// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Contact {
+    /// The first bone.
+    pub a: usize,
+    /// The second bone, or the ground.
+    pub b: Side,
+    /// Contact point on `a`, bone frame.
+    pub ra: Vec3,
+    /// Contact point on `b`, bone frame (world for the ground).
+    pub rb: Vec3,
+    /// Unit normal from `a` towards `b` (world), fixed for the frame.
+    pub n: Vec3,
+    /// Combined Coulomb coefficient.
+    pub mu: f32,
+    /// Combined restitution.
+    pub e: f32,
+    /// Normal multiplier of the current substep (0 when not touching).
+    pub lambda_n: f32,
+    /// Tangential (friction) multiplier spent in the current substep.
+    pub lambda_t: f32,
+    /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
+    pub vn_before: f32,
+}
+
+/// Pairs that never collide, precomputed from the scene.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Filter {
+    /// Sorted `(min, max)` bone-index pairs excluded from collision.
+    pub excluded: Vec<(u32, u32)>,
+}
+
+impl Filter {
+    /// Whether bones `i` and `j` may collide.
+    pub fn collides(&self, bones: &[Bone], i: usize, j: usize) -> bool {
+        let (bi, bj) = (&bones[i], &bones[j]);
+        if bi.fixed && bj.fixed {
+            return false;
+        }
+        if bi.figure == bj.figure && !(bi.self_collision && bj.self_collision) {
+            return false;
+        }
+        let key = (i.min(j) as u32, i.max(j) as u32);
+        self.excluded.binary_search(&key).is_err()
+    }
+
+    /// Excludes a pair.
+    pub fn exclude(&mut self, i: usize, j: usize) {
+        let key = (i.min(j) as u32, i.max(j) as u32);
+        if let Err(pos) = self.excluded.binary_search(&key) {
+            self.excluded.insert(pos, key);
+        }
+    }
+}
+
+/// Candidate pairs from a sort-and-sweep along X over AABBs loosened by `margin[i]`.
+pub(crate) fn broad_phase(bones: &[Bone], margin: &[f32], filter: &Filter, out: &mut Vec<(usize, usize)>) {
+    out.clear();
+    let aabbs: Vec<_> = bones
+        .iter()
+        .zip(margin)
+        .map(|(b, m)| b.shape.compute_aabb(&b.parry_pose()).loosened(*m))
+        .collect();
+    let mut order: Vec<usize> = (0..bones.len()).collect();
+    order.sort_by(|&i, &j| aabbs[i].mins.x.total_cmp(&aabbs[j].mins.x).then(i.cmp(&j)));
+    for (k, &i) in order.iter().enumerate() {
+        for &j in &order[k + 1..] {
+            if aabbs[j].mins.x > aabbs[i].maxs.x {
+                break;
+            }
+            if bones[i].is_static() && bones[j].is_static() {
+                continue;
+            }
+            if aabbs[i].intersects(&aabbs[j]) && filter.collides(bones, i, j) {
+                out.push((i.min(j), i.max(j)));
+            }
+        }
+    }
+    out.sort_unstable();
+}
+
+/// Contacts between two bones with `prediction` (m) of speculative distance. Calls
+/// `emit(point_on_a_world, point_on_b_world, normal_a_to_b, distance)`.
+pub(crate) fn shape_pair(
+    bones: &[Bone],
+    i: usize,
+    j: usize,
+    prediction: f32,
+    manifolds: &mut Vec<ContactManifold<(), ()>>,
+    mut emit: impl FnMut(Vec3, Vec3, Vec3, f32),
+) {
+    let (pi, pj) = (bones[i].parry_pose(), bones[j].parry_pose());
+    let pos12 = pi.inv_mul(&pj);
+    manifolds.clear();
+    let mut ws = None;
+    if DefaultQueryDispatcher
+        .contact_manifolds(&pos12, bones[i].shape.as_ref(), bones[j].shape.as_ref(), prediction, manifolds, &mut ws)
+        .is_err()
+    {
+        return;
+    }
+    for m in manifolds.iter() {
+        let n = pi.rotation * m.local_n1;
+        for c in &m.points {
+            emit(pi * c.local_p1, pj * c.local_p2, n, c.dist);
+        }
+    }
+}
+
+/// Contacts of a bone with the ground plane. Same `emit` convention, `a` the bone.
+pub(crate) fn ground_pair(
+    bones: &[Bone],
+    i: usize,
+    ground: &Ground,
+    prediction: f32,
+    manifolds: &mut Vec<ContactManifold<(), ()>>,
+    mut emit: impl FnMut(Vec3, Vec3, Vec3, f32),
+) {
+    let plane = HalfSpace::new(ground.normal());
+    let pg = parry3d::math::Pose::from_translation(Vec3::new(0.0, ground.height, 0.0));
+    let pb = bones[i].parry_pose();
+    let pos12 = pg.inv_mul(&pb);
+    manifolds.clear();
+    let mut ws = None;
+    if DefaultQueryDispatcher
+        .contact_manifolds(&pos12, &plane, bones[i].shape.as_ref(), prediction, manifolds, &mut ws)
+        .is_err()
+    {
+        return;
+    }
+    for m in manifolds.iter() {
+        let n = pg.rotation * m.local_n1;
+        for c in &m.points {
+            emit(pb * c.local_p2, pg * c.local_p1, -n, c.dist);
+        }
+    }
+}

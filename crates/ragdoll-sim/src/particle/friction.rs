@@ -1,0 +1,130 @@
+//! Contact response of the improved solver (after Müller et al. 2020, "Detailed rigid
+//! body simulation with extended position based dynamics", sections 3.5–3.6).
+//!
+//! Position level, per substep: the normal constraint pushes the shapes apart; then the
+//! tangential slip of the contact points during the substep is cancelled entirely when
+//! its multiplier stays inside the Coulomb cone, `λ_t ≤ μ λ_n` (static friction), and
+//! otherwise only up to `λ_t = μ λ_n` (kinetic friction). Clamping rather than
+//! all-or-nothing lets Gauss–Seidel share the tangential load between the points of a
+//! manifold — with all-or-nothing each point sees the whole body's slip against a
+//! quarter of its normal load and a box creeps down a slope below the friction angle.
+//!
+//! Velocity level: the normal velocity is set to `−e v_n` (the approach speed before
+//! the solve) above the restitution threshold and to zero below it, which also removes
+//! any velocity the position projection created: pushing out of a penetration must not
+//! add energy.
+
+use super::bone::{point_inv_mass, positional, rot_inv_mass, side_world, Bone, Side};
+use super::contacts::Contact;
+use glam::Vec3;
+
+fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
+    match s {
+        Some(i) => bones[i].displacement(local),
+        None => Vec3::ZERO,
+    }
+}
+
+/// Velocity of a side's material point at world `p`.
+pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
+    match s {
+        Some(i) if !bones[i].is_static() => {
+            let b = &bones[i];
+            b.lin_vel + b.ang_vel.cross(p - b.center())
+        }
+        _ => Vec3::ZERO,
+    }
+}
+
+/// Position pass for one contact: push apart along the normal, then hold it by static
+/// friction if the Coulomb cone allows. Accumulates `lambda_n`.
+pub(crate) fn solve_position(bones: &mut [Bone], c: &mut Contact) {
+    let a = Some(c.a);
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let depth = (pa - pb).dot(c.n);
+    if depth <= 0.0 {
+        return;
+    }
+    c.lambda_n += positional(bones, a, c.b, pa, pb, -c.n * depth, 0.0);
+    // Slip of the contact points since the start of the substep, tangential part.
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let slip = bones[c.a].displacement(c.ra) - side_displacement(bones, c.b, c.rb);
+    let slip_t = slip - c.n * slip.dot(c.n);
+    let len = slip_t.length();
+    if len < 1e-9 {
+        return;
+    }
+    let t = slip_t / len;
+    let w = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, c.b, pb, t);
+    if w <= 0.0 {
+        return;
+    }
+    // Hold the slip entirely if the cone allows (static), else as far as `μ λ_n`
+    // allows (kinetic): Gauss–Seidel over the manifold's points then shares the
+    // tangential load between them, as a Coulomb clamp does in impulse solvers.
+    // What earlier iterations of this substep spent counts against the cone.
+    let needed = len / w;
+    let allowed = c.mu * c.lambda_n - c.lambda_t;
+    if allowed > 0.0 {
+        let frac = (allowed / needed).min(1.0);
+        c.lambda_t += positional(bones, a, c.b, pa, pb, -slip_t * frac, 0.0);
+    }
+}
+
+/// Applies a velocity impulse `p` at world point `at` to a side.
+fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
+    if let Some(i) = s {
+        let b = &mut bones[i];
+        if b.is_static() {
+            return;
+        }
+        let dw = b.inv_inertia() * (at - b.center()).cross(p);
+        b.lin_vel += p * b.inv_mass();
+        b.ang_vel += dw;
+    }
+}
+
+/// Radius of the contact patch a point contact stands for (m): the lever arm of its
+/// torsional friction. A box resting on one corner otherwise spins about the normal
+/// without losing energy, since a point cannot resist twist.
+const PATCH_RADIUS: f32 = 0.01;
+
+/// Velocity pass for one contact that was active this substep.
+pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitution_threshold: f32) {
+    if c.lambda_n <= 0.0 {
+        return;
+    }
+    let a = Some(c.a);
+    let pa = bones[c.a].world(c.ra);
+    let pb = side_world(bones, c.b, c.rb);
+    let v = point_velocity(bones, a, pa) - point_velocity(bones, c.b, pb);
+    let vn = v.dot(c.n);
+    // Normal: restitution on the approach speed before the solve, never more.
+    let target = if c.vn_before > restitution_threshold { -c.e * c.vn_before } else { 0.0 };
+    let wn = point_inv_mass(bones, a, pa, c.n) + point_inv_mass(bones, c.b, pb, c.n);
+    if wn > 0.0 {
+        let p = c.n * ((target - vn) / wn);
+        apply_velocity_impulse(bones, a, pa, p);
+        apply_velocity_impulse(bones, c.b, pb, -p);
+    }
+    // Torsional friction: twist about the normal, capped by μ r λ_n / h.
+    let twist = |bones: &[Bone], s: Side| match s {
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(c.n),
+        _ => 0.0,
+    };
+    let spin = twist(bones, a) - twist(bones, c.b);
+    let wr = rot_inv_mass(bones, a, c.n) + rot_inv_mass(bones, c.b, c.n);
+    if wr > 0.0 && spin != 0.0 {
+        let l = spin.signum() * (spin.abs() / wr).min(c.mu * PATCH_RADIUS * c.lambda_n / h);
+        for (s, sign) in [(a, -1.0f32), (c.b, 1.0)] {
+            if let Some(i) = s {
+                let b = &mut bones[i];
+                if !b.is_static() {
+                    b.ang_vel += b.inv_inertia() * (c.n * (sign * l));
+                }
+            }
+        }
+    }
+}

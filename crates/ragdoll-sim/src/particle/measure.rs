@@ -1,0 +1,121 @@
+//! The metrics of DESIGN.md for the particle method, computed from the particles and
+//! the bone frames they imply.
+//!
+//! - E(t) = Σ ½ m_p |v_p|² + m_p g h_p over particles, `v_p = (x_p(t) − x_p(t−dt))/dt`
+//!   over the frame (not the substep), potential from [`crate::metrics`].
+//! - Penetration: deepest overlap of colliding pairs (the solver's own filter) and of
+//!   each shape with the ground, from parry contact manifolds at the current frames.
+//! - Joint gap: distance between the anchor as seen from each bone's frame.
+//! - Limit violation: excess of each limit's angle, measured from the bone frames.
+//! - Bone stretch: largest relative stick-length error.
+
+use super::bone::gram_schmidt;
+use super::contacts::{broad_phase, ground_pair, shape_pair};
+use super::{ParticleSolver, ParticleWorld};
+use crate::method::{BodyState, Sample};
+use crate::metrics::potential_energy;
+use glam::Vec3;
+
+/// The sample for the current state.
+pub(crate) fn sample(w: &ParticleWorld) -> Sample {
+    let dt = w.scene.settings.timestep;
+    let p = &w.particles;
+    let mut kinetic = 0.0f64;
+    let mut potential = 0.0f64;
+    for i in 0..p.len() {
+        let m = p.mass[i];
+        if m <= 0.0 {
+            continue;
+        }
+        let v = (p.x[i] - p.frame_start[i]) / dt;
+        kinetic += 0.5 * m as f64 * v.length_squared() as f64;
+        potential += potential_energy(&w.scene, m, p.x[i]);
+    }
+    let mut pen = 0.0f32;
+    let zero = vec![0.0; w.bones.len()];
+    let mut pairs = Vec::new();
+    // Asleep bones are static to the solver; the metric looks at every colliding pair.
+    let mut bones = w.bones.clone();
+    for b in bones.iter_mut() {
+        b.asleep = false;
+    }
+    broad_phase(&bones, &zero, &w.filter, &mut pairs);
+    let mut manifolds = Vec::new();
+    for &(i, j) in &pairs {
+        shape_pair(&bones, i, j, 0.0, &mut manifolds, |_, _, _, d| pen = pen.max(-d));
+    }
+    if let Some(ground) = w.scene.settings.ground {
+        for (i, b) in bones.iter().enumerate() {
+            if !b.fixed {
+                ground_pair(&bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| pen = pen.max(-d));
+            }
+        }
+    }
+    let gap = w.joints.iter().map(|j| j.gap(&w.bones)).fold(0.0, f32::max);
+    let limit = w.joints.iter().map(|j| j.limit_violation(&w.bones)).fold(0.0, f32::max);
+    let stretch = w
+        .bones
+        .iter()
+        .filter(|b| !b.fixed)
+        .map(|b| b.stretch(&p.x))
+        .fold(0.0, f32::max);
+    let all_asleep = w.solver == ParticleSolver::Improved && w.bones.iter().all(|b| b.fixed || b.asleep);
+    Sample {
+        energy: kinetic + potential,
+        kinetic,
+        max_penetration: pen,
+        max_joint_gap: gap,
+        max_limit_violation_deg: limit.to_degrees(),
+        max_bone_stretch: Some(stretch),
+        all_asleep,
+    }
+}
+
+/// The state's energy: particle velocities as the integrator holds them (paper mode:
+/// Verlet's `(x − x_old)/Δt`; improved mode: the velocities after the last substep).
+pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
+    let p = &w.particles;
+    let dt = w.scene.settings.timestep;
+    let mut e = 0.0f64;
+    for i in 0..p.len() {
+        let m = p.mass[i];
+        if m <= 0.0 {
+            continue;
+        }
+        let v = match w.solver {
+            ParticleSolver::Improved => p.v[i],
+            ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
+        };
+        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.scene, m, p.x[i]);
+    }
+    e
+}
+
+/// Kinematic state of every bone, as its frame implies.
+pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
+    out.clear();
+    let dt = w.scene.settings.timestep;
+    for b in &w.bones {
+        let pose = b.shape_pose();
+        let com = pose.transform_point(b.shape_com);
+        let (lin, ang) = match w.solver {
+            ParticleSolver::Improved => (b.lin_vel, b.ang_vel),
+            ParticleSolver::Paper => {
+                let x = &w.particles.frame_start;
+                let p0 = x[b.particles[0] as usize];
+                let (r, _) = gram_schmidt(x[b.particles[1] as usize] - p0, x[b.particles[2] as usize] - p0);
+                let prev = crate::scene::Pose { position: p0, rotation: r }.mul_pose(&b.shape_in_bone);
+                let prev_com = prev.transform_point(b.shape_com);
+                let (axis, angle) = (pose.rotation * prev.rotation.inverse()).to_axis_angle();
+                let angle = if angle > std::f32::consts::PI { angle - std::f32::consts::TAU } else { angle };
+                ((com - prev_com) / dt, axis * angle / dt)
+            }
+        };
+        out.push(BodyState {
+            com,
+            orientation: pose.rotation,
+            linear_velocity: if lin.is_finite() { lin } else { Vec3::ZERO },
+            angular_velocity: if ang.is_finite() { ang } else { Vec3::ZERO },
+        });
+    }
+}

@@ -1,0 +1,107 @@
+//! Sleeping (improved solver): islands of bones linked by joints or touching contacts
+//! go to sleep together once every bone has rested for `sleep.time` seconds, and wake
+//! together
+//! when any bone of the island moves — which includes an awake bone touching them, since
+//! contacts join islands.
+//!
+//! A bone rests when it is below the sleep speeds (Doom 3's `suspendSpeed`) or when it
+//! has not left a small box around where it was — `noMoveTranslation` and
+//! `noMoveRotation` over `noMoveTime`, Doom 3's second test. The second catches a foot
+//! trembling in place between a hard joint limit and the floor, whose speed alone never
+//! settles under the threshold.
+
+use super::bone::Bone;
+use super::contacts::Contact;
+use super::joints::Joint;
+use crate::scene::SleepSettings;
+
+fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let p = parent[parent[i as usize] as usize];
+        parent[i as usize] = p;
+        i = p;
+    }
+    i
+}
+
+fn union(parent: &mut [u32], a: usize, b: usize) {
+    let (ra, rb) = (find(parent, a as u32), find(parent, b as u32));
+    if ra != rb {
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        parent[hi as usize] = lo;
+    }
+}
+
+/// Updates sleep timers and puts islands to sleep or wakes them. Returns the bones that
+/// just fell asleep so the caller can zero their particles' velocities.
+pub(crate) fn update(
+    bones: &mut [Bone],
+    joints: &[Joint],
+    contacts: &[Contact],
+    s: &SleepSettings,
+    dt: f32,
+    time: f64,
+    newly_asleep: &mut Vec<usize>,
+) {
+    newly_asleep.clear();
+    let n = bones.len();
+    for b in bones.iter_mut() {
+        if b.fixed {
+            continue;
+        }
+        let slow = b.asleep || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
+        b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
+        let (p, q) = b.still_anchor;
+        let turned = (b.rot * q.inverse()).to_axis_angle().1;
+        let turned = turned.min(std::f32::consts::TAU - turned);
+        if b.asleep || ((b.center() - p).length() <= s.translation && turned <= s.rotation) {
+            b.still_time += dt;
+        } else {
+            b.still_anchor = (b.center(), b.rot);
+            b.still_time = 0.0;
+        }
+    }
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
+    for j in joints {
+        if let (Some(a), Some(b)) = (j.a, j.b) {
+            if dynamic(bones, a) && dynamic(bones, b) {
+                union(&mut parent, a, b);
+            }
+        }
+    }
+    for c in contacts {
+        if let Some(b) = c.b {
+            if dynamic(bones, c.a) && dynamic(bones, b) {
+                union(&mut parent, c.a, b);
+            }
+        }
+    }
+    let mut min_time = vec![f32::INFINITY; n];
+    for i in 0..n {
+        if dynamic(bones, i) {
+            let r = find(&mut parent, i as u32) as usize;
+            min_time[r] = min_time[r].min(bones[i].sleep_time.max(bones[i].still_time));
+        }
+    }
+    let forced = s.max_move_time > 0.0 && time >= s.max_move_time as f64;
+    let allowed = time >= s.min_move_time as f64;
+    for i in 0..n {
+        if !dynamic(bones, i) {
+            continue;
+        }
+        let r = find(&mut parent, i as u32) as usize;
+        let sleep = forced || (allowed && min_time[r] >= s.time);
+        if sleep && !bones[i].asleep {
+            newly_asleep.push(i);
+        }
+        bones[i].asleep = sleep;
+        if !sleep {
+            // A woken island starts its count again.
+            if min_time[r] < s.time {
+                bones[i].sleep_time = bones[i].sleep_time.min(min_time[r]);
+                bones[i].still_time = bones[i].still_time.min(min_time[r]);
+            }
+        }
+    }
+}
