@@ -18,6 +18,13 @@ use ragdoll_sim::SceneDesc;
 use ragdoll_sim::scene::{BodyRef, JointKind, Shape, SwingLimit, scene_mass_props};
 use rapier3d::prelude::*;
 
+/// Rapier limits: an axis and its `[min, max]`.
+type Limits = Vec<(JointAxis, [f32; 2])>;
+
+/// A joint in Rapier's terms: locked axes, world anchor, the world orientation of the
+/// joint frame on body1 and on body2 at rest, and the limits.
+type JointFrames = (JointAxesMask, Vec3, Quat, Quat, Limits);
+
 /// The Rapier world and what could not be carried over.
 pub struct RapierScene {
     /// The world, ready to step.
@@ -130,13 +137,7 @@ pub fn build(scene: &SceneDesc) -> RapierScene {
             BodyRef::World => (world_body, Pose::IDENTITY),
         };
         // World frames of the joint on body1 and body2 at rest, and the joint's axes.
-        let (mask, anchor, r1, r2, limits): (
-            JointAxesMask,
-            Vec3,
-            Quat,
-            Quat,
-            Vec<(JointAxis, [f32; 2])>,
-        ) = match &c.kind {
+        let (mask, anchor, r1, r2, limits): JointFrames = match &c.kind {
             JointKind::BallAndSocket {
                 anchor,
                 swing,
