@@ -32,7 +32,12 @@ impl Image {
     /// The pixel at (x, y).
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * self.width + x) * 4) as usize;
-        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2], self.rgba[i + 3]]
+        [
+            self.rgba[i],
+            self.rgba[i + 1],
+            self.rgba[i + 2],
+            self.rgba[i + 3],
+        ]
     }
 
     /// Writes a PNG.
@@ -79,11 +84,12 @@ impl Offscreen {
         // Validation errors become values: collected here and returned after each frame.
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = errors.clone();
-        gpu.device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
+        gpu.device
+            .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                if let Ok(mut v) = sink.lock() {
+                    v.push(e.to_string());
+                }
+            }));
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("capture"),
             size: wgpu::Extent3d {
@@ -190,7 +196,9 @@ impl Offscreen {
         let mut encoder = self
             .gpu
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene"),
+            });
         renderer.render(
             &self.gpu.device,
             &self.gpu.queue,
@@ -206,8 +214,9 @@ impl Offscreen {
     /// Copies the target to the readback buffer and waits for it.
     fn read(&mut self) -> Result<Image, AppError> {
         let device = &self.gpu.device;
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("read"),
+        });
         encoder.copy_texture_to_buffer(
             self.texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -248,7 +257,9 @@ impl Offscreen {
         if let Ok(mut errors) = self.errors.lock()
             && !errors.is_empty()
         {
-            return Err(AppError::Gpu(errors.drain(..).collect::<Vec<_>>().join("; ")));
+            return Err(AppError::Gpu(
+                errors.drain(..).collect::<Vec<_>>().join("; "),
+            ));
         }
         Ok(Image {
             width: self.width,

@@ -88,8 +88,9 @@ impl Compositor {
             show: state.show,
         };
 
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
         self.scene
             .render(device, queue, &mut encoder, target, size, &frame);
 
