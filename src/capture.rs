@@ -16,6 +16,8 @@ use std::sync::{Arc, Mutex};
 
 /// The target format: 8-bit sRGB, so the PNG holds what a screen would show.
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The same bytes seen without sRGB encoding, for egui (it blends in gamma space).
+const UI_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// An RGBA8 image, rows top to bottom.
 #[derive(Clone, Debug)]
@@ -65,6 +67,8 @@ pub struct Offscreen {
     height: u32,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
+    ui_view: wgpu::TextureView,
+    ui_format: wgpu::TextureFormat,
     readback: wgpu::Buffer,
     padded_row: u32,
     compositor: Option<Compositor>,
@@ -90,6 +94,14 @@ impl Offscreen {
                     v.push(e.to_string());
                 }
             }));
+        // GL (llvmpipe) cannot view one texture in two formats; egui then draws through
+        // the sRGB view (its colours a little lighter), as it says in a warning.
+        let view_formats_ok = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        let ui_format = if view_formats_ok { UI_FORMAT } else { FORMAT };
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("capture"),
             size: wgpu::Extent3d {
@@ -102,9 +114,13 @@ impl Offscreen {
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
+            view_formats: if view_formats_ok { &[UI_FORMAT] } else { &[] },
         });
         let view = texture.create_view(&Default::default());
+        let ui_view = texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(ui_format),
+            ..Default::default()
+        });
         let padded_row = (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
             * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -119,6 +135,8 @@ impl Offscreen {
             height,
             texture,
             view,
+            ui_view,
+            ui_format,
             readback,
             padded_row,
             compositor: None,
@@ -151,7 +169,7 @@ impl Offscreen {
         let samples = self.samples();
         let compositor = self
             .compositor
-            .get_or_insert_with(|| Compositor::new(&self.gpu.device, FORMAT, samples));
+            .get_or_insert_with(|| Compositor::new(&self.gpu.device, FORMAT, self.ui_format, samples));
         if compositor.ctx.cumulative_pass_nr() == 0 {
             // egui lays out auto-sized areas in a first, invisible pass; run it once so
             // the captured frame shows the settled layout.
@@ -159,6 +177,7 @@ impl Offscreen {
                 &self.gpu.device,
                 &self.gpu.queue,
                 &self.view,
+                &self.ui_view,
                 (self.width, self.height),
                 1.0,
                 egui::RawInput {
@@ -178,6 +197,7 @@ impl Offscreen {
             &self.gpu.device,
             &self.gpu.queue,
             &self.view,
+            &self.ui_view,
             (self.width, self.height),
             1.0,
             raw,

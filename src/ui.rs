@@ -143,14 +143,23 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     ui.separator();
 
     ui.strong("Scene");
-    for (i, name) in SCENES.iter().enumerate() {
-        if ui
-            .selectable_label(state.scene == Some(i), format!("{} {name}", i + 1))
-            .clicked()
-        {
-            actions.push(Action::SelectScene(i));
-        }
-    }
+    let current = state.scene.map_or_else(
+        || session.loaded.desc.name.clone(),
+        |i| format!("{} {}", i + 1, SCENES[i]),
+    );
+    egui::ComboBox::new("scene", "")
+        .selected_text(current)
+        .width(200.0)
+        .show_ui(ui, |ui| {
+            for (i, name) in SCENES.iter().enumerate() {
+                if ui
+                    .selectable_label(state.scene == Some(i), format!("{} {name}", i + 1))
+                    .clicked()
+                {
+                    actions.push(Action::SelectScene(i));
+                }
+            }
+        });
     let desc = &session.loaded.desc;
     if !desc.variants.is_empty() {
         ui.strong("Variant");

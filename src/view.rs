@@ -128,9 +128,21 @@ impl App {
             .ok_or_else(|| AppError::Gpu("the adapter cannot draw into the window".into()))?;
         config.format = format;
         config.present_mode = wgpu::PresentMode::AutoVsync;
+        // egui wants the non-sRGB view of an sRGB surface, where the platform allows one.
+        let view_formats_ok = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::SURFACE_VIEW_FORMATS);
+        let ui_format = if view_formats_ok && format.is_srgb() {
+            config.view_formats = vec![format.remove_srgb_suffix()];
+            format.remove_srgb_suffix()
+        } else {
+            format
+        };
         surface.configure(&gpu.device, &config);
         let compositor =
-            Compositor::new(&gpu.device, format, gpu::msaa_samples(&gpu.adapter, format));
+            Compositor::new(&gpu.device, format, ui_format, gpu::msaa_samples(&gpu.adapter, format));
         let egui = egui_winit::State::new(
             compositor.ctx.clone(),
             egui::ViewportId::ROOT,
@@ -285,12 +297,17 @@ impl App {
             }
         };
         let view = frame.texture.create_view(&Default::default());
+        let ui_view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: w.config.view_formats.first().copied(),
+            ..Default::default()
+        });
         let raw = w.egui.take_egui_input(&w.window);
         let ppp = egui_winit::pixels_per_point(&w.compositor.ctx, &w.window);
         let (actions, output) = w.compositor.frame(
             &w.gpu.device,
             &w.gpu.queue,
             &view,
+            &ui_view,
             (frame.texture.width(), frame.texture.height()),
             ppp,
             raw,
