@@ -208,3 +208,119 @@ fn restitution_bounce_height() {
         "apex {apex}, expected {expected}"
     );
 }
+
+fn joint(kind: JointKind, body2: BodyRef) -> ConstraintDesc {
+    ConstraintDesc {
+        name: "j".into(),
+        body1: BodyId(0),
+        body2,
+        kind,
+        friction: 0.0,
+    }
+}
+
+#[test]
+fn spring_oscillates_with_its_natural_period() {
+    // A mass hanging on a vertical spring from the world: T = 2π sqrt(m / k).
+    let (m, k) = (2.0f32, 200.0f32);
+    let top = Vec3::new(0.0, 5.0, 0.0);
+    let rest = 1.0;
+    let stretch0 = m * 9.81 / k + 0.05; // 5 cm below equilibrium
+    let b = cube("bob", 0.05, top - Vec3::Y * (rest + stretch0), m);
+    let mut sc = scene(vec![b], None);
+    sc.settings.sleep.time = 1e9;
+    sc.constraints.push(joint(
+        JointKind::Spring {
+            anchor1: top - Vec3::Y * (rest + stretch0),
+            anchor2: top,
+            stretch: k,
+            compress: k,
+            damping: 0.0,
+            rest_length: rest,
+            min_length: 0.0,
+            max_length: 0.0,
+        },
+        BodyRef::World,
+    ));
+    let period = 2.0 * std::f64::consts::PI * (m as f64 / k as f64).sqrt();
+    let eq = top.y - rest - m * 9.81 / k;
+    let mut w = MultibodyWorld::new(&sc).unwrap();
+    let dt = sc.settings.timestep as f64;
+    let mut up = Vec::new();
+    let mut prev = state(&w, 0).com.y - eq;
+    for step in 1..=300 {
+        w.step();
+        let y = state(&w, 0).com.y - eq;
+        if prev < 0.0 && y >= 0.0 {
+            up.push((step as f64 - 1.0 + (-prev / (y - prev)) as f64) * dt);
+        }
+        prev = y;
+    }
+    assert!(up.len() >= 3);
+    let measured = (up[up.len() - 1] - up[0]) / (up.len() - 1) as f64;
+    assert!(
+        (measured - period).abs() < 0.02 * period,
+        "period {measured}, theory {period}"
+    );
+}
+
+#[test]
+fn slider_moves_only_along_its_axis() {
+    // On a frictionless 30° rail (a slider to the world) a box accelerates at g sin θ.
+    let theta = 30f32.to_radians();
+    let axis = Vec3::new(theta.cos(), -theta.sin(), 0.0);
+    let b = cube("carriage", 0.1, Vec3::new(0.0, 3.0, 0.0), 1.0);
+    let mut sc = scene(vec![b], None);
+    sc.constraints
+        .push(joint(JointKind::Slider { axis }, BodyRef::World));
+    let mut w = MultibodyWorld::new(&sc).unwrap();
+    for _ in 0..60 {
+        w.step();
+    }
+    let s = state(&w, 0);
+    let v_along = s.linear_velocity.dot(axis);
+    let expected = 9.81 * theta.sin();
+    assert!(
+        (v_along - expected).abs() < 0.02 * expected,
+        "v {v_along}, expected {expected}"
+    );
+    let off = s.com - Vec3::new(0.0, 3.0, 0.0);
+    assert!(
+        (off - axis * off.dot(axis)).length() < 2e-3,
+        "left the rail by {}",
+        (off - axis * off.dot(axis)).length()
+    );
+    assert!(s.angular_velocity.length() < 1e-2);
+}
+
+#[test]
+fn universal_joint_transmits_twist() {
+    // Body1 hangs from a fixed body2 on a universal joint; spinning body1 about the
+    // vertical shaft must drag nothing (body2 is fixed) and be stopped: no twist allowed.
+    let mut post = cube("post", 0.1, Vec3::new(0.0, 3.0, 0.0), 1.0);
+    post.motion = Motion::Fixed;
+    let mut arm = cube("arm", 0.1, Vec3::new(0.0, 2.7, 0.0), 1.0);
+    arm.angular_velocity = Vec3::new(0.0, 5.0, 0.0);
+    let mut sc = scene(vec![arm, post], None);
+    sc.constraints.push(joint(
+        JointKind::Universal {
+            anchor: Vec3::new(0.0, 2.85, 0.0),
+            shaft1: Vec3::X,
+            shaft2: Vec3::Z,
+            swing: None,
+            axis_ranges: None,
+        },
+        BodyRef::Body(BodyId(1)),
+    ));
+    let mut w = MultibodyWorld::new(&sc).unwrap();
+    for _ in 0..60 {
+        w.step();
+        let s = state(&w, 0);
+        assert!(
+            s.angular_velocity.y.abs() < 0.1,
+            "twisting at {}",
+            s.angular_velocity.y
+        );
+    }
+    assert!(w.sample().max_joint_gap < 2e-3);
+}

@@ -418,3 +418,76 @@ fn same_scene_twice_gives_identical_bits() {
         );
     }
 }
+
+#[test]
+fn joint_friction_holds_below_its_torque_and_slips_above() {
+    // A pendulum released 30° from the vertical: gravity's torque is m g L sin 30° =
+    // 0.5 m g L, and joint friction f caps the holding torque at f · m g L.
+    let swing = |friction: f32| {
+        let pivot = Vec3::new(0.0, 3.0, 0.0);
+        let a = 30f32.to_radians();
+        let mut b = boxed(
+            "bob",
+            Vec3::splat(0.05),
+            pivot + Vec3::new(a.sin(), -a.cos(), 0.0),
+            1.0,
+        );
+        b.pose.rotation = Quat::from_rotation_z(a);
+        let mut sc = SceneDesc {
+            name: "friction".into(),
+            bodies: vec![b],
+            ..SceneDesc::default()
+        };
+        sc.settings.ground = None;
+        sc.constraints.push(ConstraintDesc {
+            name: "hinge".into(),
+            body1: BodyId(0),
+            body2: BodyRef::World,
+            kind: JointKind::Hinge {
+                anchor: pivot,
+                axis: Vec3::Z,
+                limit: None,
+            },
+            friction,
+        });
+        let (w, st) = run(&sc, 1.0);
+        assert!(st.finite);
+        // The hinge angle is the bob's rotation (it starts rotated by 30° about Z). The
+        // anchor itself sags under friction (the soft point constraint is weak along the
+        // rotation-dominated direction), so the centre's angle is not the hinge angle.
+        let q = states(&w)[0].orientation;
+        let (axis, angle) = q.to_axis_angle();
+        (angle * axis.z.signum()).to_degrees()
+    };
+    let held = swing(0.6);
+    assert!(
+        (held - 30.0).abs() < 1.0,
+        "f = 0.6 should hold at 30°, now at {held}°"
+    );
+    let slipped = swing(0.3);
+    assert!(
+        slipped < 25.0,
+        "f = 0.3 should let it swing, still at {slipped}°"
+    );
+}
+
+#[test]
+fn projectile_wakes_a_sleeping_stack() {
+    let sc = stack(3);
+    let mut w = MultibodyWorld::new(&sc).unwrap();
+    for _ in 0..180 {
+        w.step();
+    }
+    assert!(w.sample().all_asleep, "the stack should sleep within 3 s");
+    let mut shot = boxed("shot", Vec3::splat(0.1), Vec3::new(-2.0, 1.25, 0.0), 5.0);
+    shot.linear_velocity = Vec3::new(12.0, 0.0, 0.0);
+    let id = w.add_body(&shot);
+    assert_eq!(id.index(), 3);
+    let mut woke = false;
+    for _ in 0..60 {
+        w.step();
+        woke |= !w.sample().all_asleep && states(&w)[2].linear_velocity.length() > 0.1;
+    }
+    assert!(woke, "the top box was never woken by the hit");
+    assert!(states(&w).iter().all(|s| s.com.is_finite()));
+}

@@ -111,10 +111,11 @@ fn bone_velocities(w: &mut ParticleWorld) {
 /// that turns within a frame brings a corner the frame-start manifold did not have.
 const DETECTIONS_PER_FRAME: u32 = 4;
 
-/// Joint passes per substep, after the contacts: an impact pushes a limb one way and
-/// its joint pulls it back; the second pass halves the gap an impact leaves (human,
-/// scene 8: 4.0 → 1.9 mm) for a fifth of the step's cost.
-const JOINT_PASSES: u32 = 2;
+/// Gauss–Seidel passes (contacts, then joints) per substep. An impact pushes a limb one
+/// way and its joint pulls it back; a second pass halves the gap an impact leaves
+/// (human, scene 8: 4.0 → 1.9 mm), and lets friction correct the slip the joints
+/// brought, without which a resting figure creeps.
+const PASSES: u32 = 2;
 
 /// Passes of the contact velocity solve: one pass over a manifold leaves part of the
 /// push-out velocity of the points solved first.
@@ -165,15 +166,13 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             let pb = super::bone::side_world(&w.bones, c.b, c.rb);
             c.vn_before = (point_velocity(&w.bones, Some(c.a), pa) - point_velocity(&w.bones, c.b, pb)).dot(c.n);
         }
-        // 3. constraints, one Gauss–Seidel pass per substep
-        {
+        // 3. constraints: contacts then joints, twice
+        for _ in 0..PASSES {
             for c in w.contacts.iter_mut() {
                 solve_position(&mut w.bones, c);
             }
-            for _ in 0..JOINT_PASSES {
-                for j in &w.joints {
-                    j.solve(&mut w.bones, h);
-                }
+            for j in &w.joints {
+                j.solve(&mut w.bones, h);
             }
             if let Some(g) = w.grab {
                 super::grab_improved(&mut w.bones, g, h);

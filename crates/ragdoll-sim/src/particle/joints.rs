@@ -133,8 +133,8 @@ fn angle_limit(f: &RestFrames, a: Side, b: Side, axis: Vec3, min: f32, max: f32)
     let r = perpendicular(axis);
     AngleLimit {
         axis_a: f.local_dir(a, axis),
-        ref_a: f.local_dir(a, r),
         ref_b: f.local_dir(b, r),
+        rest_rel: f.rot(b).inverse() * f.rot(a),
         min,
         max,
     }

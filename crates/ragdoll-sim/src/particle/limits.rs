@@ -8,7 +8,7 @@
 //! generalised inverse inertia.
 
 use super::bone::{angular, side_rot, Bone, Side};
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
 /// A swing limit in the bones' frames.
 #[derive(Clone, Copy, Debug)]
@@ -47,10 +47,10 @@ pub(crate) struct SwingLimit {
 pub(crate) struct AngleLimit {
     /// The axis in body1's frame.
     pub axis_a: Vec3,
-    /// A direction perpendicular to the axis at rest, body1's frame.
-    pub ref_a: Vec3,
-    /// The same world direction at rest, body2's frame.
+    /// The same world direction at rest, body2's frame (for drawing the range).
     pub ref_b: Vec3,
+    /// Orientation of body1 relative to body2 at rest, `q_b⁻¹ q_a`.
+    pub rest_rel: Quat,
     /// Lower bound (rad).
     pub min: f32,
     /// Upper bound (rad).
@@ -64,15 +64,19 @@ pub(crate) fn perpendicular(n: Vec3) -> Vec3 {
 
 impl AngleLimit {
     /// Current angle: rotation of body1 relative to body2 about the axis, right-handed,
-    /// zero at rest.
+    /// zero at rest — the twist of the swing–twist decomposition of body1's rotation
+    /// since rest relative to body2, `Δ = (q_b⁻¹ q_a)_rest⁻¹ (q_b⁻¹ q_a)` in body1's
+    /// frame: `2 atan2(Δ_xyz · axis, Δ_w)`. Unlike projecting a reference direction it
+    /// stays defined however far the joint swings (short of a half turn).
     pub fn angle(&self, bones: &[Bone], a: Side, b: Side) -> (f32, Vec3) {
         let qa = side_rot(bones, a);
         let qb = side_rot(bones, b);
-        let t = qa * self.axis_a;
-        let p1 = qa * self.ref_a;
-        let p2 = qb * self.ref_b;
-        let p2 = p2 - t * t.dot(p2);
-        (t.dot(p2.cross(p1)).atan2(p2.dot(p1)), t)
+        let mut d = self.rest_rel.inverse() * (qb.inverse() * qa);
+        if d.w < 0.0 {
+            d = -d;
+        }
+        let phi = 2.0 * Vec3::new(d.x, d.y, d.z).dot(self.axis_a).atan2(d.w);
+        (phi, qa * self.axis_a)
     }
 
     /// Excess beyond the range (rad, ≥ 0).

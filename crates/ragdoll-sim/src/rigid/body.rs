@@ -104,6 +104,9 @@ pub struct BodyInfo {
     pub figure: u32,
     /// Smallest half extent of the shape: the radius of "resting on its flattest side".
     pub min_half_extent: f32,
+    /// Largest distance from the centre of mass to the shape's bounding box: with it,
+    /// `|v| + |ω| r` bounds the speed of every point of the body.
+    pub bound_radius: f32,
     /// Shot from the camera.
     pub projectile: bool,
 }
@@ -158,6 +161,7 @@ impl BodyInfo {
             self_collision: desc.self_collision,
             figure,
             min_half_extent: desc.shape.local_half_extents().min_element(),
+            bound_radius: (desc.shape.local_half_extents() + mp.local_com.abs()).length(),
             projectile: false,
         }
     }

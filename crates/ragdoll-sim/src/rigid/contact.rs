@@ -121,6 +121,12 @@ pub struct Contacts {
     pub ground: Option<GroundCollider>,
 }
 
+/// Upper bound of the speed of any point of body `i`.
+#[inline]
+fn point_speed(s: &BodyStates, info: &[BodyInfo], i: usize) -> f32 {
+    s.lin_vel[i].length() + s.ang_vel[i].length() * info[i].bound_radius
+}
+
 /// parry pose of body `i`'s shape frame.
 #[inline]
 pub fn shape_pose(s: &BodyStates, info: &[BodyInfo], i: usize) -> PPose {
@@ -147,7 +153,7 @@ impl Contacts {
         // Broad phase on AABBs loosened by the speculative margin and this step's motion.
         self.aabbs.clear();
         for i in 0..n {
-            let motion = s.lin_vel[i].length() * dt;
+            let motion = point_speed(s, info, i) * dt;
             let aabb = info[i].collider.compute_aabb(&shape_pose(s, info, i));
             self.aabbs
                 .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
@@ -185,34 +191,34 @@ impl Contacts {
         self.candidates.sort_unstable();
         self.candidates.dedup();
 
-        // Merge the sorted candidate list with the sorted cache.
+        // Merge the sorted candidate list with the sorted cache: surviving pairs move over
+        // with their parry workspace and impulses, new ones start empty.
         std::mem::swap(&mut self.pairs, &mut self.spare);
         self.pairs.clear();
-        let mut old = std::mem::take(&mut self.spare).into_iter().peekable();
+        let mut k = 0;
         for &(a, b) in &self.candidates {
-            while old.peek().is_some_and(|p| (p.a, p.b) < (a, b)) {
-                old.next();
+            while k < self.spare.len() && (self.spare[k].a, self.spare[k].b) < (a, b) {
+                k += 1;
             }
-            let pair = match old.peek() {
-                Some(p) if (p.a, p.b) == (a, b) => old.next().expect("peeked"),
-                _ => {
-                    let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
-                    let (fb, rb) = match (&self.ground, b == anchor) {
-                        (Some(g), true) => (g.friction, g.restitution),
-                        _ => (info[b as usize].friction, info[b as usize].restitution),
-                    };
-                    ContactPair {
-                        a,
-                        b,
-                        friction: (fa * fb).sqrt(),
-                        restitution: ra.max(rb),
-                        ..Default::default()
-                    }
+            let pair = if k < self.spare.len() && (self.spare[k].a, self.spare[k].b) == (a, b) {
+                k += 1;
+                std::mem::take(&mut self.spare[k - 1])
+            } else {
+                let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
+                let (fb, rb) = match (&self.ground, b == anchor) {
+                    (Some(g), true) => (g.friction, g.restitution),
+                    _ => (info[b as usize].friction, info[b as usize].restitution),
+                };
+                ContactPair {
+                    a,
+                    b,
+                    friction: (fa * fb).sqrt(),
+                    restitution: ra.max(rb),
+                    ..Default::default()
                 }
             };
             self.pairs.push(pair);
         }
-        self.spare = old.collect();
         self.spare.clear();
 
         for pair in &mut self.pairs {
@@ -230,8 +236,11 @@ impl Contacts {
             } else {
                 (shape_pose(s, info, b), &info[b].collider)
             };
-            let rel_speed = (s.lin_vel[a] - s.lin_vel[b]).length();
-            let prediction = SPECULATIVE_DISTANCE + rel_speed * dt;
+            // Every point of a moves at most |v| + |ω| r: contacts that may close this
+            // step are created now, so the speculative branch stops them on time even
+            // for a limb swinging fast about its joint.
+            let speed_b = if b == n { 0.0 } else { point_speed(s, info, b) };
+            let prediction = SPECULATIVE_DISTANCE + (point_speed(s, info, a) + speed_b) * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
             let ok = DefaultQueryDispatcher.contact_manifolds(
                 &pos12,

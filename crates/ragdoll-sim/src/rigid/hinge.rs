@@ -46,12 +46,12 @@ impl JointSolve for HingeJoint {
     }
 
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        self.friction.solve(&self.frame, s, ctx);
         if let Some(l) = &mut self.limit {
             l.solve(&self.frame, s, ctx, use_bias);
         }
         self.align.solve(&self.frame, s, ctx, use_bias);
         self.point.solve(&self.frame, s, ctx, use_bias);
+        self.friction.solve(&self.frame, s, ctx);
     }
 
     fn limit_violation(&self, s: &BodyStates) -> f32 {

@@ -189,7 +189,7 @@ impl JointSet {
                     let frame = JointFrame::new(s, a, b, s.com[a]);
                     set.slider.push(SliderJoint {
                         frame,
-                        axis_a: frame.dir_in_a(s, *axis),
+                        axis_b: frame.dir_in_b(s, *axis),
                         impulse: [0.0; 2],
                         lock: AngularLock3::new(&frame, s),
                     });

@@ -130,8 +130,15 @@ impl MultibodyWorld {
 
     /// Deepest overlap among colliding pairs and the ground now (m).
     fn max_penetration(&self) -> f32 {
+        self.deepest_overlap().map_or(0.0, |d| d.0)
+    }
+
+    /// The deepest overlap now and its pair (body names; `"ground"` for the plane), for
+    /// diagnostics.
+    pub fn deepest_overlap(&self) -> Option<(f32, String, String)> {
         let n = self.info.len();
         let mut deepest = 0.0f32;
+        let mut which = None;
         for p in &self.contacts.pairs {
             if !p.touching() {
                 continue;
@@ -148,7 +155,11 @@ impl MultibodyWorld {
                 if let Some(sm) = self.info[a].collider.as_support_map() {
                     let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
                     let p = pa.transform_point(local);
-                    deepest = deepest.max(-g.normal.dot(p - g.origin));
+                    let depth = -g.normal.dot(p - g.origin);
+                    if depth > deepest {
+                        deepest = depth;
+                        which = Some((a, b));
+                    }
                 }
                 continue;
             }
@@ -159,11 +170,18 @@ impl MultibodyWorld {
                 &pb,
                 &*self.info[b].collider,
                 0.0,
-            ) {
-                deepest = deepest.max(-c.dist);
+            ) && -c.dist > deepest
+            {
+                deepest = -c.dist;
+                which = Some((a, b));
             }
         }
-        deepest
+        let name = |i: usize| {
+            self.info
+                .get(i)
+                .map_or("ground".to_string(), |b| b.name.clone())
+        };
+        which.map(|(a, b)| (deepest, name(a), name(b)))
     }
 
     /// Current pose of body `i`'s shape frame.
