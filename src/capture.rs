@@ -167,9 +167,9 @@ impl Offscreen {
     /// Renders the full frame (both halves, labels, and the panel if `state.panel`).
     pub fn render(&mut self, state: &AppState, session: &Session) -> Result<Image, AppError> {
         let samples = self.samples();
-        let compositor = self
-            .compositor
-            .get_or_insert_with(|| Compositor::new(&self.gpu.device, FORMAT, self.ui_format, samples));
+        let compositor = self.compositor.get_or_insert_with(|| {
+            Compositor::new(&self.gpu.device, FORMAT, self.ui_format, samples)
+        });
         if compositor.ctx.cumulative_pass_nr() == 0 {
             // egui lays out auto-sized areas in a first, invisible pass; run it once so
             // the captured frame shows the settled layout.

@@ -141,8 +141,12 @@ impl App {
             format
         };
         surface.configure(&gpu.device, &config);
-        let compositor =
-            Compositor::new(&gpu.device, format, ui_format, gpu::msaa_samples(&gpu.adapter, format));
+        let compositor = Compositor::new(
+            &gpu.device,
+            format,
+            ui_format,
+            gpu::msaa_samples(&gpu.adapter, format),
+        );
         let egui = egui_winit::State::new(
             compositor.ctx.clone(),
             egui::ViewportId::ROOT,
