@@ -136,3 +136,12 @@ fn the_mouse_opens_the_menu_orbits_pans_zooms_and_grabs() {
         Some(Action::GrabEnd)
     );
 }
+
+#[test]
+fn tab_walks_the_built_in_scenes_in_table_order() {
+    let names: Vec<&str> = ragdoll_lab::scenes::builtin_scenes()
+        .iter()
+        .map(|s| s.name)
+        .collect();
+    assert_eq!(names, SCENES.to_vec());
+}
