@@ -822,7 +822,14 @@ fn side_lines(side: &SideView, show: ShowOptions, out: &mut Vec<LineVertex>) {
         let c = palette::linear(palette::CONTACT);
         for contact in &snap.contacts {
             let p = contact.point;
-            seg(p, p + contact.normal * scale * 3.0, c);
+            // The normal's axis, drawn on its upper side so it is not buried in the ground
+            // (a normal from a body into the ground points down).
+            let n = if contact.normal.y < 0.0 {
+                -contact.normal
+            } else {
+                contact.normal
+            };
+            seg(p, p + n * scale * 2.0, c);
             let s = scale * 0.5;
             seg(p - Vec3::X * s, p + Vec3::X * s, c);
             seg(p - Vec3::Z * s, p + Vec3::Z * s, c);
