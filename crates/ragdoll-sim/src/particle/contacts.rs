@@ -70,7 +70,12 @@ impl Filter {
 }
 
 /// Candidate pairs from a sort-and-sweep along X over AABBs loosened by `margin[i]`.
-pub(crate) fn broad_phase(bones: &[Bone], margin: &[f32], filter: &Filter, out: &mut Vec<(usize, usize)>) {
+pub(crate) fn broad_phase(
+    bones: &[Bone],
+    margin: &[f32],
+    filter: &Filter,
+    out: &mut Vec<(usize, usize)>,
+) {
     out.clear();
     let aabbs: Vec<_> = bones
         .iter()
@@ -110,7 +115,14 @@ pub(crate) fn shape_pair(
     manifolds.clear();
     let mut ws = None;
     if DefaultQueryDispatcher
-        .contact_manifolds(&pos12, bones[i].shape.as_ref(), bones[j].shape.as_ref(), prediction, manifolds, &mut ws)
+        .contact_manifolds(
+            &pos12,
+            bones[i].shape.as_ref(),
+            bones[j].shape.as_ref(),
+            prediction,
+            manifolds,
+            &mut ws,
+        )
         .is_err()
     {
         return;
@@ -139,7 +151,14 @@ pub(crate) fn ground_pair(
     manifolds.clear();
     let mut ws = None;
     if DefaultQueryDispatcher
-        .contact_manifolds(&pos12, &plane, bones[i].shape.as_ref(), prediction, manifolds, &mut ws)
+        .contact_manifolds(
+            &pos12,
+            &plane,
+            bones[i].shape.as_ref(),
+            prediction,
+            manifolds,
+            &mut ws,
+        )
         .is_err()
     {
         return;

@@ -14,7 +14,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{point_inv_mass, positional, rot_inv_mass, side_world, Bone, Side};
+use super::bone::{Bone, Side, point_inv_mass, positional, rot_inv_mass, side_world};
 use super::contacts::Contact;
 use glam::Vec3;
 
@@ -102,7 +102,11 @@ pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitutio
     let v = point_velocity(bones, a, pa) - point_velocity(bones, c.b, pb);
     let vn = v.dot(c.n);
     // Normal: restitution on the approach speed before the solve, never more.
-    let target = if c.vn_before > restitution_threshold { -c.e * c.vn_before } else { 0.0 };
+    let target = if c.vn_before > restitution_threshold {
+        -c.e * c.vn_before
+    } else {
+        0.0
+    };
     let wn = point_inv_mass(bones, a, pa, c.n) + point_inv_mass(bones, c.b, pb, c.n);
     if wn > 0.0 {
         let p = c.n * ((target - vn) / wn);

@@ -15,9 +15,9 @@
 //! Energy: every step is a projection or a dissipative velocity change; the only source
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
-use super::contacts::{broad_phase, ground_pair, shape_pair, Contact};
+use super::contacts::{Contact, broad_phase, ground_pair, shape_pair};
 use super::friction::{point_velocity, solve_position, solve_velocity};
-use super::{sleeping, ParticleWorld};
+use super::{ParticleWorld, sleeping};
 use crate::scene::Ground;
 use glam::Vec3;
 
@@ -52,7 +52,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                 mu,
                 e,
                 lambda_n: 0.0,
-                    lambda_t: 0.0,
+                lambda_t: 0.0,
                 vn_before: 0.0,
             });
         });
@@ -164,7 +164,9 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             c.lambda_t = 0.0;
             let pa = w.bones[c.a].world(c.ra);
             let pb = super::bone::side_world(&w.bones, c.b, c.rb);
-            c.vn_before = (point_velocity(&w.bones, Some(c.a), pa) - point_velocity(&w.bones, c.b, pb)).dot(c.n);
+            c.vn_before = (point_velocity(&w.bones, Some(c.a), pa)
+                - point_velocity(&w.bones, c.b, pb))
+            .dot(c.n);
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {

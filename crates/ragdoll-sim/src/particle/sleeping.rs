@@ -49,7 +49,8 @@ pub(crate) fn update(
         if b.fixed {
             continue;
         }
-        let slow = b.asleep || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
+        let slow = b.asleep
+            || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
         b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
         let (p, q) = b.still_anchor;
         let turned = (b.rot * q.inverse()).to_axis_angle().1;
