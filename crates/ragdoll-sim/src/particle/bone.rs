@@ -165,9 +165,8 @@ impl Bone {
         let p = u;
         let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
         let mut a = Mat3::ZERO;
-        for k in 0..4 {
-            let d = p[k] - c;
-            let r = self.rest[k];
+        for (pk, r) in p.iter().zip(&self.rest) {
+            let d = *pk - c;
             a += Mat3::from_cols(d * r.x, d * r.y, d * r.z);
         }
         self.dcom = c;

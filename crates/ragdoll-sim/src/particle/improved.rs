@@ -99,8 +99,8 @@ fn bone_velocities(w: &mut ParticleWorld) {
         let vc = (vi[0] + vi[1] + vi[2] + vi[3]) * 0.25;
         let m = b.mass * 0.25;
         let mut l = Vec3::ZERO;
-        for k in 0..4 {
-            l += (b.rot * b.rest[k]).cross(vi[k] - vc) * m;
+        for (r, v) in b.rest.iter().zip(&vi) {
+            l += (b.rot * *r).cross(*v - vc) * m;
         }
         b.lin_vel = vc;
         b.ang_vel = b.inv_inertia() * l;
@@ -151,10 +151,10 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                 continue;
             }
             let mut u = [Vec3::ZERO; 4];
-            for k in 0..4 {
+            for (k, uk) in u.iter_mut().enumerate() {
                 let p = b.particles[k] as usize;
                 w.particles.v[p] += s.gravity * h;
-                u[k] = b.rot * b.rest[k] + w.particles.v[p] * h;
+                *uk = b.rot * b.rest[k] + w.particles.v[p] * h;
             }
             b.shape_match(&u);
         }

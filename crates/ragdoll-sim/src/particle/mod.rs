@@ -508,15 +508,15 @@ impl Method for ParticleWorld {
         let mut best: Option<RayHit> = None;
         for b in &self.bones {
             let pose = b.parry_pose();
-            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true) {
-                if best.is_none_or(|h| t < h.distance) {
-                    let local = b.shape_pose().inverse_transform_point(origin + dir * t);
-                    best = Some(RayHit {
-                        body: BodyId(b.body as u32),
-                        distance: t,
-                        local_point: local,
-                    });
-                }
+            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true)
+                && best.is_none_or(|h| t < h.distance)
+            {
+                let local = b.shape_pose().inverse_transform_point(origin + dir * t);
+                best = Some(RayHit {
+                    body: BodyId(b.body as u32),
+                    distance: t,
+                    local_point: local,
+                });
             }
         }
         best

@@ -114,11 +114,10 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
     for c in &scene.constraints {
         let b1 = c.body1.index();
         let b2 = c.body2.body().map(|b| b.index());
-        let fixed = scene.bodies[b1].is_fixed() && b2.is_none_or(|b| scene.bodies[b].is_fixed());
-        let world_tied = b2.is_none();
-        let movable = !fixed
-            && !world_tied
-            && !(scene.bodies[b1].is_fixed() || b2.is_some_and(|b| scene.bodies[b].is_fixed()));
+        // A joint particle moves only when both bones do (the world and fixed bones
+        // hold it).
+        let movable =
+            !scene.bodies[b1].is_fixed() && b2.is_some_and(|b| !scene.bodies[b].is_fixed());
         let pts: Vec<Vec3> = match &c.kind {
             JointKind::BallAndSocket { anchor, .. } | JointKind::Universal { anchor, .. } => {
                 vec![*anchor]

@@ -33,6 +33,7 @@ impl Particles {
     /// Verlet's velocity lives half a step back: `(x₀ − x₋₁)/Δt = v(−Δt/2)`. Starting it
     /// there, `x₋₁ = x₀ − v Δt + ½ g Δt²`, makes free fall exact (eq. 41 is exact for a
     /// parabola); the velocity form gets `v − ½ g h` for its substep `h`.
+    #[allow(clippy::too_many_arguments)] // one call site per placement; all plain values
     pub fn push(
         &mut self,
         x: Vec3,
@@ -57,7 +58,7 @@ impl Particles {
         self.mass.push(mass);
         self.inv_mass.push(if movable { 1.0 } else { 0.0 });
         self.joint.push(false);
-        i as u32
+        i
     }
 
     /// Number of particles.

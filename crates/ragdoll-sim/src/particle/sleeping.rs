@@ -65,17 +65,19 @@ pub(crate) fn update(
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
     for j in joints {
-        if let (Some(a), Some(b)) = (j.a, j.b) {
-            if dynamic(bones, a) && dynamic(bones, b) {
-                union(&mut parent, a, b);
-            }
+        if let (Some(a), Some(b)) = (j.a, j.b)
+            && dynamic(bones, a)
+            && dynamic(bones, b)
+        {
+            union(&mut parent, a, b);
         }
     }
     for c in contacts {
-        if let Some(b) = c.b {
-            if dynamic(bones, c.a) && dynamic(bones, b) {
-                union(&mut parent, c.a, b);
-            }
+        if let Some(b) = c.b
+            && dynamic(bones, c.a)
+            && dynamic(bones, b)
+        {
+            union(&mut parent, c.a, b);
         }
     }
     let mut min_time = vec![f32::INFINITY; n];
