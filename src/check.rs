@@ -42,6 +42,16 @@ pub fn summary(file: &str, scene: &AfScene) -> String {
             .collect();
         let _ = writeln!(out, "variants: {}", v.join(", "));
     }
+    let st = &d.settings;
+    let ground = match st.ground {
+        Some(g) => format!("ground top at {} m", g.height),
+        None => "no ground".into(),
+    };
+    let _ = writeln!(
+        out,
+        "settings: timestep {:.4} s, {} iterations, {} substeps, {ground}",
+        st.timestep, st.iterations, st.substeps
+    );
     let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
     for b in &d.bodies {
         *shapes.entry(b.shape.kind_name()).or_default() += 1;

@@ -175,4 +175,8 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Smoke test: tiny sizes and a few frames, seconds in all (for CI; the figures
+    /// mean nothing).
+    #[arg(long)]
+    pub quick: bool,
 }

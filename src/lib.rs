@@ -2,14 +2,20 @@
 //! capture, stats and benchmarks. The physics lives in the `ragdoll-sim` crate; the app
 //! drives it only through `ragdoll_sim::Method` and draws only `RenderSnapshot`s.
 
+pub mod app_state;
 pub mod bench;
 pub mod capture;
 pub mod check;
+pub mod compose;
 pub mod cli;
 pub mod error;
+pub mod input;
 pub mod methods;
+pub mod render;
 pub mod scenes;
+pub mod session;
 pub mod stats;
+pub mod ui;
 pub mod view;
 
 pub use error::AppError;

@@ -7,6 +7,12 @@ use clap::Parser;
 use ragdoll_lab::cli::{Cli, Command};
 use std::process::ExitCode;
 
+/// Counts live heap bytes for `bench memory` (test 9); two relaxed atomics per
+/// allocation, otherwise the system allocator.
+#[global_allocator]
+static ALLOCATOR: ragdoll_lab::bench::memory::CountingAlloc =
+    ragdoll_lab::bench::memory::CountingAlloc;
+
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();

@@ -19,6 +19,5 @@ pub fn build_particle(
 
 /// The multibody method (right, red).
 pub fn build_multibody(scene: &SceneDesc) -> Result<Box<dyn Method>, AppError> {
-    let _ = scene;
-    Err(AppError::Other("the multibody method is not built yet (issue 4)".into()))
+    Ok(Box::new(ragdoll_sim::rigid::MultibodyWorld::new(scene)?))
 }

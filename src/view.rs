@@ -1,10 +1,405 @@
-//! The window: split-screen renderer, egui panel, the paper's keys.
+//! The window (`ragdoll-lab` / `ragdoll-lab view`): winit 0.30's `ApplicationHandler`
+//! around the same compositor capture uses. Keys and mouse go through
+//! [`crate::input::InputMapper`] into [`crate::app_state::AppState`]; egui sees every
+//! event first and keeps the ones over its panel and menu.
 
-use crate::cli::ViewArgs;
+use crate::app_state::{Action, AppState, Rebuild, SCENES};
+use crate::cli::{SceneArgs, ViewArgs};
+use crate::compose::Compositor;
+use crate::input::InputMapper;
+use crate::render::camera::OrbitCamera;
+use crate::render::gpu::{self, Gpu};
+use crate::scenes::{self, LoadedScene};
+use crate::session::Session;
 use crate::AppError;
+use glam::Vec2;
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::window::{Window, WindowId};
 
 /// Opens the window and runs until the user quits.
 pub fn run(args: ViewArgs) -> Result<(), AppError> {
-    let _ = args;
-    Err(AppError::Other("the viewer is not built yet (issue 5)".into()))
+    // Load before opening a window, so a bad scene is reported without one.
+    let loaded = scenes::load(&args.scene)?;
+    let scene = args
+        .scene
+        .scene
+        .as_deref()
+        .and_then(scenes::find_builtin)
+        .map(|b| b.number as usize - 1)
+        .or(if args.scene.af.is_some() { None } else { Some(7) });
+    let mut state = AppState::new(
+        scene,
+        loaded.desc.variant,
+        OrbitCamera::from_desc(&loaded.desc.settings.camera),
+    );
+    state.particle_solver = args.particle_solver;
+    let session = Session::new(loaded, args.particle_solver)?;
+    let event_loop =
+        EventLoop::new().map_err(|e| AppError::Gpu(format!("cannot open a window: {e}")))?;
+    let mut app = App {
+        args,
+        state,
+        session,
+        input: InputMapper::new(),
+        window: None,
+        error: None,
+        last: Instant::now(),
+        grab_viewport: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| AppError::Gpu(format!("event loop: {e}")))?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// Everything that exists only while the window does.
+struct WindowState {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    compositor: Compositor,
+    egui: egui_winit::State,
+}
+
+struct App {
+    args: ViewArgs,
+    state: AppState,
+    session: Session,
+    input: InputMapper,
+    window: Option<WindowState>,
+    error: Option<AppError>,
+    last: Instant,
+    /// The half a grab started in: the cursor's ray is taken through it while dragging.
+    grab_viewport: Option<crate::render::Viewport>,
+}
+
+impl App {
+    fn open_window(&self, event_loop: &ActiveEventLoop) -> Result<WindowState, AppError> {
+        let attrs = Window::default_attributes()
+            .with_title("ragdoll-lab — particle (left) vs multibody (right)")
+            .with_inner_size(PhysicalSize::new(1280, 720));
+        let window = Arc::new(
+            event_loop
+                .create_window(attrs)
+                .map_err(|e| AppError::Gpu(format!("cannot open a window: {e}")))?,
+        );
+        let backends = gpu::backends();
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
+                event_loop.owned_display_handle(),
+            ))
+        });
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| AppError::Gpu(format!("cannot draw into the window: {e}")))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: Some(&surface),
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| AppError::Gpu(format!("no adapter can draw into the window: {e}")))?;
+        let gpu = gpu::open(instance, adapter)?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb())
+            .or(caps.formats.first().copied())
+            .ok_or_else(|| AppError::Gpu("the window offers no surface format".into()))?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| AppError::Gpu("the adapter cannot draw into the window".into()))?;
+        config.format = format;
+        config.present_mode = wgpu::PresentMode::AutoVsync;
+        surface.configure(&gpu.device, &config);
+        let compositor = Compositor::new(
+            &gpu.device,
+            format,
+            gpu::msaa_samples(&gpu.adapter, format),
+        );
+        let egui = egui_winit::State::new(
+            compositor.ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        log::info!("window on {}", gpu.adapter.get_info().name);
+        Ok(WindowState {
+            window,
+            surface,
+            config,
+            gpu,
+            compositor,
+            egui,
+        })
+    }
+
+    /// Applies an action; grabs need the methods and the viewports, the rest is state.
+    fn act(&mut self, action: Action) {
+        let viewports = match &self.window {
+            Some(w) => w.compositor.viewports,
+            None => return,
+        };
+        match action {
+            Action::GrabStart(p) => {
+                self.state.apply(action);
+                for (side, vp) in viewports.iter().enumerate() {
+                    if vp.contains(p) {
+                        let (o, d) = self.state.camera.ray(vp.ndc(p), vp.aspect());
+                        if self.session.grab_start(side, o, d) {
+                            self.grab_viewport = Some(*vp);
+                        }
+                    }
+                }
+            }
+            Action::GrabMove(p) => {
+                if let Some(vp) = self.grab_viewport {
+                    let (o, d) = self.state.camera.ray(vp.ndc(p), vp.aspect());
+                    self.session.grab_move(o, d);
+                }
+            }
+            Action::GrabEnd => {
+                self.grab_viewport = None;
+                self.session.grab_end();
+            }
+            other => {
+                self.state.viewport_height = viewports[0].height;
+                self.state.apply(other);
+            }
+        }
+    }
+
+    /// Reloads or rebuilds the scene the state asks for; on failure keeps the old one.
+    fn rebuild(&mut self, kind: Rebuild) {
+        let result = match kind {
+            Rebuild::Restart => {
+                let mut loaded = self.session.loaded.clone();
+                // A variant change needs the file's variant overrides: load it again.
+                if loaded.desc.variant != self.state.variant {
+                    match self.load(false) {
+                        Ok(l) => loaded = l,
+                        Err(e) => return report(e),
+                    }
+                }
+                Session::new(loaded, self.state.particle_solver)
+            }
+            Rebuild::Load => self
+                .load(true)
+                .and_then(|l| Session::new(l, self.state.particle_solver)),
+        };
+        match result {
+            Ok(session) => {
+                let scene_changed = session.loaded.desc.name != self.session.loaded.desc.name;
+                if scene_changed {
+                    self.state.camera = OrbitCamera::from_desc(&session.loaded.desc.settings.camera);
+                }
+                self.state.variant = session.loaded.desc.variant;
+                self.session = session;
+                self.grab_viewport = None;
+            }
+            Err(e) => report(e),
+        }
+    }
+
+    /// Loads the state's scene and variant; `from_disk` prefers the file on disk (R).
+    fn load(&self, from_disk: bool) -> Result<LoadedScene, AppError> {
+        let mut args = SceneArgs {
+            variant: Some(self.state.variant),
+            ..self.args.scene.clone()
+        };
+        match self.state.scene {
+            Some(i) => {
+                args.af = None;
+                args.scene = Some(SCENES[i].to_string());
+                let on_disk = scenes::find_builtin(SCENES[i]).map(|b| b.asset_path());
+                if from_disk && let Some(path) = on_disk.filter(|p| p.exists()) {
+                    args.scene = None;
+                    args.af = Some(path);
+                }
+            }
+            None => {} // the --af file, read from disk again
+        }
+        scenes::load(&args)
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(kind) = self.state.rebuild.take() {
+            self.rebuild(kind);
+        }
+        if let Some(settings) = self.state.pending_settings.take() {
+            self.session.set_settings(&settings);
+        }
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f64();
+        self.last = now;
+        let timestep = self.session.settings().timestep as f64;
+        for _ in 0..self.state.steps_due(dt, timestep) {
+            self.session.step();
+        }
+        for _ in 0..std::mem::take(&mut self.state.pending_shots) {
+            let eye = self.state.camera.eye();
+            let dir = (self.state.camera.target - eye).normalize();
+            self.session.shoot(eye, dir);
+        }
+        self.session.refresh();
+
+        let Some(w) = self.window.as_mut() else { return };
+        let size = w.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return; // minimised
+        }
+        let frame = match w.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(f) => f,
+            wgpu::CurrentSurfaceTexture::Suboptimal(f) => {
+                // Draw this one; reconfigure before the next.
+                w.config.width = size.width;
+                w.config.height = size.height;
+                f
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                w.config.width = size.width;
+                w.config.height = size.height;
+                w.surface.configure(&w.gpu.device, &w.config);
+                return;
+            }
+            other => {
+                log::warn!("skipping a frame: {other:?}");
+                return;
+            }
+        };
+        let view = frame.texture.create_view(&Default::default());
+        let raw = w.egui.take_egui_input(&w.window);
+        let ppp = egui_winit::pixels_per_point(&w.compositor.ctx, &w.window);
+        let (actions, output) = w.compositor.frame(
+            &w.gpu.device,
+            &w.gpu.queue,
+            &view,
+            (frame.texture.width(), frame.texture.height()),
+            ppp,
+            raw,
+            &self.state,
+            &self.session,
+        );
+        w.egui.handle_platform_output(&w.window, output);
+        w.window.pre_present_notify();
+        w.gpu.queue.present(frame);
+        if (w.config.width, w.config.height) != (size.width, size.height) {
+            w.surface.configure(&w.gpu.device, &w.config);
+        }
+        for a in actions {
+            self.act(a);
+        }
+        if self.state.quit {
+            event_loop.exit();
+        }
+    }
+}
+
+fn report(e: AppError) {
+    log::error!("{e}");
+    eprintln!("{e}");
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        match self.open_window(event_loop) {
+            Ok(w) => {
+                w.window.request_redraw();
+                self.window = Some(w);
+                self.last = Instant::now();
+            }
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(w) = self.window.as_mut() else { return };
+        // Keys belong to the app (egui would move its focus on Tab and press focused
+        // buttons on Space) except while a slider's number field is being edited.
+        let editing = w.compositor.ctx.text_edit_focused();
+        let is_key = matches!(event, WindowEvent::KeyboardInput { .. });
+        let consumed =
+            (!is_key || editing) && w.egui.on_window_event(&w.window, &event).consumed;
+        let action = match &event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                None
+            }
+            WindowEvent::Resized(size) => {
+                if size.width > 0 && size.height > 0 {
+                    w.config.width = size.width;
+                    w.config.height = size.height;
+                    w.surface.configure(&w.gpu.device, &w.config);
+                }
+                None
+            }
+            WindowEvent::RedrawRequested => {
+                self.redraw(event_loop);
+                return;
+            }
+            WindowEvent::ModifiersChanged(m) => {
+                self.input.set_modifiers(m.state());
+                None
+            }
+            WindowEvent::Focused(false) | WindowEvent::CursorLeft { .. } => {
+                self.input.release_all()
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let a = self
+                    .input
+                    .cursor_moved(Vec2::new(position.x as f32, position.y as f32));
+                // A drag that started in the 3D view continues over the panel.
+                a.filter(|_| !consumed || self.grab_viewport.is_some())
+            }
+            WindowEvent::KeyboardInput { event, .. } if !editing => self
+                .input
+                .key(&event.logical_key, event.state == ElementState::Pressed),
+            // Releases always reach the mapper, or a drag ending over the panel would stick.
+            WindowEvent::MouseInput { state, button, .. }
+                if !consumed || *state == ElementState::Released =>
+            {
+                self.input
+                    .button(*button, *state == ElementState::Pressed)
+            }
+            _ if consumed => None,
+            WindowEvent::MouseWheel { delta, .. } => self.input.wheel(match delta {
+                MouseScrollDelta::LineDelta(_, y) => *y,
+                MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+            }),
+            _ => None,
+        };
+        if let Some(a) = action {
+            self.act(a);
+        }
+        if self.state.quit {
+            event_loop.exit();
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(w) = &self.window {
+            w.window.request_redraw();
+        }
+    }
 }

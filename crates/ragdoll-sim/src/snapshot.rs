@@ -150,3 +150,30 @@ impl RenderSnapshot {
         self.joints.clear();
     }
 }
+
+impl RenderSnapshot {
+    /// The scene's bodies at their rest pose, as a method would show them before its first
+    /// step: fixed bodies as [`BodyRole::Fixed`], the rest as [`BodyRole::Dynamic`]. No
+    /// particles, sticks, contacts or joints: those belong to a method.
+    pub fn from_scene_rest(scene: &crate::SceneDesc) -> RenderSnapshot {
+        let bodies = scene
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| BodyInstance {
+                body: BodyId(i as u32),
+                shape: b.shape.clone(),
+                pose: b.pose,
+                role: if b.is_fixed() {
+                    BodyRole::Fixed
+                } else {
+                    BodyRole::Dynamic
+                },
+            })
+            .collect();
+        RenderSnapshot {
+            bodies,
+            ..RenderSnapshot::default()
+        }
+    }
+}

@@ -136,6 +136,13 @@ fn unknown_and_reserved_bodies() {
         6,
         "may not be named \"world\"",
     );
+    check(
+        "body \"b\"",
+        "body \"Origin\"",
+        10,
+        6,
+        "may not be named \"origin\"",
+    );
     check("body2 \"a\"", "body2 \"b\"", 15, 1, "to itself");
     check("\tbody2 \"a\"\n", "", 15, 1, "missing `body2`");
     check("\tanchor ( 0, 1.1, 0 )\n", "", 15, 1, "missing `anchor`");
@@ -323,7 +330,9 @@ fn validation_errors_point_at_the_body() {
     let e = err(&bouncy);
     assert_eq!((e.line, e.col), (5, 6), "{e}");
     assert!(e.message.contains("restitution"), "{e}");
-    let spring = format!("{GOOD}spring \"s\" {{ body1 \"a\" body2 \"world\" anchor1 ( 0, 0, 0 ) anchor2 ( 0, 1, 0 ) }}\n");
+    let spring = format!(
+        "{GOOD}spring \"s\" {{ body1 \"a\" body2 \"world\" anchor1 ( 0, 0, 0 ) anchor2 ( 0, 1, 0 ) }}\n"
+    );
     assert!(parse(&spring, Path::new("t.af"), &AfOptions::default()).is_ok());
     let e = err(&GOOD.replace("up \"y\"", "up \"y\"\n\ttimestep 5"));
     assert!(e.message.contains("timestep"), "{e}");
@@ -379,6 +388,36 @@ fn the_doom_figure_uses_everything_and_reports_ignored_keys() {
         assert!(s.ignored.iter().any(|i| i.key == key), "{key}");
     }
     assert!(s.ignored.iter().any(|i| i.key.starts_with("custom(")));
+    // Hinge `limit centre, width, shaft` = 45, 90, 0: body1 may turn 0..90 degrees.
+    let find = |n: &str| &d.constraints.iter().find(|c| c.name == n).unwrap().kind;
+    let ragdoll_sim::scene::JointKind::Hinge { limit: Some(l), .. } = find("l_elbow") else {
+        panic!()
+    };
+    assert!(l.min.abs() < 1e-6 && (l.max - 90f32.to_radians()).abs() < 1e-6);
+    // Universal: Doom 3's shafts along the bones become the cross's two axes, each
+    // perpendicular to its shaft and to the other; the cone keeps shaft 1.
+    let ragdoll_sim::scene::JointKind::Universal {
+        shaft1,
+        shaft2,
+        swing,
+        ..
+    } = find("neck")
+    else {
+        panic!()
+    };
+    let up = ragdoll_sim::glam::Vec3::Y; // bonedir(Neck, Head) in Z-up inches is our +Y
+    assert!(
+        shaft1.dot(*shaft2).abs() < 1e-6
+            && shaft1.dot(up).abs() < 1e-6
+            && shaft2.dot(up).abs() < 1e-6
+    );
+    let Some(ragdoll_sim::scene::SwingLimit::Cone {
+        shaft, half_angle, ..
+    }) = swing
+    else {
+        panic!()
+    };
+    assert!((*shaft - up).length() < 1e-6 && (half_angle - 30f32.to_radians()).abs() < 1e-6);
     assert!(
         s.ignored
             .windows(2)

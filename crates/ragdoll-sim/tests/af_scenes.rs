@@ -551,3 +551,71 @@ fn collision_scene_has_two_falling_boxes() {
     assert_eq!((s.bodies.len(), s.constraints.len()), (2, 0));
     assert!(s.bodies.iter().all(|b| !b.is_fixed() && bottom(b) > 0.1));
 }
+
+/// The parry3d shape of a body, for the overlap test.
+fn parry_shape(s: &Shape) -> Box<dyn parry3d::shape::Shape> {
+    use parry3d::shape as ps;
+    match s {
+        Shape::Box { half_extents } => Box::new(ps::Cuboid::new(*half_extents)),
+        Shape::Capsule {
+            half_height,
+            radius,
+        } => Box::new(ps::Capsule::new_y(*half_height, *radius)),
+        Shape::Cylinder {
+            half_height,
+            radius,
+            ..
+        } => Box::new(ps::Cylinder::new(*half_height, *radius)),
+        Shape::Cone {
+            half_height,
+            radius,
+            ..
+        } => Box::new(ps::Cone::new(*half_height, *radius)),
+        Shape::ConvexHull { points } => {
+            Box::new(ps::ConvexPolyhedron::from_convex_hull(points).unwrap())
+        }
+    }
+}
+
+/// Bodies that do not share a joint must not start inside each other: contacts would
+/// push them apart with energy the scene never had. (Jointed neighbours may touch or,
+/// as in the PyODE tutorial, overlap; both methods skip their contacts.)
+#[test]
+fn no_scene_starts_with_unjointed_bodies_overlapping() {
+    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+        let path = e.unwrap().path();
+        let s = load(&path, &AfOptions::default()).unwrap().desc;
+        let jointed = |a: usize, b: usize| {
+            s.constraints.iter().any(|c| {
+                let (x, y) = (c.body1.index(), c.body2.body().map(|b| b.index()));
+                (x == a && y == Some(b)) || (x == b && y == Some(a))
+            })
+        };
+        let shapes: Vec<_> = s.bodies.iter().map(|b| parry_shape(&b.shape)).collect();
+        let poses: Vec<_> = s
+            .bodies
+            .iter()
+            .map(|b| parry3d::math::Pose::from_parts(b.pose.position, b.pose.rotation))
+            .collect();
+        for i in 0..s.bodies.len() {
+            for j in i + 1..s.bodies.len() {
+                if jointed(i, j) || (s.bodies[i].is_fixed() && s.bodies[j].is_fixed()) {
+                    continue;
+                }
+                let c =
+                    parry3d::query::contact(&poses[i], &*shapes[i], &poses[j], &*shapes[j], 0.0)
+                        .unwrap();
+                if let Some(c) = c {
+                    assert!(
+                        c.dist > -1e-3,
+                        "{}: {} and {} overlap by {} m",
+                        path.display(),
+                        s.bodies[i].name,
+                        s.bodies[j].name,
+                        -c.dist
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,1 +1,32 @@
-//! The impulse-based multibody solver — being written (issue 4).
+//! The impulse-based multibody method (right, red): maximal coordinates, rigid bodies,
+//! joints and contacts solved with impulses by Box2D v3's soft step.
+//!
+//! - [`body`]: hot body arrays (SoA) and cold body data.
+//! - [`integrate`]: semi-implicit Euler with the implicit gyroscopic term.
+//! - [`soft`]: soft-constraint coefficients.
+//! - [`joint`]: building blocks every joint is made of; [`limits`]: swing, twist, ranges.
+//! - [`ball`], [`hinge`], [`universal`], [`fixed`], [`slider`], [`spring`]: one file per
+//!   joint type; [`joint_set`]: the arrays of them.
+//! - [`broadphase`], [`contact`]: collision detection and the contact solver.
+//! - [`island`]: islands and sleeping; [`solver`]: the step.
+//! - [`world`]: [`MultibodyWorld`], the `Method`.
+
+pub mod ball;
+pub mod body;
+pub mod broadphase;
+pub mod contact;
+pub mod fixed;
+pub mod hinge;
+pub mod integrate;
+pub mod island;
+pub mod joint;
+pub mod joint_set;
+pub mod limits;
+pub mod slider;
+pub mod soft;
+pub mod solver;
+pub mod spring;
+pub mod universal;
+pub mod world;
+
+pub use world::MultibodyWorld;

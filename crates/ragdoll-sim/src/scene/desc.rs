@@ -147,9 +147,9 @@ impl Shape {
                 radius,
                 ..
             } => Vec3::new(*radius, *half_height, *radius),
-            Shape::ConvexHull { points } => points
-                .iter()
-                .fold(Vec3::ZERO, |acc, p| acc.max(p.abs())),
+            Shape::ConvexHull { points } => {
+                points.iter().fold(Vec3::ZERO, |acc, p| acc.max(p.abs()))
+            }
         }
     }
 

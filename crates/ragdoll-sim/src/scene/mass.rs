@@ -4,8 +4,8 @@
 //! multibody method uses mass, centre of mass and inertia directly; the particle
 //! method's improved mode places its particles to reproduce the same three.
 
-use super::desc::{BodyDesc, MassSpec, SceneDesc, Shape};
 use super::SceneError;
+use super::desc::{BodyDesc, MassSpec, SceneDesc, Shape};
 use glam::{Mat3, Vec3};
 use parry3d::mass_properties::MassProperties;
 use parry3d::shape::{ConvexPolyhedron, Shape as _};
@@ -127,7 +127,12 @@ impl SceneDesc {
             MassSpec::Mass(m) | MassSpec::Density(m) => m,
         };
         if let Some(total) = self.settings.total_mass {
-            let sum: f32 = self.bodies.iter().filter(|b| !b.is_fixed()).map(|b| kg(b.mass)).sum();
+            let sum: f32 = self
+                .bodies
+                .iter()
+                .filter(|b| !b.is_fixed())
+                .map(|b| kg(b.mass))
+                .sum();
             if sum > 0.0 {
                 let k = total / sum;
                 for b in self.bodies.iter_mut().filter(|b| !b.is_fixed()) {
@@ -178,12 +183,7 @@ mod tests {
 
     #[test]
     fn flat_hull_is_rejected() {
-        let pts: Vec<Vec3> = vec![
-            Vec3::ZERO,
-            Vec3::X,
-            Vec3::Y,
-            Vec3::new(1.0, 1.0, 0.0),
-        ];
+        let pts: Vec<Vec3> = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
         let b = BodyDesc::new(
             "flat",
             Shape::ConvexHull { points: pts.into() },

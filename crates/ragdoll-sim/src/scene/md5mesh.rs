@@ -126,17 +126,17 @@ pub fn parse(text: &str, file: &str) -> Result<Md5Skeleton, AfError> {
             orientation: Quat::from_xyzw(q.x, q.y, q.z, w).normalize(),
         });
     }
-    if let Some((n, pos)) = declared {
-        if n != joints.len() as f64 {
-            return Err(AfError::at(
-                file,
-                pos,
-                format!(
-                    "numJoints says {n} but the joints block lists {}",
-                    joints.len()
-                ),
-            ));
-        }
+    if let Some((n, pos)) = declared
+        && n != joints.len() as f64
+    {
+        return Err(AfError::at(
+            file,
+            pos,
+            format!(
+                "numJoints says {n} but the joints block lists {}",
+                joints.len()
+            ),
+        ));
     }
     Ok(Md5Skeleton { joints })
 }

@@ -8,19 +8,27 @@
 //! explicit particles, a figure transform and a grid of copies. `docs/af-format.md` is
 //! the user's reference; this module is the implementation:
 //!
-//! - [`lexer`]: characters to positioned tokens.
+//! - `lexer`: characters to positioned tokens.
 //! - `parser`: tokens to blocks of `key value, ...` entries, all positions kept.
-//! - `build`: blocks to a validated [`SceneDesc`] — units, axes, variants, masses.
-//! - `models`: Doom 3 collision models to our [`crate::scene::Shape`]s.
+//! - `ctx`: units and axes, the four vector forms against the `.md5mesh`, typed values
+//!   with positioned errors, the ignored-key list.
+//! - `build`: the pipeline — variants, settings and our scene blocks, validation, masses.
+//! - `body`, `models`: a body block; Doom 3 collision models as our shapes.
+//! - `constraint`: the six constraint types and their limits.
+//! - `place`: the `transform` block and the `replicate` grid.
 //!
 //! Axis mapping: a Z-up file (Doom 3's default) maps `(x, y, z)` to `(x, z, -y)`, a
 //! proper rotation, so handedness and the sign of every angle are kept; a Y-up file is
 //! taken as is. Lengths are multiplied by the unit (`inch` = 0.0254 m by default).
 
+mod body;
 mod build;
+mod constraint;
+mod ctx;
 pub(crate) mod lexer;
 mod models;
 mod parser;
+mod place;
 
 use crate::scene::SceneDesc;
 use std::fmt;

@@ -187,7 +187,10 @@ impl<'a> Parser<'a> {
             };
             return Err(self.err(
                 pos,
-                format!("`{kind}` is not a block; expected one of {}{hint}", KINDS.join(", ")),
+                format!(
+                    "`{kind}` is not a block; expected one of {}{hint}",
+                    KINDS.join(", ")
+                ),
             ));
         }
         let mut header = Vec::new();

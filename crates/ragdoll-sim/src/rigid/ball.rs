@@ -1,0 +1,72 @@
+//! Ball-and-socket joint: the anchor is shared, rotation is free up to an optional swing
+//! limit (Doom 3 cone or pyramid) and twist limit, hard or soft (PyODE's flex and twist).
+
+use super::body::BodyStates;
+use super::joint::{FrictionMotor, JointFrame, PointPart};
+use super::joint_set::JointSolve;
+use super::limits::{AngleLimit, Swing};
+use super::soft::StepContext;
+
+/// A ball-and-socket joint.
+#[derive(Clone, Debug)]
+pub struct BallJoint {
+    /// Bodies and anchor.
+    pub frame: JointFrame,
+    /// The shared point.
+    pub point: PointPart,
+    /// Swing limit on body1's shaft relative to body2's axis.
+    pub swing: Option<Swing>,
+    /// Twist limit about body1's twist axis.
+    pub twist: Option<AngleLimit>,
+    /// Joint friction.
+    pub friction: FrictionMotor,
+}
+
+impl JointSolve for BallJoint {
+    fn frame(&self) -> &JointFrame {
+        &self.frame
+    }
+
+    fn prepare(&mut self, s: &BodyStates) {
+        if let Some(sw) = &mut self.swing {
+            sw.update(&self.frame, s);
+        }
+        if let Some(t) = &mut self.twist {
+            t.update(&self.frame, s);
+        }
+    }
+
+    fn warm_start(&self, s: &mut BodyStates) {
+        self.friction.warm_start(&self.frame, s);
+        if let Some(sw) = &self.swing {
+            sw.warm_start(&self.frame, s);
+        }
+        if let Some(t) = &self.twist {
+            t.warm_start(&self.frame, s);
+        }
+        self.point.warm_start(&self.frame, s);
+    }
+
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        self.friction.solve(&self.frame, s, ctx);
+        if let Some(sw) = &mut self.swing {
+            sw.solve(&self.frame, s, ctx, use_bias);
+        }
+        if let Some(t) = &mut self.twist {
+            t.solve(&self.frame, s, ctx, use_bias);
+        }
+        self.point.solve(&self.frame, s, ctx, use_bias);
+    }
+
+    fn limit_violation(&self, s: &BodyStates) -> f32 {
+        let sw = self
+            .swing
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s));
+        let tw = self
+            .twist
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s));
+        sw.max(tw)
+    }
+}

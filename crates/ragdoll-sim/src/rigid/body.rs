@@ -1,0 +1,168 @@
+//! Rigid bodies as structure-of-arrays: the hot state the solver touches every substep
+//! ([`BodyStates`]) apart from the cold description it reads once per step or less
+//! ([`BodyInfo`]).
+//!
+//! The solver addresses bodies by index. Index `len()` of the hot arrays is the
+//! *static anchor*: a body with zero inverse mass and zero velocity that stands for the
+//! world (`body2 "world"`) and the ground, so constraint code never branches on it.
+
+use crate::scene::{BodyDesc, MassProps, Shape};
+use glam::{Mat3, Quat, Vec3};
+use parry3d::shape::SharedShape;
+
+/// Hot per-body state, one entry per body plus the trailing static anchor.
+#[derive(Clone, Debug, Default)]
+pub struct BodyStates {
+    /// Centre of mass (world).
+    pub com: Vec<Vec3>,
+    /// Orientation of the body (= of its shape frame).
+    pub rot: Vec<Quat>,
+    /// Linear velocity of the centre of mass.
+    pub lin_vel: Vec<Vec3>,
+    /// Angular velocity (world).
+    pub ang_vel: Vec<Vec3>,
+    /// Inverse mass; 0 for fixed, sleeping and the static anchor.
+    pub inv_mass: Vec<f32>,
+    /// World-space inverse inertia `R I⁻¹ Rᵀ`, refreshed every substep.
+    pub inv_inertia: Vec<Mat3>,
+}
+
+impl BodyStates {
+    /// Number of entries including the static anchor.
+    pub fn len(&self) -> usize {
+        self.com.len()
+    }
+
+    /// True when there is not even the static anchor.
+    pub fn is_empty(&self) -> bool {
+        self.com.is_empty()
+    }
+
+    /// Appends one body.
+    pub fn push(&mut self, com: Vec3, rot: Quat, v: Vec3, w: Vec3) {
+        self.com.push(com);
+        self.rot.push(rot);
+        self.lin_vel.push(v);
+        self.ang_vel.push(w);
+        self.inv_mass.push(0.0);
+        self.inv_inertia.push(Mat3::ZERO);
+    }
+
+    /// Velocity of the material point at world offset `r` from body `i`'s centre of mass.
+    #[inline]
+    pub fn point_velocity(&self, i: usize, r: Vec3) -> Vec3 {
+        self.lin_vel[i] + self.ang_vel[i].cross(r)
+    }
+
+    /// Applies the impulse `p` at offset `r` to body `i` (Newton: Δv = p/m, Δω = I⁻¹ r×p).
+    #[inline]
+    pub fn apply_impulse(&mut self, i: usize, r: Vec3, p: Vec3) {
+        self.lin_vel[i] += p * self.inv_mass[i];
+        self.ang_vel[i] += self.inv_inertia[i] * r.cross(p);
+    }
+
+    /// Applies the angular impulse `l` to body `i`.
+    #[inline]
+    pub fn apply_angular_impulse(&mut self, i: usize, l: Vec3) {
+        self.ang_vel[i] += self.inv_inertia[i] * l;
+    }
+}
+
+/// Cold per-body data: what the scene said, and what the solver derives from it once.
+#[derive(Clone, Debug)]
+pub struct BodyInfo {
+    /// Scene name.
+    pub name: String,
+    /// The scene shape (for snapshots).
+    pub shape: Shape,
+    /// The collision shape, in the shape frame.
+    pub collider: SharedShape,
+    /// Centre of mass in the shape frame.
+    pub local_com: Vec3,
+    /// Mass (kg), also for fixed bodies (they are treated as infinite).
+    pub mass: f32,
+    /// Body-space inertia about the centre of mass.
+    pub inertia: Mat3,
+    /// Body-space inverse inertia (zero for fixed bodies).
+    pub inv_inertia_local: Mat3,
+    /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
+    /// while the body sleeps and restored from here.
+    pub inv_mass: f32,
+    /// Fixed bodies never move.
+    pub fixed: bool,
+    /// Doom 3 air friction on translation, fraction of velocity lost per second.
+    pub linear_damping: f32,
+    /// Doom 3 air friction on rotation, fraction lost per second.
+    pub angular_damping: f32,
+    /// Coulomb coefficient.
+    pub friction: f32,
+    /// Restitution.
+    pub restitution: f32,
+    /// Collides with bodies of its own figure.
+    pub self_collision: bool,
+    /// Figure (connected component of the joint graph) this body belongs to.
+    pub figure: u32,
+    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
+    pub min_half_extent: f32,
+    /// Largest distance from the centre of mass to the shape's bounding box: with it,
+    /// `|v| + |ω| r` bounds the speed of every point of the body.
+    pub bound_radius: f32,
+    /// Shot from the camera.
+    pub projectile: bool,
+}
+
+/// The parry3d collider for a scene shape. Round shapes in parry3d are Y-aligned like
+/// ours; a cone's base is at −half_height and its apex at +half_height in both.
+pub fn collider(shape: &Shape) -> Option<SharedShape> {
+    Some(match shape {
+        Shape::Box { half_extents } => {
+            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
+        }
+        Shape::Capsule {
+            half_height,
+            radius,
+        } => SharedShape::capsule_y(*half_height, *radius),
+        Shape::Cylinder {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cylinder(*half_height, *radius),
+        Shape::Cone {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cone(*half_height, *radius),
+        Shape::ConvexHull { points } => SharedShape::convex_hull(points)?,
+    })
+}
+
+impl BodyInfo {
+    /// Cold data of one body from its description and mass properties.
+    pub fn new(desc: &BodyDesc, mp: &MassProps, collider: SharedShape, figure: u32) -> BodyInfo {
+        let fixed = desc.is_fixed();
+        BodyInfo {
+            name: desc.name.clone(),
+            shape: desc.shape.clone(),
+            collider,
+            local_com: mp.local_com,
+            mass: mp.mass,
+            inertia: mp.inertia,
+            inv_inertia_local: if fixed {
+                Mat3::ZERO
+            } else {
+                mp.inverse_inertia()
+            },
+            inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
+            fixed,
+            linear_damping: desc.friction.linear,
+            angular_damping: desc.friction.angular,
+            friction: desc.friction.contact,
+            restitution: desc.restitution,
+            self_collision: desc.self_collision,
+            figure,
+            min_half_extent: desc.shape.local_half_extents().min_element(),
+            bound_radius: (desc.shape.local_half_extents() + mp.local_com.abs()).length(),
+            projectile: false,
+        }
+    }
+}

@@ -1,0 +1,445 @@
+//! Contacts: parry3d manifolds between bodies and against the ground plane, cached per
+//! body pair with persistent point ids for warm starting, solved as soft non-penetration
+//! constraints with Coulomb friction and a restitution pass (Box2D v3's contact solver,
+//! in 3D).
+//!
+//! Per step: the broad phase proposes pairs, the cache keeps each pair's parry workspace
+//! and last impulses (a sorted array keyed by the pair, merged with the new pair list),
+//! the narrow phase refreshes the manifolds, and `prepare` fixes anchors, normal and
+//! effective masses for the step. Separation is then tracked through the substeps from
+//! the bodies' motion (`s = s₀ + n·(Δp_b − Δp_a)`), as Box2D does.
+
+// Several per-body arrays are walked together by index.
+#![allow(clippy::needless_range_loop)]
+
+use super::body::{BodyInfo, BodyStates};
+use super::broadphase::BroadPhase;
+use super::soft::StepContext;
+use glam::{Quat, Vec3};
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::math::Pose as PPose;
+use parry3d::query::{
+    ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
+use parry3d::shape::SharedShape;
+
+/// Distance within which contacts are created before touching (speculative margin, m).
+pub const SPECULATIVE_DISTANCE: f32 = 0.02;
+/// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
+pub const LINEAR_SLOP: f32 = 0.0005;
+
+/// One contact point with its solver state.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ContactPoint {
+    /// Persistent id: parry's feature ids of both shapes.
+    pub id: u64,
+    /// Normal from a to b (world).
+    pub normal: Vec3,
+    /// Tangent basis.
+    pub tangents: [Vec3; 2],
+    /// Anchor on a relative to its centre of mass (world, fixed for the step).
+    pub ra: Vec3,
+    /// Anchor on b.
+    pub rb: Vec3,
+    /// Anchor in a's body space, to follow a through the substeps.
+    pub local_a: Vec3,
+    /// Anchor in b's body space.
+    pub local_b: Vec3,
+    /// World anchor on a at prepare time.
+    pub pa0: Vec3,
+    /// World anchor on b at prepare time.
+    pub pb0: Vec3,
+    /// Separation at prepare time (negative = overlap).
+    pub base_separation: f32,
+    /// 1 / (n·K·n).
+    pub normal_mass: f32,
+    /// Effective masses of the two tangent rows.
+    pub tangent_mass: [f32; 2],
+    /// Accumulated normal impulse.
+    pub normal_impulse: f32,
+    /// Accumulated friction impulse (world vector, survives basis changes).
+    pub tangent_impulse: Vec3,
+    /// Largest normal impulse applied this step (restitution only bounces real contacts).
+    pub max_normal_impulse: f32,
+    /// Normal velocity at prepare time (negative = approaching).
+    pub relative_velocity: f32,
+}
+
+/// A cached body pair. (No `Debug`: parry's workspace has none.)
+#[derive(Default)]
+pub struct ContactPair {
+    /// Body a.
+    pub a: u32,
+    /// Body b, or the static anchor for the ground.
+    pub b: u32,
+    /// Combined Coulomb coefficient.
+    pub friction: f32,
+    /// Combined restitution.
+    pub restitution: f32,
+    /// Points of the last narrow phase.
+    pub points: Vec<ContactPoint>,
+    manifolds: Vec<ContactManifold<(), ()>>,
+    workspace: Option<ContactManifoldsWorkspace>,
+}
+
+impl ContactPair {
+    /// Whether any point is within the speculative margin.
+    pub fn touching(&self) -> bool {
+        !self.points.is_empty()
+    }
+}
+
+/// The ground as a collider.
+#[derive(Clone, Debug)]
+pub struct GroundCollider {
+    /// A parry half-space.
+    pub shape: SharedShape,
+    /// Its pose (the tilt, the height).
+    pub pose: PPose,
+    /// Outward normal.
+    pub normal: Vec3,
+    /// A point on the plane.
+    pub origin: Vec3,
+    /// Coulomb coefficient.
+    pub friction: f32,
+    /// Restitution.
+    pub restitution: f32,
+}
+
+/// All contact state of a world.
+#[derive(Default)]
+pub struct Contacts {
+    /// Active pairs, sorted by `(a, b)`.
+    pub pairs: Vec<ContactPair>,
+    spare: Vec<ContactPair>,
+    candidates: Vec<(u32, u32)>,
+    aabbs: Vec<Aabb>,
+    broad: BroadPhase,
+    /// Pairs that never collide (jointed, overlapping at rest, self-collision off), sorted.
+    pub excluded: Vec<(u32, u32)>,
+    /// The ground, if any.
+    pub ground: Option<GroundCollider>,
+}
+
+/// Upper bound of the speed of any point of body `i`.
+#[inline]
+fn point_speed(s: &BodyStates, info: &[BodyInfo], i: usize) -> f32 {
+    s.lin_vel[i].length() + s.ang_vel[i].length() * info[i].bound_radius
+}
+
+/// parry pose of body `i`'s shape frame.
+#[inline]
+pub fn shape_pose(s: &BodyStates, info: &[BodyInfo], i: usize) -> PPose {
+    let q = s.rot[i];
+    PPose::from_parts(s.com[i] - q * info[i].local_com, q)
+}
+
+/// Whether two bodies may collide at all (not counting the exclusion list).
+pub fn may_collide(info: &[BodyInfo], a: usize, b: usize) -> bool {
+    let (ia, ib) = (&info[a], &info[b]);
+    if ia.fixed && ib.fixed {
+        return false;
+    }
+    ia.figure != ib.figure || (ia.self_collision && ib.self_collision)
+}
+
+impl Contacts {
+    /// Runs broad and narrow phase for the current pose and prepares the solver data.
+    /// `awake[i]` tells which bodies move; pairs between resting bodies keep their
+    /// cached state untouched. `dt` widens the margins for fast bodies.
+    pub fn update(&mut self, s: &BodyStates, info: &[BodyInfo], awake: &[bool], dt: f32) {
+        let n = info.len();
+        let anchor = n as u32;
+        // Broad phase on AABBs loosened by the speculative margin and this step's motion.
+        self.aabbs.clear();
+        for i in 0..n {
+            let motion = point_speed(s, info, i) * dt;
+            let aabb = info[i].collider.compute_aabb(&shape_pose(s, info, i));
+            self.aabbs
+                .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
+        }
+        self.candidates.clear();
+        self.broad.pairs(&self.aabbs, &mut self.candidates);
+        let excluded = &self.excluded;
+        self.candidates.retain(|&(a, b)| {
+            (awake[a as usize] || awake[b as usize])
+                && may_collide(info, a as usize, b as usize)
+                && excluded.binary_search(&(a, b)).is_err()
+        });
+        // Bodies near the ground plane (the plane comes last: the anchor has the largest index).
+        if let Some(g) = &self.ground {
+            for i in 0..n {
+                if info[i].fixed {
+                    continue;
+                }
+                let aabb = &self.aabbs[i];
+                let c = aabb.center();
+                let e = aabb.half_extents();
+                let reach = g.normal.abs().dot(e);
+                if g.normal.dot(c - g.origin) - reach < 0.0 {
+                    self.candidates.push((i as u32, anchor));
+                }
+            }
+            self.candidates.sort_unstable();
+        }
+        // Sleeping pairs stay in the cache as they are (islands need them).
+        for p in &self.pairs {
+            if !awake[p.a as usize] && !awake[p.b as usize] {
+                self.candidates.push((p.a, p.b));
+            }
+        }
+        self.candidates.sort_unstable();
+        self.candidates.dedup();
+
+        // Merge the sorted candidate list with the sorted cache: surviving pairs move over
+        // with their parry workspace and impulses, new ones start empty.
+        std::mem::swap(&mut self.pairs, &mut self.spare);
+        self.pairs.clear();
+        let mut k = 0;
+        for &(a, b) in &self.candidates {
+            while k < self.spare.len() && (self.spare[k].a, self.spare[k].b) < (a, b) {
+                k += 1;
+            }
+            let pair = if k < self.spare.len() && (self.spare[k].a, self.spare[k].b) == (a, b) {
+                k += 1;
+                std::mem::take(&mut self.spare[k - 1])
+            } else {
+                let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
+                let (fb, rb) = match (&self.ground, b == anchor) {
+                    (Some(g), true) => (g.friction, g.restitution),
+                    _ => (info[b as usize].friction, info[b as usize].restitution),
+                };
+                ContactPair {
+                    a,
+                    b,
+                    friction: (fa * fb).sqrt(),
+                    restitution: ra.max(rb),
+                    ..Default::default()
+                }
+            };
+            self.pairs.push(pair);
+        }
+        self.spare.clear();
+
+        for pair in &mut self.pairs {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            if !awake[a] && !awake[b] {
+                continue;
+            }
+            let pose_a = shape_pose(s, info, a);
+            let (pose_b, shape_b) = if b == n {
+                let g = self
+                    .ground
+                    .as_ref()
+                    .expect("ground pairs exist only with a ground");
+                (g.pose, &g.shape)
+            } else {
+                (shape_pose(s, info, b), &info[b].collider)
+            };
+            // Every point of a moves at most |v| + |ω| r: contacts that may close this
+            // step are created now, so the speculative branch stops them on time even
+            // for a limb swinging fast about its joint.
+            let speed_b = if b == n { 0.0 } else { point_speed(s, info, b) };
+            let prediction = SPECULATIVE_DISTANCE + (point_speed(s, info, a) + speed_b) * dt;
+            let pos12 = pose_a.inv_mul(&pose_b);
+            let ok = DefaultQueryDispatcher.contact_manifolds(
+                &pos12,
+                &*info[a].collider,
+                &**shape_b,
+                prediction,
+                &mut pair.manifolds,
+                &mut pair.workspace,
+            );
+            if ok.is_err() {
+                pair.manifolds.clear();
+            }
+            prepare_pair(pair, s, &pose_a, &pose_b);
+        }
+    }
+
+    /// Pairs with points where at least one body is awake.
+    fn active<'a>(
+        pairs: &'a mut [ContactPair],
+        awake: &'a [bool],
+    ) -> impl Iterator<Item = &'a mut ContactPair> {
+        pairs
+            .iter_mut()
+            .filter(move |p| p.touching() && (awake[p.a as usize] || awake[p.b as usize]))
+    }
+
+    /// Effective masses with the current inverse inertias (call after `update_inertia`).
+    pub fn prepare_masses(&mut self, s: &BodyStates, awake: &[bool]) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            for p in &mut pair.points {
+                let k = |d: Vec3| {
+                    let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
+                    s.inv_mass[a]
+                        + s.inv_mass[b]
+                        + ja.dot(s.inv_inertia[a] * ja)
+                        + jb.dot(s.inv_inertia[b] * jb)
+                };
+                let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
+                p.normal_mass = inv(k(p.normal));
+                p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
+                p.max_normal_impulse = 0.0;
+                p.relative_velocity = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+            }
+        }
+    }
+
+    /// Re-applies the impulses cached from the last step.
+    pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            for p in &pair.points {
+                let imp = p.normal * p.normal_impulse + p.tangent_impulse;
+                s.apply_impulse(a, p.ra, -imp);
+                s.apply_impulse(b, p.rb, imp);
+            }
+        }
+    }
+
+    /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
+    /// impulse just computed (Box2D v3's order; friction first would cap it with a
+    /// normal impulse the relax pass is about to raise, and slide too easily).
+    pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            let (qa, qb) = (s.rot[a], s.rot[b]);
+            let (ca, cb) = (s.com[a], s.com[b]);
+            for p in &mut pair.points {
+                // Non-penetration at the current separation.
+                let sep = current_separation(p, ca, qa, cb, qb);
+                let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
+                    // Speculative: the gap may close this substep, no further.
+                    (sep * ctx.inv_h, 1.0, 0.0)
+                } else if use_bias {
+                    let c = (sep + LINEAR_SLOP).min(0.0);
+                    (
+                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
+                        ctx.contact.mass_scale,
+                        ctx.contact.impulse_scale,
+                    )
+                } else {
+                    (0.0, 1.0, 0.0)
+                };
+                let vn = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+                let l =
+                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+                let new = (p.normal_impulse + l).max(0.0);
+                let d = new - p.normal_impulse;
+                p.normal_impulse = new;
+                p.max_normal_impulse = p.max_normal_impulse.max(new);
+                s.apply_impulse(a, p.ra, -p.normal * d);
+                s.apply_impulse(b, p.rb, p.normal * d);
+
+                // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
+                let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
+                let old = p.tangent_impulse;
+                let mut new = old;
+                for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
+                    new -= *t * (m * t.dot(dv));
+                }
+                let cap = pair.friction * p.normal_impulse;
+                if new.length_squared() > cap * cap {
+                    new = new.normalize_or_zero() * cap;
+                }
+                p.tangent_impulse = new;
+                let d = new - old;
+                s.apply_impulse(a, p.ra, -d);
+                s.apply_impulse(b, p.rb, d);
+            }
+        }
+    }
+
+    /// Box2D's restitution pass, after the substeps: points that were approaching faster
+    /// than `threshold` and carried load get the normal velocity `−e · v_before`.
+    pub fn restitution(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
+        // Block-free Gauss–Seidel over a face's points: one pass under-shoots, so
+        // the pass is run a few times (the clamp keeps it from over-shooting).
+        for _ in 0..4 {
+            self.restitution_pass(s, awake, threshold);
+        }
+    }
+
+    fn restitution_pass(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            if pair.restitution == 0.0 {
+                continue;
+            }
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            for p in &mut pair.points {
+                if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
+                    continue;
+                }
+                let vn = p
+                    .normal
+                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+                let l = -p.normal_mass * (vn + pair.restitution * p.relative_velocity);
+                let new = (p.normal_impulse + l).max(0.0);
+                let d = new - p.normal_impulse;
+                p.normal_impulse = new;
+                s.apply_impulse(a, p.ra, -p.normal * d);
+                s.apply_impulse(b, p.rb, p.normal * d);
+            }
+        }
+    }
+}
+
+/// Separation now, from the motion of both anchors since prepare.
+#[inline]
+fn current_separation(p: &ContactPoint, ca: Vec3, qa: Quat, cb: Vec3, qb: Quat) -> f32 {
+    let da = ca + qa * p.local_a - p.pa0;
+    let db = cb + qb * p.local_b - p.pb0;
+    p.base_separation + p.normal.dot(db - da)
+}
+
+/// Turns parry's manifolds into solver points, carrying impulses over by feature id.
+fn prepare_pair(pair: &mut ContactPair, s: &BodyStates, pose_a: &PPose, pose_b: &PPose) {
+    let (a, b) = (pair.a as usize, pair.b as usize);
+    // Old impulses by id; manifolds hold a handful of points, a linear search is cheapest.
+    let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
+    let n_old = pair.points.len().min(8);
+    for (slot, p) in old.iter_mut().zip(&pair.points) {
+        *slot = (p.id, p.normal_impulse, p.tangent_impulse);
+    }
+    pair.points.clear();
+    for m in &pair.manifolds {
+        let normal = (pose_a.rotation * m.local_n1).normalize_or_zero();
+        if normal == Vec3::ZERO {
+            continue;
+        }
+        let (t0, t1) = normal.any_orthonormal_pair();
+        for c in &m.points {
+            let pa = pose_a.transform_point(c.local_p1);
+            let pb = pose_b.transform_point(c.local_p2);
+            let id = ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64;
+            let (ni, ti) = old[..n_old]
+                .iter()
+                .find(|o| o.0 == id)
+                .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
+            let ra = pa - s.com[a];
+            let rb = pb - s.com[b];
+            pair.points.push(ContactPoint {
+                id,
+                normal,
+                tangents: [t0, t1],
+                ra,
+                rb,
+                local_a: s.rot[a].inverse() * ra,
+                local_b: s.rot[b].inverse() * rb,
+                pa0: pa,
+                pb0: pb,
+                base_separation: c.dist,
+                normal_impulse: ni,
+                tangent_impulse: ti,
+                ..Default::default()
+            });
+        }
+    }
+}

@@ -1,0 +1,39 @@
+//! Fixed joint: no relative motion (PyODE's spine). The anchor is body1's centre of mass.
+
+use super::body::BodyStates;
+use super::joint::{AngularLock3, JointFrame, PointPart};
+use super::joint_set::JointSolve;
+use super::soft::StepContext;
+
+/// A fixed joint.
+#[derive(Clone, Debug)]
+pub struct FixedJoint {
+    /// Bodies and anchor.
+    pub frame: JointFrame,
+    /// The shared point.
+    pub point: PointPart,
+    /// The relative orientation lock.
+    pub lock: AngularLock3,
+}
+
+impl JointSolve for FixedJoint {
+    fn frame(&self) -> &JointFrame {
+        &self.frame
+    }
+
+    fn prepare(&mut self, _: &BodyStates) {}
+
+    fn warm_start(&self, s: &mut BodyStates) {
+        self.lock.warm_start(&self.frame, s);
+        self.point.warm_start(&self.frame, s);
+    }
+
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        self.lock.solve(&self.frame, s, ctx, use_bias);
+        self.point.solve(&self.frame, s, ctx, use_bias);
+    }
+
+    fn limit_violation(&self, _: &BodyStates) -> f32 {
+        0.0
+    }
+}

@@ -1,0 +1,62 @@
+//! Hinge: the anchor is shared and the hinge axis fixed in both bodies stays aligned,
+//! leaving one rotation, optionally limited to a range (Doom 3's V-shaped limit, ODE's
+//! hinge stops).
+
+use super::body::BodyStates;
+use super::joint::{AlignPart, FrictionMotor, JointFrame, PointPart};
+use super::joint_set::JointSolve;
+use super::limits::{AngleGauge, AngleLimit};
+use super::soft::StepContext;
+
+/// A hinge joint.
+#[derive(Clone, Debug)]
+pub struct HingeJoint {
+    /// Bodies and anchor.
+    pub frame: JointFrame,
+    /// The shared point.
+    pub point: PointPart,
+    /// The axis, kept aligned in both bodies.
+    pub align: AlignPart,
+    /// The hinge angle (for drawing and the range).
+    pub gauge: AngleGauge,
+    /// The range, if limited.
+    pub limit: Option<AngleLimit>,
+    /// Joint friction.
+    pub friction: FrictionMotor,
+}
+
+impl JointSolve for HingeJoint {
+    fn frame(&self) -> &JointFrame {
+        &self.frame
+    }
+
+    fn prepare(&mut self, s: &BodyStates) {
+        if let Some(l) = &mut self.limit {
+            l.update(&self.frame, s);
+        }
+    }
+
+    fn warm_start(&self, s: &mut BodyStates) {
+        self.friction.warm_start(&self.frame, s);
+        if let Some(l) = &self.limit {
+            l.warm_start(&self.frame, s);
+        }
+        self.align.warm_start(&self.frame, s);
+        self.point.warm_start(&self.frame, s);
+    }
+
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        if let Some(l) = &mut self.limit {
+            l.solve(&self.frame, s, ctx, use_bias);
+        }
+        self.align.solve(&self.frame, s, ctx, use_bias);
+        self.point.solve(&self.frame, s, ctx, use_bias);
+        self.friction.solve(&self.frame, s, ctx);
+    }
+
+    fn limit_violation(&self, s: &BodyStates) -> f32 {
+        self.limit
+            .as_ref()
+            .map_or(0.0, |l| l.violation(&self.frame, s))
+    }
+}

@@ -1,0 +1,424 @@
+//! What every joint is made of: a frame on each body, a point constraint, angular locks,
+//! one-dimensional angular rows (limits, soft limits, motors) and joint friction.
+//!
+//! Conventions: body `a` is the scene's body1, body `b` its body2 or the static anchor
+//! (the world). Offsets are stored in body space relative to the centre of mass and turned
+//! into world space from the current orientations at every substep, so position errors
+//! are measured on the current state (Box2D v3 measures them from delta positions; in 3D
+//! with substeps this is the same quantity).
+
+// `!(k > ε)` on purpose: it is also true for NaN, which must skip the row too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::body::BodyStates;
+use super::soft::{Softness, Spring, StepContext};
+use glam::{Mat3, Quat, Vec3};
+
+/// The two bodies of a joint and the joint anchor fixed in each.
+#[derive(Clone, Copy, Debug)]
+pub struct JointFrame {
+    /// Body1.
+    pub a: usize,
+    /// Body2 or the static anchor.
+    pub b: usize,
+    /// Anchor in body a's space, relative to its centre of mass.
+    pub local_a: Vec3,
+    /// Anchor in body b's space (world space for the static anchor).
+    pub local_b: Vec3,
+}
+
+impl JointFrame {
+    /// A frame for a world-space `anchor` at the rest pose.
+    pub fn new(s: &BodyStates, a: usize, b: usize, anchor: Vec3) -> JointFrame {
+        JointFrame {
+            a,
+            b,
+            local_a: s.rot[a].inverse() * (anchor - s.com[a]),
+            local_b: s.rot[b].inverse() * (anchor - s.com[b]),
+        }
+    }
+
+    /// World offsets of the anchor from each centre of mass, now.
+    #[inline]
+    pub fn offsets(&self, s: &BodyStates) -> (Vec3, Vec3) {
+        (s.rot[self.a] * self.local_a, s.rot[self.b] * self.local_b)
+    }
+
+    /// World anchor as seen from a and from b; their distance is the joint gap.
+    pub fn anchors(&self, s: &BodyStates) -> (Vec3, Vec3) {
+        let (ra, rb) = self.offsets(s);
+        (s.com[self.a] + ra, s.com[self.b] + rb)
+    }
+
+    /// A body-a direction given in world space at rest, stored in a's space.
+    pub fn dir_in_a(&self, s: &BodyStates, v: Vec3) -> Vec3 {
+        s.rot[self.a].inverse() * v
+    }
+
+    /// A body-b direction given in world space at rest, stored in b's space.
+    pub fn dir_in_b(&self, s: &BodyStates, v: Vec3) -> Vec3 {
+        s.rot[self.b].inverse() * v
+    }
+
+    /// Sum of the two world inverse inertias (the angular effective-mass matrix).
+    #[inline]
+    pub fn inv_inertia_sum(&self, s: &BodyStates) -> Mat3 {
+        s.inv_inertia[self.a] + s.inv_inertia[self.b]
+    }
+
+    /// Relative angular velocity `ω_a − ω_b`.
+    #[inline]
+    pub fn rel_ang_vel(&self, s: &BodyStates) -> Vec3 {
+        s.ang_vel[self.a] - s.ang_vel[self.b]
+    }
+
+    /// Applies the angular impulse `l` to a and `−l` to b.
+    #[inline]
+    pub fn apply_angular(&self, s: &mut BodyStates, l: Vec3) {
+        s.apply_angular_impulse(self.a, l);
+        s.apply_angular_impulse(self.b, -l);
+    }
+}
+
+/// Soft coefficients for a bilateral row: the joint softness while solving, rigid
+/// without feedback in the relax pass.
+#[inline]
+fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
+    if use_bias { ctx.joint } else { Softness::RIGID }
+}
+
+/// The ball-and-socket point constraint `p_b − p_a = 0`, three rows solved as a block:
+/// `K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PointPart {
+    /// Accumulated impulse on b (world).
+    pub impulse: Vec3,
+}
+
+impl PointPart {
+    /// Re-applies last substep's impulse.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        let (ra, rb) = f.offsets(s);
+        s.apply_impulse(f.a, ra, -self.impulse);
+        s.apply_impulse(f.b, rb, self.impulse);
+    }
+
+    /// One soft Gauss–Seidel update.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let (ra, rb) = f.offsets(s);
+        let c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
+        let cdot = s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra);
+        let soft = bilateral(ctx, use_bias);
+        let k = point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb);
+        let Some(k_inv) = invert(k) else { return };
+        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c))
+            - soft.impulse_scale * self.impulse;
+        self.impulse += p;
+        s.apply_impulse(f.a, ra, -p);
+        s.apply_impulse(f.b, rb, p);
+    }
+}
+
+/// `m⁻¹ 1 − r̂ I⁻¹ r̂` for one body: the response of a point's velocity to an impulse there.
+#[inline]
+pub fn point_mass_matrix(s: &BodyStates, i: usize, r: Vec3) -> Mat3 {
+    let rx = super::integrate::skew(r);
+    Mat3::from_diagonal(Vec3::splat(s.inv_mass[i])) - rx * s.inv_inertia[i] * rx
+}
+
+/// Inverse of a 3×3 effective-mass matrix, `None` when singular (both bodies static).
+#[inline]
+pub fn invert(k: Mat3) -> Option<Mat3> {
+    let det = k.determinant();
+    (det.is_finite() && det.abs() > 1e-20).then(|| k.inverse())
+}
+
+/// Locks all three relative rotations to the rest pose: `C = 2 vec(q_b q_rel q_a⁻¹)` with
+/// `q_rel` the rest orientation of a seen from b... written so that `Ċ ≈ ω_a − ω_b`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AngularLock3 {
+    /// `q_b⁻¹ q_a` at rest.
+    pub rest: Quat,
+    /// Accumulated angular impulse on a.
+    pub impulse: Vec3,
+}
+
+impl AngularLock3 {
+    /// The lock for the rest pose of `f`.
+    pub fn new(f: &JointFrame, s: &BodyStates) -> AngularLock3 {
+        AngularLock3 {
+            rest: s.rot[f.b].inverse() * s.rot[f.a],
+            impulse: Vec3::ZERO,
+        }
+    }
+
+    /// Rotation vector (small-angle) of a away from where the rest pose puts it.
+    pub fn error(&self, f: &JointFrame, s: &BodyStates) -> Vec3 {
+        let target = s.rot[f.b] * self.rest;
+        let mut e = s.rot[f.a] * target.inverse();
+        if e.w < 0.0 {
+            e = -e;
+        }
+        2.0 * Vec3::new(e.x, e.y, e.z)
+    }
+
+    /// Re-applies the accumulated impulse.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        f.apply_angular(s, self.impulse);
+    }
+
+    /// One soft block update.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let c = self.error(f, s);
+        let cdot = f.rel_ang_vel(s);
+        let soft = bilateral(ctx, use_bias);
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+            return;
+        };
+        let l = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c))
+            - soft.impulse_scale * self.impulse;
+        self.impulse += l;
+        f.apply_angular(s, l);
+    }
+}
+
+/// Keeps a direction fixed in a aligned with one fixed in b: two rows about the
+/// directions perpendicular to it (the hinge's rotational part; a 0° cone).
+/// `C = P (d_b × d_a)`, `Ċ ≈ P (ω_a − ω_b)` with P the projection off `d_a`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AlignPart {
+    /// Direction in a's space.
+    pub local_a: Vec3,
+    /// Direction in b's space.
+    pub local_b: Vec3,
+    /// Accumulated impulse (two components along the current perpendiculars).
+    pub impulse: [f32; 2],
+}
+
+impl AlignPart {
+    /// Alignment of the world direction `d` (at rest) in both bodies.
+    pub fn new(f: &JointFrame, s: &BodyStates, d: Vec3) -> AlignPart {
+        AlignPart {
+            local_a: f.dir_in_a(s, d),
+            local_b: f.dir_in_b(s, d),
+            impulse: [0.0; 2],
+        }
+    }
+
+    fn basis(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, Vec3, Vec3, Vec3) {
+        let da = s.rot[f.a] * self.local_a;
+        let db = s.rot[f.b] * self.local_b;
+        let (u, v) = da.any_orthonormal_pair();
+        (da, db, u, v)
+    }
+
+    /// Re-applies the accumulated impulse along the current perpendiculars.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        let (_, _, u, v) = self.basis(f, s);
+        f.apply_angular(s, u * self.impulse[0] + v * self.impulse[1]);
+    }
+
+    /// One soft 2×2 block update.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let (da, db, u, v) = self.basis(f, s);
+        let e = db.cross(da);
+        let w = f.rel_ang_vel(s);
+        let m = f.inv_inertia_sum(s);
+        let (k11, k12, k22) = (u.dot(m * u), u.dot(m * v), v.dot(m * v));
+        let det = k11 * k22 - k12 * k12;
+        if !(det.abs() > 1e-20) {
+            return;
+        }
+        let soft = bilateral(ctx, use_bias);
+        let r = [
+            u.dot(w) + soft.bias_rate * u.dot(e),
+            v.dot(w) + soft.bias_rate * v.dot(e),
+        ];
+        let sol = [
+            (k22 * r[0] - k12 * r[1]) / det,
+            (k11 * r[1] - k12 * r[0]) / det,
+        ];
+        let l0 = -soft.mass_scale * sol[0] - soft.impulse_scale * self.impulse[0];
+        let l1 = -soft.mass_scale * sol[1] - soft.impulse_scale * self.impulse[1];
+        self.impulse[0] += l0;
+        self.impulse[1] += l1;
+        f.apply_angular(s, u * l0 + v * l1);
+    }
+}
+
+/// How a one-dimensional row reacts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RowKind {
+    /// `C ≥ 0`, impulse ≥ 0: a hard limit (soft in the Box2D sense, speculative when
+    /// `C > 0` so it never pulls).
+    Limit,
+    /// `C ≥ 0` enforced by a one-sided spring of stiffness `k` (N·m per unit of C):
+    /// the PyODE tutorial's restoring torque, implicitly integrated, with a little
+    /// damping as the tutorial's counter-torque adds.
+    SoftLimit {
+        /// Stiffness.
+        k: f32,
+    },
+    /// `C = 0`, both signs.
+    Equality,
+}
+
+/// One angular constraint row `Ċ = axis · (ω_a − ω_b)`.
+#[derive(Clone, Copy, Debug)]
+pub struct AxisRow {
+    /// World axis, recomputed every substep.
+    pub axis: Vec3,
+    /// Position value (rad or a dimensionless sine, positive = inside the limit).
+    pub c: f32,
+    /// Reaction.
+    pub kind: RowKind,
+    /// Accumulated impulse.
+    pub impulse: f32,
+    /// Whether the row is near enough to its bound to be solved this substep.
+    pub active: bool,
+}
+
+impl AxisRow {
+    /// An inactive row.
+    pub const fn new(kind: RowKind) -> AxisRow {
+        AxisRow {
+            axis: Vec3::ZERO,
+            c: 0.0,
+            kind,
+            impulse: 0.0,
+            active: false,
+        }
+    }
+
+    /// Sets axis and value; rows far from their bound (more than `margin`) sleep.
+    pub fn set(&mut self, axis: Vec3, c: f32, margin: f32) {
+        self.axis = axis;
+        self.c = c;
+        let active = self.kind == RowKind::Equality || c < margin;
+        if !active {
+            self.impulse = 0.0;
+        }
+        self.active = active;
+    }
+
+    /// Re-applies the accumulated impulse.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        if self.active {
+            f.apply_angular(s, self.axis * self.impulse);
+        }
+    }
+
+    /// One update of the row.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        if !self.active {
+            return;
+        }
+        let k = self.axis.dot(f.inv_inertia_sum(s) * self.axis);
+        if !(k > 1e-20) {
+            return;
+        }
+        let m = 1.0 / k;
+        let cdot = self.axis.dot(f.rel_ang_vel(s));
+        let old = self.impulse;
+        let new = match self.kind {
+            RowKind::Limit | RowKind::Equality => {
+                let (bias, soft) = if self.c > 0.0 && self.kind == RowKind::Limit {
+                    // Speculative: allow closing the gap this substep, never pull.
+                    (self.c * ctx.inv_h, Softness::RIGID)
+                } else if use_bias {
+                    (ctx.joint.bias_rate * self.c, ctx.joint)
+                } else {
+                    (0.0, Softness::RIGID)
+                };
+                let l = -m * soft.mass_scale * (cdot + bias) - soft.impulse_scale * old;
+                if self.kind == RowKind::Limit {
+                    (old + l).max(0.0)
+                } else {
+                    old + l
+                }
+            }
+            RowKind::SoftLimit { k: stiffness } => {
+                if self.c >= 0.0 {
+                    0.0
+                } else {
+                    // Damping 1 % of the stiffness, as the tutorial's `-0.01 * force`.
+                    let Some(sp) = Spring::new(stiffness, 0.01 * stiffness, ctx.h) else {
+                        return;
+                    };
+                    let l = -(cdot + sp.bias_rate * self.c + sp.gamma * old) / (k + sp.gamma);
+                    (old + l).max(0.0)
+                }
+            }
+        };
+        self.impulse = new;
+        f.apply_angular(s, self.axis * (new - old));
+    }
+}
+
+/// Joint friction as a capped motor (Doom 3 `friction`): drives the relative angular
+/// velocity to zero with at most `max_torque · h` angular impulse per substep, so the
+/// joint holds still under small loads and slips under large ones.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrictionMotor {
+    /// Largest friction torque (N·m); 0 disables the motor.
+    pub max_torque: f32,
+    /// Accumulated angular impulse on a.
+    pub impulse: Vec3,
+}
+
+impl FrictionMotor {
+    /// Doom 3 gives joint friction as a number in [0, 1] without units; we read it as the
+    /// fraction of the torque gravity exerts on body1 held horizontally at its arm
+    /// (the anchor's distance from body1's centre of mass): `f · m₁ g r`.
+    pub fn new(friction: f32, mass_a: f32, arm: f32, g: f32) -> FrictionMotor {
+        FrictionMotor {
+            max_torque: friction * mass_a * g * arm.max(0.05),
+            impulse: Vec3::ZERO,
+        }
+    }
+
+    /// Re-applies the accumulated impulse.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        if self.max_torque > 0.0 {
+            f.apply_angular(s, self.impulse);
+        }
+    }
+
+    /// One update; friction is solved without bias, the same in both passes.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext) {
+        if self.max_torque <= 0.0 {
+            return;
+        }
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+            return;
+        };
+        let old = self.impulse;
+        let mut new = old - k_inv * f.rel_ang_vel(s);
+        let cap = self.max_torque * ctx.h;
+        if new.length_squared() > cap * cap {
+            new = new.normalize() * cap;
+        }
+        self.impulse = new;
+        f.apply_angular(s, new - old);
+    }
+}
+
+/// Wraps an angle into (−π, π].
+#[inline]
+pub fn wrap_angle(a: f32) -> f32 {
+    use std::f32::consts::{PI, TAU};
+    let mut a = a % TAU;
+    if a > PI {
+        a -= TAU;
+    } else if a <= -PI {
+        a += TAU;
+    }
+    a
+}
+
+/// Follows an angle continuously past ±π: the new raw angle is taken as the nearest
+/// multiple of 2π to the previous unwrapped value.
+#[inline]
+pub fn unwrap_angle(previous: f32, raw: f32) -> f32 {
+    previous + wrap_angle(raw - previous)
+}

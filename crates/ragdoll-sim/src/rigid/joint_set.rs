@@ -1,0 +1,339 @@
+//! All joints of a world, in one array per joint type (Box2D/Jolt style: no pointers,
+//! no virtual calls in the inner loops), built from the scene's constraints.
+
+use super::ball::BallJoint;
+use super::body::{BodyInfo, BodyStates};
+use super::fixed::FixedJoint;
+use super::hinge::HingeJoint;
+use super::joint::{
+    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind,
+};
+use super::limits::{AngleGauge, AngleLimit, Swing};
+use super::slider::SliderJoint;
+use super::soft::StepContext;
+use super::spring::SpringJoint;
+use super::universal::UniversalJoint;
+use crate::scene::{BodyRef, ConstraintDesc, JointKind, LimitStyle};
+use crate::snapshot::{JointInstance, LimitShape};
+
+/// What the solver asks of every joint type.
+pub trait JointSolve {
+    /// Bodies and anchor.
+    fn frame(&self) -> &JointFrame;
+    /// Recomputes limit rows from the current pose, once per substep.
+    fn prepare(&mut self, s: &BodyStates);
+    /// Re-applies the accumulated impulses.
+    fn warm_start(&self, s: &mut BodyStates);
+    /// One Gauss–Seidel update; `use_bias` false in the relax pass.
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
+    /// Distance between the anchor as seen from each body (m).
+    fn gap(&self, s: &BodyStates) -> f32 {
+        let (pa, pb) = self.frame().anchors(s);
+        pa.distance(pb)
+    }
+    /// Excess of a limited angle beyond its limit (rad).
+    fn limit_violation(&self, s: &BodyStates) -> f32;
+}
+
+/// Every joint, by type.
+#[derive(Clone, Debug, Default)]
+pub struct JointSet {
+    /// Ball-and-socket joints.
+    pub ball: Vec<BallJoint>,
+    /// Hinges.
+    pub hinge: Vec<HingeJoint>,
+    /// Universal joints.
+    pub universal: Vec<UniversalJoint>,
+    /// Fixed joints.
+    pub fixed: Vec<FixedJoint>,
+    /// Sliders.
+    pub slider: Vec<SliderJoint>,
+    /// Springs.
+    pub spring: Vec<SpringJoint>,
+}
+
+/// Runs `$body` with `$j` bound to every joint of every type.
+macro_rules! for_each_joint {
+    ($set:expr, $j:ident => $body:expr) => {{
+        for $j in $set.ball.iter_mut() {
+            $body
+        }
+        for $j in $set.hinge.iter_mut() {
+            $body
+        }
+        for $j in $set.universal.iter_mut() {
+            $body
+        }
+        for $j in $set.fixed.iter_mut() {
+            $body
+        }
+        for $j in $set.slider.iter_mut() {
+            $body
+        }
+        for $j in $set.spring.iter_mut() {
+            $body
+        }
+    }};
+}
+
+/// Runs `$body` with `$j` bound to every joint, read-only.
+macro_rules! for_each_joint_ref {
+    ($set:expr, $j:ident => $body:expr) => {{
+        for $j in $set.ball.iter() {
+            $body
+        }
+        for $j in $set.hinge.iter() {
+            $body
+        }
+        for $j in $set.universal.iter() {
+            $body
+        }
+        for $j in $set.fixed.iter() {
+            $body
+        }
+        for $j in $set.slider.iter() {
+            $body
+        }
+        for $j in $set.spring.iter() {
+            $body
+        }
+    }};
+}
+
+impl JointSet {
+    /// Builds the joints of `constraints` on bodies at their rest pose. `anchor` is the
+    /// index of the static anchor (the world).
+    pub fn build(
+        constraints: &[ConstraintDesc],
+        s: &BodyStates,
+        info: &[BodyInfo],
+        anchor: usize,
+        g: f32,
+    ) -> JointSet {
+        let mut set = JointSet::default();
+        for c in constraints {
+            let a = c.body1.index();
+            let b = match c.body2 {
+                BodyRef::Body(id) => id.index(),
+                BodyRef::World => anchor,
+            };
+            let friction = |frame: &JointFrame| {
+                FrictionMotor::new(c.friction, info[a].mass, frame.local_a.length(), g)
+            };
+            match &c.kind {
+                JointKind::BallAndSocket {
+                    anchor: p,
+                    swing,
+                    twist,
+                    limit_style,
+                } => {
+                    let frame = JointFrame::new(s, a, b, *p);
+                    set.ball.push(BallJoint {
+                        frame,
+                        point: PointPart::default(),
+                        swing: swing.map(|l| Swing::new(&frame, s, &l, *limit_style)),
+                        twist: twist.map(|t| AngleLimit::twist(&frame, s, &t, *limit_style)),
+                        friction: friction(&frame),
+                    });
+                }
+                JointKind::Hinge {
+                    anchor: p,
+                    axis,
+                    limit,
+                } => {
+                    let frame = JointFrame::new(s, a, b, *p);
+                    set.hinge.push(HingeJoint {
+                        frame,
+                        point: PointPart::default(),
+                        align: AlignPart::new(&frame, s, *axis),
+                        gauge: AngleGauge::new(&frame, s, *axis),
+                        limit: limit
+                            .map(|r| AngleLimit::new(&frame, s, *axis, r, LimitStyle::Hard)),
+                        friction: friction(&frame),
+                    });
+                }
+                JointKind::Universal {
+                    anchor: p,
+                    shaft1,
+                    shaft2,
+                    swing,
+                    axis_ranges,
+                } => {
+                    let frame = JointFrame::new(s, a, b, *p);
+                    set.universal.push(UniversalJoint {
+                        frame,
+                        point: PointPart::default(),
+                        shaft_a: frame.dir_in_a(s, *shaft1),
+                        shaft_b: frame.dir_in_b(s, *shaft2),
+                        rest_dot: shaft1.dot(*shaft2),
+                        cross_row: AxisRow::new(RowKind::Equality),
+                        swing: swing.map(|l| Swing::new(&frame, s, &l, LimitStyle::Hard)),
+                        ranges: axis_ranges.map(|r| {
+                            [
+                                AngleLimit::new(&frame, s, *shaft1, r[0], LimitStyle::Hard),
+                                AngleLimit::new(&frame, s, *shaft2, r[1], LimitStyle::Hard),
+                            ]
+                        }),
+                        friction: friction(&frame),
+                    });
+                }
+                JointKind::Fixed => {
+                    let frame = JointFrame::new(s, a, b, s.com[a]);
+                    set.fixed.push(FixedJoint {
+                        frame,
+                        point: PointPart::default(),
+                        lock: AngularLock3::new(&frame, s),
+                    });
+                }
+                JointKind::Slider { axis } => {
+                    let frame = JointFrame::new(s, a, b, s.com[a]);
+                    set.slider.push(SliderJoint {
+                        frame,
+                        axis_b: frame.dir_in_b(s, *axis),
+                        impulse: [0.0; 2],
+                        lock: AngularLock3::new(&frame, s),
+                    });
+                }
+                JointKind::Spring {
+                    anchor1,
+                    anchor2,
+                    stretch,
+                    compress,
+                    damping,
+                    rest_length,
+                    min_length,
+                    max_length,
+                } => {
+                    let mut frame = JointFrame::new(s, a, b, *anchor1);
+                    frame.local_b = s.rot[b].inverse() * (*anchor2 - s.com[b]);
+                    set.spring.push(SpringJoint {
+                        frame,
+                        stretch: *stretch,
+                        compress: *compress,
+                        damping: *damping,
+                        rest_length: *rest_length,
+                        min_length: *min_length,
+                        max_length: *max_length,
+                        impulse: [0.0; 3],
+                    });
+                }
+            }
+        }
+        set
+    }
+
+    /// Number of joints.
+    pub fn len(&self) -> usize {
+        self.ball.len()
+            + self.hinge.len()
+            + self.universal.len()
+            + self.fixed.len()
+            + self.slider.len()
+            + self.spring.len()
+    }
+
+    /// True without joints.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Calls `f(a, b)` for the two bodies of every joint.
+    pub fn for_each_pair(&self, mut f: impl FnMut(usize, usize)) {
+        for_each_joint_ref!(self, j => { let fr = j.frame(); f(fr.a, fr.b) });
+    }
+
+    /// Per-substep preparation of joints touching an awake body.
+    pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
+        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.prepare(s) });
+    }
+
+    /// Warm start of joints touching an awake body.
+    pub fn warm_start(&self, s: &mut BodyStates, awake: &[bool]) {
+        for_each_joint_ref!(self, j => if touches_awake(j.frame(), awake) { j.warm_start(s) });
+    }
+
+    /// One iteration over joints touching an awake body.
+    pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
+        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.solve(s, ctx, use_bias) });
+    }
+
+    /// Largest joint gap now (m).
+    pub fn max_gap(&self, s: &BodyStates) -> f32 {
+        let mut m = 0.0f32;
+        for_each_joint_ref!(self, j => m = m.max(j.gap(s)));
+        m
+    }
+
+    /// Largest limit violation now (rad).
+    pub fn max_limit_violation(&self, s: &BodyStates) -> f32 {
+        let mut m = 0.0f32;
+        for_each_joint_ref!(self, j => m = m.max(j.limit_violation(s)));
+        m
+    }
+
+    /// Appends what to draw for every joint.
+    pub fn draw(&self, s: &BodyStates, out: &mut Vec<JointInstance>) {
+        for j in &self.ball {
+            let (anchor, anchor2) = j.frame.anchors(s);
+            let limit = j.swing.as_ref().map_or(LimitShape::None, |sw| {
+                let (axis, half_angle) = sw.draw_cone(&j.frame, s);
+                LimitShape::Cone { axis, half_angle }
+            });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
+            });
+        }
+        for j in &self.hinge {
+            let (anchor, anchor2) = j.frame.anchors(s);
+            let limit = j
+                .limit
+                .as_ref()
+                .map_or(LimitShape::None, |l| LimitShape::Arc {
+                    axis: s.rot[j.frame.b] * j.gauge.axis_b,
+                    reference: s.rot[j.frame.b] * j.gauge.ref_b,
+                    min: l.range.min,
+                    max: l.range.max,
+                });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
+            });
+        }
+        for j in &self.universal {
+            let (anchor, anchor2) = j.frame.anchors(s);
+            let limit = j.swing.as_ref().map_or(LimitShape::None, |sw| {
+                let (axis, half_angle) = sw.draw_cone(&j.frame, s);
+                LimitShape::Cone { axis, half_angle }
+            });
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit,
+            });
+        }
+        for j in &self.fixed {
+            let (anchor, anchor2) = j.frame.anchors(s);
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit: LimitShape::None,
+            });
+        }
+        for j in &self.spring {
+            let (anchor, anchor2) = j.frame.anchors(s);
+            out.push(JointInstance {
+                anchor,
+                anchor2,
+                limit: LimitShape::None,
+            });
+        }
+    }
+}
+
+#[inline]
+fn touches_awake(f: &JointFrame, awake: &[bool]) -> bool {
+    awake[f.a] || awake[f.b]
+}

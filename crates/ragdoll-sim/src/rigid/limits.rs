@@ -1,0 +1,342 @@
+//! Joint limits: swing (Doom 3 cone and pyramid), twist, and angle ranges (hinge,
+//! the PyODE universal joint's stops), hard or the PyODE tutorial's soft style.
+//!
+//! Every limit becomes one-dimensional angular rows ([`AxisRow`]) whose value `C` is
+//! positive inside the limit; rows are recomputed from the current orientations each
+//! substep. Doom 3 semantics: the swing *axis* (cone or pyramid) is attached to body2,
+//! the *shaft* to body1.
+
+use super::body::BodyStates;
+use super::joint::{AlignPart, AxisRow, JointFrame, RowKind, unwrap_angle};
+use super::soft::StepContext;
+use crate::scene::{AngleRange, LimitStyle, SwingLimit, TwistLimit};
+use glam::{Quat, Vec3};
+
+/// Rows further than this from their bound (rad) are not solved.
+const MARGIN: f32 = 0.25;
+/// Cone half-angles below this (rad) are solved as an exact alignment.
+const TIGHT_CONE: f32 = 1e-3;
+
+/// The row kind of a limit style.
+pub fn row_kind(style: LimitStyle) -> RowKind {
+    match style {
+        LimitStyle::Hard => RowKind::Limit,
+        LimitStyle::Soft { torque } => RowKind::SoftLimit { k: torque },
+    }
+}
+
+/// A swing limit in body space.
+#[derive(Clone, Copy, Debug)]
+pub enum Swing {
+    /// Shaft within `half_angle` of the axis; `C = half_angle − ∠(axis, shaft)`.
+    Cone {
+        /// Axis in b.
+        axis_b: Vec3,
+        /// Shaft in a.
+        shaft_a: Vec3,
+        /// Half-angle (rad).
+        half_angle: f32,
+        /// The row.
+        row: AxisRow,
+    },
+    /// A 0° cone: shaft and axis locked together (two bilateral rows).
+    Tight(AlignPart),
+    /// Shaft inside four planes through the axis, tilted by ±half_angle1 towards `side1`
+    /// and ±half_angle2 towards `side2`: `C_k = −shaft · n_k`.
+    Pyramid {
+        /// Axis in b.
+        axis_b: Vec3,
+        /// First side direction in b (perpendicular to the axis, roll applied).
+        side1_b: Vec3,
+        /// Second side direction in b.
+        side2_b: Vec3,
+        /// Shaft in a.
+        shaft_a: Vec3,
+        /// Half-angles.
+        half: [f32; 2],
+        /// One row per side plane.
+        rows: [AxisRow; 4],
+    },
+}
+
+impl Swing {
+    /// Body-space limit from the scene's world-space description at rest.
+    pub fn new(f: &JointFrame, s: &BodyStates, limit: &SwingLimit, style: LimitStyle) -> Swing {
+        let kind = row_kind(style);
+        match *limit {
+            SwingLimit::Cone {
+                axis,
+                half_angle,
+                shaft,
+            } => {
+                if half_angle < TIGHT_CONE && kind == RowKind::Limit {
+                    // Align the shaft (in a) with the axis (in b). At rest they may differ;
+                    // the tight cone then holds the shaft on the axis from the first step.
+                    let mut p = AlignPart::new(f, s, axis);
+                    p.local_a = f.dir_in_a(s, shaft);
+                    Swing::Tight(p)
+                } else {
+                    Swing::Cone {
+                        axis_b: f.dir_in_b(s, axis),
+                        shaft_a: f.dir_in_a(s, shaft),
+                        half_angle,
+                        row: AxisRow::new(kind),
+                    }
+                }
+            }
+            SwingLimit::Pyramid {
+                axis,
+                half_angle1,
+                half_angle2,
+                roll,
+                shaft,
+            } => {
+                let (u, v) = axis.any_orthonormal_pair();
+                let r = Quat::from_axis_angle(axis, roll);
+                Swing::Pyramid {
+                    axis_b: f.dir_in_b(s, axis),
+                    side1_b: f.dir_in_b(s, r * u),
+                    side2_b: f.dir_in_b(s, r * v),
+                    shaft_a: f.dir_in_a(s, shaft),
+                    half: [half_angle1, half_angle2],
+                    rows: [AxisRow::new(kind); 4],
+                }
+            }
+        }
+    }
+
+    /// Plane normals of the pyramid, world: the plane through the axis tilted by `h`
+    /// towards `side` has normal `cos h · side − sin h · axis` (outward).
+    fn pyramid_normals(axis: Vec3, s1: Vec3, s2: Vec3, half: [f32; 2]) -> [Vec3; 4] {
+        let (c1, n1) = (half[0].cos(), half[0].sin());
+        let (c2, n2) = (half[1].cos(), half[1].sin());
+        [
+            c1 * s1 - n1 * axis,
+            -c1 * s1 - n1 * axis,
+            c2 * s2 - n2 * axis,
+            -c2 * s2 - n2 * axis,
+        ]
+    }
+
+    /// Recomputes the rows from the current pose.
+    pub fn update(&mut self, f: &JointFrame, s: &BodyStates) {
+        match self {
+            Swing::Cone {
+                axis_b,
+                shaft_a,
+                half_angle,
+                row,
+            } => {
+                let a = s.rot[f.b] * *axis_b;
+                let sh = s.rot[f.a] * *shaft_a;
+                let phi = a.dot(sh).clamp(-1.0, 1.0).acos();
+                // φ̇ = n · (ω_a − ω_b) with n the unit rotation axis from `a` to the shaft.
+                let n = a.cross(sh);
+                let n = if n.length_squared() > 1e-12 {
+                    n.normalize()
+                } else {
+                    a.any_orthonormal_vector()
+                };
+                row.set(-n, *half_angle - phi, MARGIN);
+            }
+            Swing::Tight(_) => {}
+            Swing::Pyramid {
+                axis_b,
+                side1_b,
+                side2_b,
+                shaft_a,
+                half,
+                rows,
+            } => {
+                let rb = s.rot[f.b];
+                let normals =
+                    Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half);
+                let sh = s.rot[f.a] * *shaft_a;
+                for (row, n) in rows.iter_mut().zip(normals) {
+                    // d(shaft·n)/dt = (ω_a − ω_b)·(shaft × n).
+                    let c = -sh.dot(n);
+                    row.set(-sh.cross(n), c, MARGIN);
+                }
+            }
+        }
+    }
+
+    /// How far outside the limit the shaft is now (rad, 0 inside).
+    pub fn violation(&self, f: &JointFrame, s: &BodyStates) -> f32 {
+        match self {
+            Swing::Cone {
+                axis_b,
+                shaft_a,
+                half_angle,
+                ..
+            } => {
+                let a = s.rot[f.b] * *axis_b;
+                let sh = s.rot[f.a] * *shaft_a;
+                (a.dot(sh).clamp(-1.0, 1.0).acos() - half_angle).max(0.0)
+            }
+            Swing::Tight(p) => {
+                let a = s.rot[f.b] * p.local_b;
+                let sh = s.rot[f.a] * p.local_a;
+                a.dot(sh).clamp(-1.0, 1.0).acos()
+            }
+            Swing::Pyramid {
+                axis_b,
+                side1_b,
+                side2_b,
+                shaft_a,
+                half,
+                ..
+            } => {
+                let rb = s.rot[f.b];
+                let sh = s.rot[f.a] * *shaft_a;
+                Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half)
+                    .iter()
+                    .map(|n| sh.dot(*n).clamp(-1.0, 1.0).asin().max(0.0))
+                    .fold(0.0, f32::max)
+            }
+        }
+    }
+
+    /// Re-applies accumulated impulses.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        match self {
+            Swing::Cone { row, .. } => row.warm_start(f, s),
+            Swing::Tight(p) => p.warm_start(f, s),
+            Swing::Pyramid { rows, .. } => rows.iter().for_each(|r| r.warm_start(f, s)),
+        }
+    }
+
+    /// One update of every row.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        match self {
+            Swing::Cone { row, .. } => row.solve(f, s, ctx, use_bias),
+            Swing::Tight(p) => p.solve(f, s, ctx, use_bias),
+            Swing::Pyramid { rows, .. } => {
+                rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias))
+            }
+        }
+    }
+
+    /// World axis and half-angle for drawing (the pyramid drawn as its wider cone).
+    pub fn draw_cone(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
+        match self {
+            Swing::Cone {
+                axis_b, half_angle, ..
+            } => (s.rot[f.b] * *axis_b, *half_angle),
+            Swing::Tight(p) => (s.rot[f.b] * p.local_b, 0.0),
+            Swing::Pyramid { axis_b, half, .. } => (s.rot[f.b] * *axis_b, half[0].max(half[1])),
+        }
+    }
+}
+
+/// The rotation of body1 relative to body2 about an axis, measured from the rest pose,
+/// right-handed, followed continuously past ±π. Reference directions perpendicular to
+/// the axis are fixed in each body; body2's is first swung onto the plane perpendicular
+/// to body1's axis by the shortest arc, so swing does not read as twist.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleGauge {
+    /// Axis in a.
+    pub axis_a: Vec3,
+    /// Axis in b.
+    pub axis_b: Vec3,
+    /// Reference in a.
+    pub ref_a: Vec3,
+    /// Reference in b.
+    pub ref_b: Vec3,
+    /// Last unwrapped angle (rad).
+    pub angle: f32,
+}
+
+impl AngleGauge {
+    /// A gauge about the world `axis` at rest, reading 0 now.
+    pub fn new(f: &JointFrame, s: &BodyStates, axis: Vec3) -> AngleGauge {
+        let r = axis.any_orthonormal_vector();
+        AngleGauge {
+            axis_a: f.dir_in_a(s, axis),
+            axis_b: f.dir_in_b(s, axis),
+            ref_a: f.dir_in_a(s, r),
+            ref_b: f.dir_in_b(s, r),
+            angle: 0.0,
+        }
+    }
+
+    /// Current world axis (body1's) and unwrapped angle, without updating the memory.
+    pub fn measure(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
+        let ta = s.rot[f.a] * self.axis_a;
+        let tb = s.rot[f.b] * self.axis_b;
+        let ra = s.rot[f.a] * self.ref_a;
+        let rb = Quat::from_rotation_arc(tb, ta) * (s.rot[f.b] * self.ref_b);
+        let raw = ta.dot(rb.cross(ra)).atan2(rb.dot(ra));
+        (ta, unwrap_angle(self.angle, raw))
+    }
+}
+
+/// A `[min, max]` range on an [`AngleGauge`]: a hinge limit, a twist limit, one axis
+/// of a universal joint.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleLimit {
+    /// The angle measured.
+    pub gauge: AngleGauge,
+    /// Bounds (rad).
+    pub range: AngleRange,
+    /// Lower and upper rows.
+    pub rows: [AxisRow; 2],
+}
+
+impl AngleLimit {
+    /// A limit about the world `axis` at rest.
+    pub fn new(
+        f: &JointFrame,
+        s: &BodyStates,
+        axis: Vec3,
+        range: AngleRange,
+        style: LimitStyle,
+    ) -> AngleLimit {
+        let kind = row_kind(style);
+        AngleLimit {
+            gauge: AngleGauge::new(f, s, axis),
+            range,
+            rows: [AxisRow::new(kind); 2],
+        }
+    }
+
+    /// From a twist limit.
+    pub fn twist(f: &JointFrame, s: &BodyStates, t: &TwistLimit, style: LimitStyle) -> AngleLimit {
+        AngleLimit::new(
+            f,
+            s,
+            t.axis,
+            AngleRange {
+                min: t.min,
+                max: t.max,
+            },
+            style,
+        )
+    }
+
+    /// Measures the angle (remembering it for unwrapping) and sets the rows.
+    pub fn update(&mut self, f: &JointFrame, s: &BodyStates) {
+        let (axis, angle) = self.gauge.measure(f, s);
+        self.gauge.angle = angle;
+        self.rows[0].set(axis, angle - self.range.min, MARGIN);
+        self.rows[1].set(-axis, self.range.max - angle, MARGIN);
+    }
+
+    /// Excess beyond the range now (rad).
+    pub fn violation(&self, f: &JointFrame, s: &BodyStates) -> f32 {
+        let (_, a) = self.gauge.measure(f, s);
+        (self.range.min - a).max(a - self.range.max).max(0.0)
+    }
+
+    /// Re-applies accumulated impulses.
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        self.rows.iter().for_each(|r| r.warm_start(f, s));
+    }
+
+    /// One update of both rows.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        self.rows
+            .iter_mut()
+            .for_each(|r| r.solve(f, s, ctx, use_bias));
+    }
+}

@@ -1,0 +1,89 @@
+//! Universal joint: a ball-and-socket that also keeps body1's shaft at its rest angle
+//! (normally 90°) to body2's shaft, so neither body twists about the shafts. Optional
+//! Doom 3 swing limit on shaft1 and PyODE lo/hi stops about each shaft.
+
+use super::body::BodyStates;
+use super::joint::{AxisRow, FrictionMotor, JointFrame, PointPart};
+use super::joint_set::JointSolve;
+use super::limits::{AngleLimit, Swing};
+use super::soft::StepContext;
+use glam::Vec3;
+
+/// A universal joint.
+#[derive(Clone, Debug)]
+pub struct UniversalJoint {
+    /// Bodies and anchor.
+    pub frame: JointFrame,
+    /// The shared point.
+    pub point: PointPart,
+    /// Shaft 1 in a.
+    pub shaft_a: Vec3,
+    /// Shaft 2 in b.
+    pub shaft_b: Vec3,
+    /// `shaft1 · shaft2` at rest.
+    pub rest_dot: f32,
+    /// The row keeping `shaft1 · shaft2` at rest: `Ċ = (ω_a − ω_b)·(s₁ × s₂)`.
+    pub cross_row: AxisRow,
+    /// Swing limit on shaft 1.
+    pub swing: Option<Swing>,
+    /// Stops about shaft 1 and shaft 2.
+    pub ranges: Option<[AngleLimit; 2]>,
+    /// Joint friction.
+    pub friction: FrictionMotor,
+}
+
+impl JointSolve for UniversalJoint {
+    fn frame(&self) -> &JointFrame {
+        &self.frame
+    }
+
+    fn prepare(&mut self, s: &BodyStates) {
+        let f = &self.frame;
+        let s1 = s.rot[f.a] * self.shaft_a;
+        let s2 = s.rot[f.b] * self.shaft_b;
+        self.cross_row
+            .set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
+        if let Some(sw) = &mut self.swing {
+            sw.update(f, s);
+        }
+        if let Some(r) = &mut self.ranges {
+            r.iter_mut().for_each(|l| l.update(f, s));
+        }
+    }
+
+    fn warm_start(&self, s: &mut BodyStates) {
+        let f = &self.frame;
+        self.friction.warm_start(f, s);
+        if let Some(sw) = &self.swing {
+            sw.warm_start(f, s);
+        }
+        if let Some(r) = &self.ranges {
+            r.iter().for_each(|l| l.warm_start(f, s));
+        }
+        self.cross_row.warm_start(f, s);
+        self.point.warm_start(f, s);
+    }
+
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let f = &self.frame;
+        self.friction.solve(f, s, ctx);
+        if let Some(sw) = &mut self.swing {
+            sw.solve(f, s, ctx, use_bias);
+        }
+        if let Some(r) = &mut self.ranges {
+            r.iter_mut().for_each(|l| l.solve(f, s, ctx, use_bias));
+        }
+        self.cross_row.solve(f, s, ctx, use_bias);
+        self.point.solve(f, s, ctx, use_bias);
+    }
+
+    fn limit_violation(&self, s: &BodyStates) -> f32 {
+        let f = &self.frame;
+        let sw = self.swing.as_ref().map_or(0.0, |l| l.violation(f, s));
+        let r = self
+            .ranges
+            .as_ref()
+            .map_or(0.0, |r| r[0].violation(f, s).max(r[1].violation(f, s)));
+        sw.max(r)
+    }
+}

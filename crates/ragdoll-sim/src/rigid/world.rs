@@ -1,0 +1,430 @@
+//! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
+//! [`Method`] trait.
+
+use super::body::{BodyInfo, BodyStates, collider};
+use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
+use super::island::Islands;
+use super::joint_set::JointSet;
+use super::solver;
+use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+use crate::metrics::potential_energy;
+use crate::scene::{
+    BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, mass_props, validate,
+};
+use crate::snapshot::{BodyInstance, BodyRole, ContactInstance, RenderSnapshot};
+use glam::{Quat, Vec3};
+use parry3d::math::Pose as PPose;
+use parry3d::query::{self, Ray};
+use parry3d::shape::SharedShape;
+
+/// The impulse-based multibody world (right, red).
+pub struct MultibodyWorld {
+    scene: SceneDesc,
+    states: BodyStates,
+    info: Vec<BodyInfo>,
+    joints: JointSet,
+    contacts: Contacts,
+    islands: Islands,
+    awake: Vec<bool>,
+    dynamic: Vec<bool>,
+    time: f64,
+    grab: Option<Grab>,
+}
+
+impl MultibodyWorld {
+    /// Builds the world from a scene: validates it, computes mass properties, creates the
+    /// joints at the rest pose and the contact exclusions (jointed pairs, pairs of the same
+    /// figure that overlap at rest).
+    pub fn new(scene: &SceneDesc) -> Result<MultibodyWorld, SceneError> {
+        validate(scene)?;
+        let n = scene.bodies.len();
+        // Figures: connected components of the joint graph.
+        let mut figure: Vec<u32> = (0..n as u32).collect();
+        fn root(f: &mut [u32], mut i: u32) -> u32 {
+            while f[i as usize] != i {
+                i = f[i as usize];
+            }
+            i
+        }
+        for c in &scene.constraints {
+            if let BodyRef::Body(b) = c.body2 {
+                let (ra, rb) = (root(&mut figure, c.body1.0), root(&mut figure, b.0));
+                figure[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        let mut states = BodyStates::default();
+        let mut info = Vec::with_capacity(n);
+        for (i, b) in scene.bodies.iter().enumerate() {
+            let mp = mass_props(b)?;
+            let shape = collider(&b.shape).ok_or_else(|| SceneError::Degenerate {
+                body: b.name.clone(),
+                what: "its convex hull cannot be built".into(),
+            })?;
+            let fig = root(&mut figure, i as u32);
+            info.push(BodyInfo::new(b, &mp, shape, fig));
+            let com = b.pose.transform_point(mp.local_com);
+            let (v, w) = if b.is_fixed() {
+                (Vec3::ZERO, Vec3::ZERO)
+            } else {
+                (b.linear_velocity, b.angular_velocity)
+            };
+            states.push(com, b.pose.rotation, v, w);
+        }
+        // The static anchor: the world and the ground.
+        states.push(Vec3::ZERO, Quat::IDENTITY, Vec3::ZERO, Vec3::ZERO);
+        let dynamic: Vec<bool> = info.iter().map(|b: &BodyInfo| !b.fixed).collect();
+        let g = scene.settings.gravity.length();
+        let joints = JointSet::build(&scene.constraints, &states, &info, n, g);
+
+        let mut contacts = Contacts::default();
+        joints.for_each_pair(|a, b| {
+            if b < n {
+                contacts.excluded.push((a.min(b) as u32, a.max(b) as u32));
+            }
+        });
+        for a in 0..n {
+            for b in a + 1..n {
+                if info[a].figure != info[b].figure || !may_collide(&info, a, b) {
+                    continue;
+                }
+                let (pa, pb) = (shape_pose(&states, &info, a), shape_pose(&states, &info, b));
+                let overlap = query::contact(&pa, &*info[a].collider, &pb, &*info[b].collider, 0.0)
+                    .ok()
+                    .flatten()
+                    .is_some_and(|c| c.dist < -1e-3);
+                if overlap {
+                    contacts.excluded.push((a as u32, b as u32));
+                }
+            }
+        }
+        contacts.excluded.sort_unstable();
+        contacts.excluded.dedup();
+        contacts.ground = scene.settings.ground.map(|gr| {
+            let rot = Quat::from_rotation_z(gr.tilt);
+            let origin = Vec3::new(0.0, gr.height, 0.0);
+            GroundCollider {
+                shape: SharedShape::halfspace(Vec3::Y),
+                pose: PPose::from_parts(origin, rot),
+                normal: gr.normal(),
+                origin,
+                friction: gr.friction,
+                restitution: gr.restitution,
+            }
+        });
+        let islands = Islands::new(&states, n);
+        let mut awake = vec![false; n + 1];
+        solver::refresh_awake(&mut states, &info, &islands, &mut awake, &dynamic);
+        Ok(MultibodyWorld {
+            scene: scene.clone(),
+            states,
+            info,
+            joints,
+            contacts,
+            islands,
+            awake,
+            dynamic,
+            time: 0.0,
+            grab: None,
+        })
+    }
+
+    /// Deepest overlap among colliding pairs and the ground now (m).
+    fn max_penetration(&self) -> f32 {
+        self.deepest_overlap().map_or(0.0, |d| d.0)
+    }
+
+    /// The deepest overlap now and its pair (body names; `"ground"` for the plane), for
+    /// diagnostics.
+    pub fn deepest_overlap(&self) -> Option<(f32, String, String)> {
+        let n = self.info.len();
+        let mut deepest = 0.0f32;
+        let mut which = None;
+        for p in &self.contacts.pairs {
+            if !p.touching() {
+                continue;
+            }
+            let (a, b) = (p.a as usize, p.b as usize);
+            let pa = shape_pose(&self.states, &self.info, a);
+            if b == n {
+                // Against the plane: depth of the shape's support point along −n.
+                let g = self
+                    .contacts
+                    .ground
+                    .as_ref()
+                    .expect("ground pair without ground");
+                if let Some(sm) = self.info[a].collider.as_support_map() {
+                    let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
+                    let p = pa.transform_point(local);
+                    let depth = -g.normal.dot(p - g.origin);
+                    if depth > deepest {
+                        deepest = depth;
+                        which = Some((a, b));
+                    }
+                }
+                continue;
+            }
+            let pb = shape_pose(&self.states, &self.info, b);
+            if let Ok(Some(c)) = query::contact(
+                &pa,
+                &*self.info[a].collider,
+                &pb,
+                &*self.info[b].collider,
+                0.0,
+            ) && -c.dist > deepest
+            {
+                deepest = -c.dist;
+                which = Some((a, b));
+            }
+        }
+        let name = |i: usize| {
+            self.info
+                .get(i)
+                .map_or("ground".to_string(), |b| b.name.clone())
+        };
+        which.map(|(a, b)| (deepest, name(a), name(b)))
+    }
+
+    /// Current pose of body `i`'s shape frame.
+    fn pose(&self, i: usize) -> Pose {
+        let q = self.states.rot[i];
+        Pose {
+            position: self.states.com[i] - q * self.info[i].local_com,
+            rotation: q,
+        }
+    }
+}
+
+impl Method for MultibodyWorld {
+    fn kind(&self) -> MethodKind {
+        MethodKind::Multibody
+    }
+
+    fn solver_label(&self) -> String {
+        let s = &self.scene.settings;
+        format!(
+            "soft step, {} substeps × {} iterations",
+            s.substeps, s.iterations
+        )
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn step(&mut self) {
+        if let Some(g) = self.grab {
+            // A stiff, critically damped mouse spring on the grabbed point (velocity level).
+            let i = g.body.index();
+            if i < self.info.len() && self.dynamic[i] {
+                self.islands.asleep[i] = false;
+                let q = self.states.rot[i];
+                let r = q * (g.local_point - self.info[i].local_com);
+                let p = self.states.com[i] + r;
+                let dt = self.scene.settings.timestep;
+                let v = self.states.point_velocity(i, r);
+                let dv = (g.target - p) * (0.5 / dt) - v;
+                self.states.lin_vel[i] += dv * 0.5;
+            }
+        }
+        solver::step(
+            &mut self.states,
+            &self.info,
+            &mut self.joints,
+            &mut self.contacts,
+            &mut self.islands,
+            &mut self.awake,
+            &self.dynamic,
+            &self.scene.settings,
+            self.time as f32,
+        );
+        self.time += self.scene.settings.timestep as f64;
+    }
+
+    fn set_settings(&mut self, settings: &Settings) {
+        self.scene.settings = settings.clone();
+    }
+
+    fn settings(&self) -> &Settings {
+        &self.scene.settings
+    }
+
+    fn snapshot(&self, out: &mut RenderSnapshot) {
+        out.clear();
+        for (i, b) in self.info.iter().enumerate() {
+            let role = if self.grab.is_some_and(|g| g.body.index() == i) {
+                BodyRole::Grabbed
+            } else if b.fixed {
+                BodyRole::Fixed
+            } else if b.projectile {
+                BodyRole::Projectile
+            } else if self.islands.asleep[i] {
+                BodyRole::Asleep
+            } else {
+                BodyRole::Dynamic
+            };
+            out.bodies.push(BodyInstance {
+                body: BodyId(i as u32),
+                shape: b.shape.clone(),
+                pose: self.pose(i),
+                role,
+            });
+        }
+        for p in &self.contacts.pairs {
+            for c in &p.points {
+                let (a, b) = (p.a as usize, p.b as usize);
+                let pa = self.states.com[a] + self.states.rot[a] * c.local_a;
+                let pb = self.states.com[b] + self.states.rot[b] * c.local_b;
+                out.contacts.push(ContactInstance {
+                    point: (pa + pb) * 0.5,
+                    normal: c.normal,
+                    depth: -c.normal.dot(pb - pa),
+                });
+            }
+        }
+        self.joints.draw(&self.states, &mut out.joints);
+    }
+
+    fn sample(&self) -> Sample {
+        let mut kinetic = 0.0f64;
+        let mut potential = 0.0f64;
+        for (i, b) in self.info.iter().enumerate() {
+            if b.fixed {
+                continue;
+            }
+            let v = self.states.lin_vel[i];
+            let w = self.states.ang_vel[i];
+            let q = self.states.rot[i];
+            // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
+            let wb = q.inverse() * w;
+            kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
+                + 0.5 * wb.dot(b.inertia * wb) as f64;
+            potential += potential_energy(&self.scene, b.mass, self.states.com[i]);
+        }
+        Sample {
+            energy: kinetic + potential,
+            kinetic,
+            max_penetration: self.max_penetration(),
+            max_joint_gap: self.joints.max_gap(&self.states),
+            max_limit_violation_deg: self.joints.max_limit_violation(&self.states).to_degrees(),
+            max_bone_stretch: None,
+            all_asleep: (0..self.info.len()).all(|i| !self.dynamic[i] || self.islands.asleep[i]),
+        }
+    }
+
+    fn body_count(&self) -> usize {
+        self.info.len()
+    }
+
+    fn particle_count(&self) -> usize {
+        0
+    }
+
+    fn body_states(&self, out: &mut Vec<BodyState>) {
+        out.clear();
+        for i in 0..self.info.len() {
+            out.push(BodyState {
+                com: self.states.com[i],
+                orientation: self.states.rot[i],
+                linear_velocity: self.states.lin_vel[i],
+                angular_velocity: self.states.ang_vel[i],
+            });
+        }
+    }
+
+    fn particle_positions(&self, out: &mut Vec<Vec3>) {
+        out.clear();
+    }
+
+    fn raycast(&self, origin: Vec3, dir: Vec3) -> Option<RayHit> {
+        let ray = Ray::new(origin, dir);
+        let mut best: Option<RayHit> = None;
+        for (i, b) in self.info.iter().enumerate() {
+            let pose = shape_pose(&self.states, &self.info, i);
+            if let Some(t) = b.collider.cast_ray(&pose, &ray, f32::MAX, true)
+                && best.is_none_or(|h| t < h.distance)
+            {
+                best = Some(RayHit {
+                    body: BodyId(i as u32),
+                    distance: t,
+                    local_point: self.pose(i).inverse_transform_point(origin + dir * t),
+                });
+            }
+        }
+        best
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab = grab;
+    }
+
+    fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
+        let i = self.info.len();
+        let (Ok(mp), Some(shape)) = (mass_props(desc), collider(&desc.shape)) else {
+            // A degenerate projectile is not added; the caller gets the id it would have had.
+            return BodyId(i as u32);
+        };
+        let mut b = BodyInfo::new(desc, &mp, shape, u32::MAX - i as u32);
+        b.projectile = true;
+        self.info.push(b);
+        // Insert before the static anchor, which stays last.
+        let com = desc.pose.transform_point(mp.local_com);
+        let s = &mut self.states;
+        s.com.insert(i, com);
+        s.rot.insert(i, desc.pose.rotation);
+        s.lin_vel.insert(i, desc.linear_velocity);
+        s.ang_vel.insert(i, desc.angular_velocity);
+        s.inv_mass.insert(i, 0.0);
+        s.inv_inertia.insert(i, glam::Mat3::ZERO);
+        self.dynamic.push(!desc.is_fixed());
+        self.awake.insert(i, false);
+        self.islands.push(&self.states, i);
+        // Joints and contact pairs that named the anchor by index follow it.
+        let old_anchor = i;
+        let new_anchor = i + 1;
+        self.joints_retarget(old_anchor, new_anchor);
+        self.contacts.pairs.clear();
+        solver::refresh_awake(
+            &mut self.states,
+            &self.info,
+            &self.islands,
+            &mut self.awake,
+            &self.dynamic,
+        );
+        BodyId(i as u32)
+    }
+}
+
+impl MultibodyWorld {
+    /// Moves references to the static anchor from index `old` to `new`.
+    fn joints_retarget(&mut self, old: usize, new: usize) {
+        let fix = |b: &mut usize| {
+            if *b == old {
+                *b = new;
+            }
+        };
+        self.joints
+            .ball
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .hinge
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .universal
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .fixed
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .slider
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+        self.joints
+            .spring
+            .iter_mut()
+            .for_each(|j| fix(&mut j.frame.b));
+    }
+}

@@ -1,0 +1,218 @@
+//! Test 9 (paper section 5.2.1, table 1): bytes per simulation as the bones grow from 2
+//! to 4096, measured with a counting global allocator rather than estimated.
+//!
+//! [`CountingAlloc`] wraps the system allocator and keeps the number of live heap bytes
+//! and their high-water mark in two relaxed atomics: one `fetch_add`/`fetch_sub` and one
+//! `fetch_max` per allocation, noise next to the allocation itself. The `ragdoll-lab`
+//! binary installs it as its `#[global_allocator]`; a library user who does not install
+//! it gets an error from this bench instead of zeros.
+//!
+//! What is counted: every heap byte a method holds after it has been built from the
+//! scene and stepped [`STEPS`] frames (so contact caches, islands and scratch buffers
+//! have grown to their working size), minus what was live before it was built. The
+//! scene description itself was allocated before and is not counted. Stack and static
+//! memory are not heap and are not counted; neither method keeps state there.
+
+use super::table::Table;
+use super::{Flavor, Report, Size, progress, scenes};
+use crate::AppError;
+use serde_json::{Value, json};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Frames stepped before the live bytes are read.
+pub const STEPS: usize = 10;
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+/// The system allocator, counting live bytes and their peak.
+pub struct CountingAlloc;
+
+fn grew(bytes: usize) {
+    let now = LIVE.fetch_add(bytes, Ordering::Relaxed) + bytes;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+fn shrank(bytes: usize) {
+    LIVE.fetch_sub(bytes, Ordering::Relaxed);
+}
+
+// SAFETY: every call forwards to `System` with the caller's arguments unchanged; the
+// counters are only bookkeeping and never affect the pointers returned.
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: the caller upholds `GlobalAlloc::alloc`'s contract, which we forward.
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as for `alloc`.
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from this allocator, i.e. from `System`, with `layout`.
+        unsafe { System.dealloc(ptr, layout) };
+        shrank(layout.size());
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: `ptr` came from `System` with `layout`; the caller upholds the rest.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            if new_size >= layout.size() {
+                grew(new_size - layout.size());
+            } else {
+                shrank(layout.size() - new_size);
+            }
+        }
+        p
+    }
+}
+
+/// Heap bytes live now (0 forever if [`CountingAlloc`] is not the global allocator).
+pub fn live_bytes() -> usize {
+    LIVE.load(Ordering::Relaxed)
+}
+
+/// Highest [`live_bytes`] since the last [`reset_peak`].
+pub fn peak_bytes() -> usize {
+    PEAK.load(Ordering::Relaxed)
+}
+
+/// Starts a new high-water mark at the bytes live now.
+pub fn reset_peak() {
+    PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
+}
+
+/// Whether [`CountingAlloc`] is the global allocator of this process.
+pub fn is_installed() -> bool {
+    let before = live_bytes();
+    let probe = std::hint::black_box(Vec::<u8>::with_capacity(4096));
+    let during = live_bytes();
+    drop(probe);
+    during >= before + 4096
+}
+
+/// What one method holds for one scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Footprint {
+    /// Heap bytes held after building and stepping.
+    pub bytes: usize,
+    /// Highest heap bytes held at any moment while building and stepping.
+    pub peak_bytes: usize,
+}
+
+/// Builds `flavor` for `scene`, steps it [`STEPS`] frames and reads its heap footprint.
+pub fn footprint(flavor: Flavor, scene: &ragdoll_sim::SceneDesc) -> Result<Footprint, AppError> {
+    if !is_installed() {
+        return Err(AppError::Other(
+            "the memory bench needs ragdoll_lab::bench::memory::CountingAlloc as the global \
+             allocator (the ragdoll-lab binary installs it)"
+                .into(),
+        ));
+    }
+    let base = live_bytes();
+    reset_peak();
+    let mut method = flavor.build(scene)?;
+    for _ in 0..STEPS {
+        method.step();
+    }
+    let held = live_bytes().saturating_sub(base);
+    let peak = peak_bytes().saturating_sub(base);
+    drop(method);
+    Ok(Footprint {
+        bytes: held,
+        peak_bytes: peak,
+    })
+}
+
+/// The paper's table 1: bones, particle-based KB, constraint-based KB.
+pub const PAPER: [(usize, f64, f64); 12] = [
+    (2, 3.5, 2.0),
+    (4, 12.0, 4.0),
+    (8, 24.0, 4.0),
+    (16, 28.0, 16.0),
+    (32, 76.0, 32.0),
+    (64, 95.0, 60.0),
+    (128, 176.0, 128.0),
+    (256, 386.0, 264.0),
+    (512, 886.0, 512.0),
+    (1024, 1308.0, 1012.0),
+    (2048, 3000.0, 2032.0),
+    (4096, 6000.0, 4016.0),
+];
+
+/// Runs test 9.
+pub fn run(size: Size) -> Result<Report, AppError> {
+    let rows_wanted: &[(usize, f64, f64)] = match size {
+        Size::Full => &PAPER,
+        Size::Quick => &PAPER[..2],
+    };
+    let mut table = Table::new(
+        format!(
+            "Test 9 (table 1): heap memory per simulation, small boxes stacked with gaps, \
+             after building and {STEPS} frames. KB = 1024 bytes."
+        ),
+        &[
+            "Bones",
+            "paper particle KB",
+            "paper constraint KB",
+            "particle(paper) KB",
+            "B/bone",
+            "particle(improved) KB",
+            "B/bone",
+            "multibody KB",
+            "B/bone",
+        ],
+    );
+    let mut rows = Vec::new();
+    for &(bones, paper_particle, paper_constraint) in rows_wanted {
+        progress(&format!("memory: {bones} bones"));
+        let scene = scenes::stacked_boxes(bones);
+        let mut cells = vec![
+            bones.to_string(),
+            format!("{paper_particle}"),
+            format!("{paper_constraint}"),
+        ];
+        let mut row = serde_json::Map::new();
+        row.insert("bones".into(), json!(bones));
+        row.insert(
+            "paper_particle_bytes".into(),
+            json!(paper_particle * 1024.0),
+        );
+        row.insert(
+            "paper_constraint_bytes".into(),
+            json!(paper_constraint * 1024.0),
+        );
+        for flavor in Flavor::ALL {
+            let f = footprint(flavor, &scene)?;
+            cells.push(format!("{:.1}", f.bytes as f64 / 1024.0));
+            cells.push(format!("{:.0}", f.bytes as f64 / bones as f64));
+            row.insert(
+                flavor.key().into(),
+                json!({
+                    "bytes": f.bytes,
+                    "bytes_per_bone": f.bytes as f64 / bones as f64,
+                    "peak_bytes": f.peak_bytes,
+                }),
+            );
+        }
+        table.row(cells);
+        rows.push(Value::Object(row));
+    }
+    table.note("Goal (issue 6): at most 512 B per bone for both methods.");
+    Ok(Report {
+        json: json!({"bench": "memory", "steps": STEPS, "rows": rows}),
+        text: table.render(),
+    })
+}

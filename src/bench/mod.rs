@@ -1,0 +1,247 @@
+//! `ragdoll-lab bench ...`: the paper's performance tests 9-12 (section 5.2, tables 1-4)
+//! and the scale table of the pile of humans.
+//!
+//! Every table prints the paper's own figures in a column beside ours, for the particle
+//! method in both solver modes and for the multibody method. Timings are wall-clock on
+//! whatever machine runs them; the benches are run by hand in a release build and their
+//! output is committed to `docs/benchmarks.md` with the command that produced it.
+//! Nothing here asserts a time.
+//!
+//! - [`memory`]: test 9, bytes per simulation, measured by a counting global allocator.
+//! - [`timestep`]: test 10, t_real/t_sim against the timestep.
+//! - [`bones`]: test 11, t_real/t_sim against the number of bones.
+//! - [`iterations`]: test 12, t_real/t_sim against the iterations.
+//! - [`scale`]: the pile of humans, milliseconds per frame.
+//! - [`scenes`]: the benches' scenes, built as `SceneDesc` in code.
+
+pub mod bones;
+pub mod iterations;
+pub mod memory;
+pub mod scale;
+pub mod scenes;
+mod table;
+pub mod timestep;
+
+use crate::AppError;
+use crate::cli::{BenchArgs, BenchKind, ParticleSolverArg};
+use crate::methods;
+use ragdoll_sim::{Method, SceneDesc};
+use serde_json::{Value, json};
+use std::time::Instant;
+
+/// One configuration the benches compare: a method, and for the particle method its
+/// solver mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flavor {
+    /// The particle method as the paper wrote it (section 3).
+    ParticlePaper,
+    /// Our particle method (the default solver).
+    ParticleImproved,
+    /// The impulse-based multibody method.
+    Multibody,
+}
+
+impl Flavor {
+    /// All three, in table order.
+    pub const ALL: [Flavor; 3] = [
+        Flavor::ParticlePaper,
+        Flavor::ParticleImproved,
+        Flavor::Multibody,
+    ];
+
+    /// The key used in JSON and table headers.
+    pub fn key(self) -> &'static str {
+        match self {
+            Flavor::ParticlePaper => "particle_paper",
+            Flavor::ParticleImproved => "particle_improved",
+            Flavor::Multibody => "multibody",
+        }
+    }
+
+    /// Builds this method for `scene`.
+    pub fn build(self, scene: &SceneDesc) -> Result<Box<dyn Method>, AppError> {
+        match self {
+            Flavor::ParticlePaper => methods::build_particle(scene, ParticleSolverArg::Paper),
+            Flavor::ParticleImproved => methods::build_particle(scene, ParticleSolverArg::Improved),
+            Flavor::Multibody => methods::build_multibody(scene),
+        }
+    }
+}
+
+/// How much work a bench does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Size {
+    /// The full table, as in the paper (minutes).
+    Full,
+    /// A smoke test: the smallest rows and a few frames (seconds). The figures mean nothing.
+    Quick,
+}
+
+/// Wall-clock cost of running a method for some simulated time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunTiming {
+    /// Steps taken.
+    pub steps: usize,
+    /// Simulated seconds.
+    pub t_sim: f64,
+    /// Wall-clock seconds spent in `step` (building the method is not counted).
+    pub t_real: f64,
+    /// Median wall-clock time of one step (ms).
+    pub median_step_ms: f64,
+    /// The state was still finite at the end (a blown-up run is fast for the wrong reason).
+    pub finite: bool,
+}
+
+impl RunTiming {
+    /// The paper's measure: 100 % · t_real / t_sim (below 100 % is faster than real time).
+    pub fn percent_of_realtime(&self) -> f64 {
+        100.0 * self.t_real / self.t_sim
+    }
+
+    /// Mean wall-clock time of one step (ms).
+    pub fn mean_step_ms(&self) -> f64 {
+        1e3 * self.t_real / self.steps as f64
+    }
+
+    /// The paper's t_sim column: seconds simulated in 10 s of wall-clock time.
+    pub fn t_sim_per_10s(&self) -> f64 {
+        10.0 * self.t_sim / self.t_real
+    }
+
+    /// The JSON object the realtime benches print per method.
+    pub fn to_json(&self) -> Value {
+        json!({
+            "steps": self.steps,
+            "t_sim": self.t_sim,
+            "t_real": self.t_real,
+            "percent_of_realtime": self.percent_of_realtime(),
+            "mean_step_ms": self.mean_step_ms(),
+            "median_step_ms": self.median_step_ms,
+            "finite": self.finite,
+        })
+    }
+}
+
+/// Builds `flavor` for `scene` and times `steps` steps of `scene.settings.timestep`.
+pub fn time_steps(flavor: Flavor, scene: &SceneDesc, steps: usize) -> Result<RunTiming, AppError> {
+    let mut method = flavor.build(scene)?;
+    Ok(time_method(method.as_mut(), steps))
+}
+
+/// Times `steps` steps of an already built method, each one measured on its own.
+pub fn time_method(method: &mut dyn Method, steps: usize) -> RunTiming {
+    let dt = method.settings().timestep as f64;
+    let mut per_step = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        let t0 = Instant::now();
+        method.step();
+        per_step.push(t0.elapsed().as_secs_f64());
+    }
+    let t_real = per_step.iter().sum();
+    RunTiming {
+        steps,
+        t_sim: steps as f64 * dt,
+        t_real,
+        median_step_ms: 1e3 * median(&mut per_step),
+        finite: method.sample().energy.is_finite(),
+    }
+}
+
+/// Times each flavor in turn on `scene` for `seconds` of simulated time.
+pub fn time_flavors(
+    scene: &SceneDesc,
+    seconds: f64,
+    flavors: &[Flavor],
+) -> Result<Vec<(Flavor, RunTiming)>, AppError> {
+    let steps = steps_for(seconds, scene.settings.timestep);
+    flavors
+        .iter()
+        .map(|&f| Ok((f, time_steps(f, scene, steps)?)))
+        .collect()
+}
+
+/// The realtime percentage of a run, marked when the run blew up.
+fn pct_cell(t: &RunTiming) -> String {
+    let cell = table::pct(t.percent_of_realtime());
+    if t.finite {
+        cell
+    } else {
+        format!("{cell} (NaN)")
+    }
+}
+
+/// The median of `xs` (reorders them); 0 for an empty slice.
+pub fn median(xs: &mut [f64]) -> f64 {
+    if xs.is_empty() {
+        return 0.0;
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    }
+}
+
+/// Number of steps that simulate `seconds` at `dt`, at least one.
+pub fn steps_for(seconds: f64, dt: f32) -> usize {
+    ((seconds / dt as f64).round() as usize).max(1)
+}
+
+/// A bench's result: the JSON for machines and the text table for people.
+pub struct Report {
+    /// What `--json` prints.
+    pub json: Value,
+    /// What is printed without `--json`.
+    pub text: String,
+}
+
+/// `ragdoll-lab bench ...`.
+pub fn run(args: BenchArgs) -> Result<(), AppError> {
+    let size = if args.quick { Size::Quick } else { Size::Full };
+    let report = match args.kind {
+        BenchKind::Memory => memory::run(size)?,
+        BenchKind::Timestep => timestep::run(size)?,
+        BenchKind::Bones => bones::run(size)?,
+        BenchKind::Iterations => iterations::run(size)?,
+        BenchKind::Scale => scale::run(size)?,
+    };
+    if args.json {
+        println!("{}", report.json);
+    } else {
+        print!("{}", report.text);
+    }
+    Ok(())
+}
+
+/// Prints progress to stderr so a long table shows it is alive; stdout stays clean.
+fn progress(msg: &str) {
+    eprintln!("bench: {msg}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut []), 0.0);
+    }
+
+    #[test]
+    fn realtime_percent_is_the_papers_measure() {
+        // The paper's table 2, first particle row: 10 s of wall time simulated 3.3 s.
+        let t = RunTiming {
+            steps: 3300,
+            t_sim: 3.3,
+            t_real: 10.0,
+            median_step_ms: 0.0,
+            finite: true,
+        };
+        assert_eq!(t.percent_of_realtime().round(), 303.0);
+        assert!((t.t_sim_per_10s() - 3.3).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,160 @@
+//! The scale table: the pile scene (scene 10) with 1, 10, 100, 270 and 1000 humans of
+//! 16 bones, 600 frames at 1/60 s, milliseconds per frame for each method, on one
+//! thread and on all cores.
+//!
+//! Each measurement builds the method, steps it 600 frames and times every frame; the
+//! table shows the mean (the cost of the whole run) and the median frame. A row with
+//! more threads than one is measured only for a method that really runs in parallel
+//! ([`runs_in_parallel`]); otherwise its figure is `null` rather than a repeat of the
+//! single-threaded one.
+
+use super::table::Table;
+use super::{Flavor, Report, Size, progress, time_method};
+use crate::cli::SceneArgs;
+use crate::{AppError, scenes};
+use serde_json::json;
+
+/// Humans in the pile, per row.
+pub const HUMANS: [u32; 5] = [1, 10, 100, 270, 1000];
+/// Frames per measurement.
+pub const FRAMES: usize = 600;
+/// Frame length (s).
+pub const FRAME_DT: f32 = 1.0 / 60.0;
+
+/// The two methods the scale table compares: the particle method in its default
+/// (improved) mode and the multibody method.
+pub const FLAVORS: [Flavor; 2] = [Flavor::ParticleImproved, Flavor::Multibody];
+
+/// Whether `flavor` spreads one simulation's step over several threads. Neither method
+/// does yet: both step their islands one after the other on the calling thread, so a
+/// many-thread figure would only repeat the one-thread figure.
+pub fn runs_in_parallel(flavor: Flavor) -> bool {
+    let _ = flavor;
+    false
+}
+
+/// The thread counts to measure: one, and all cores when there is more than one.
+pub fn thread_counts() -> Vec<usize> {
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if all > 1 { vec![1, all] } else { vec![1] }
+}
+
+/// The pile of `humans` humans, stepped at [`FRAME_DT`].
+pub fn pile(humans: u32) -> Result<ragdoll_sim::SceneDesc, AppError> {
+    let loaded = scenes::load(&SceneArgs {
+        scene: Some("pile".into()),
+        count: Some(humans),
+        ..SceneArgs::default()
+    })?;
+    let mut desc = loaded.desc;
+    desc.settings.timestep = FRAME_DT;
+    Ok(desc)
+}
+
+/// Mean and median ms per frame of one method on one pile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameCost {
+    /// Mean wall-clock ms per frame over the run.
+    pub mean_ms: f64,
+    /// Median frame (ms).
+    pub median_ms: f64,
+    /// Still finite at the end.
+    pub finite: bool,
+}
+
+/// Builds `flavor` on `scene` and times `frames` frames.
+pub fn measure(
+    flavor: Flavor,
+    scene: &ragdoll_sim::SceneDesc,
+    frames: usize,
+) -> Result<FrameCost, AppError> {
+    let mut method = flavor.build(scene)?;
+    let t = time_method(method.as_mut(), frames);
+    Ok(FrameCost {
+        mean_ms: t.mean_step_ms(),
+        median_ms: t.median_step_ms,
+        finite: t.finite,
+    })
+}
+
+/// Runs the scale table.
+pub fn run(size: Size) -> Result<Report, AppError> {
+    let (humans, frames): (&[u32], usize) = match size {
+        Size::Full => (&HUMANS, FRAMES),
+        Size::Quick => (&[1, 2], 5),
+    };
+    let mut table = Table::new(
+        format!(
+            "Scale: pile of humans, {frames} frames at 1/60 s, ms per frame (mean / median); \
+             us = microseconds per bone per frame"
+        ),
+        &[
+            "Humans",
+            "Bones",
+            "Threads",
+            "particle ms",
+            "us",
+            "multibody ms",
+            "us",
+        ],
+    );
+    let mut rows = Vec::new();
+    for &n in humans {
+        let scene = pile(n)?;
+        let bones = scene.dynamic_body_count();
+        for threads in thread_counts() {
+            let mut costs = [None; 2];
+            for (slot, flavor) in costs.iter_mut().zip(FLAVORS) {
+                if threads > 1 && !runs_in_parallel(flavor) {
+                    continue;
+                }
+                progress(&format!(
+                    "scale: {n} humans, {threads} thread(s), {}",
+                    flavor.key()
+                ));
+                *slot = Some(measure(flavor, &scene, frames)?);
+            }
+            let cell = |c: Option<FrameCost>| match c {
+                Some(c) => {
+                    let s = format!("{:.2} / {:.2}", c.mean_ms, c.median_ms);
+                    if c.finite { s } else { format!("{s} (NaN)") }
+                }
+                None => "one thread".into(),
+            };
+            let us = |c: Option<FrameCost>| {
+                c.map_or("-".into(), |c| {
+                    format!("{:.2}", 1e3 * c.mean_ms / bones as f64)
+                })
+            };
+            table.row(vec![
+                n.to_string(),
+                bones.to_string(),
+                threads.to_string(),
+                cell(costs[0]),
+                us(costs[0]),
+                cell(costs[1]),
+                us(costs[1]),
+            ]);
+            let ms = |c: Option<FrameCost>| c.map(|c| c.mean_ms);
+            let median = |c: Option<FrameCost>| c.map(|c| c.median_ms);
+            rows.push(json!({
+                "humans": n,
+                "bones": bones,
+                "threads": threads,
+                "particle_ms_per_frame": ms(costs[0]),
+                "multibody_ms_per_frame": ms(costs[1]),
+                "particle_median_ms": median(costs[0]),
+                "multibody_median_ms": median(costs[1]),
+            }));
+        }
+    }
+    table.note("\"one thread\": the method does not run a step on several threads, so there is no separate figure.");
+    table.note(
+        "Goals (issue 6): 1000 humans under 16.6 ms (particle) and 33 ms (multibody) per frame; \
+         multibody at most ~2.9 us per bone per step on one core (Box3D's rain benchmark here).",
+    );
+    Ok(Report {
+        json: json!({"bench": "scale", "frames": frames, "frame_dt": FRAME_DT, "rows": rows}),
+        text: table.render(),
+    })
+}

@@ -1,0 +1,136 @@
+//! One frame, window or offscreen: run the egui pass (it decides the 3D area), draw the
+//! two halves with the scene renderer, then the egui layer on top.
+
+use crate::app_state::{Action, AppState};
+use crate::render::{Frame, Renderer, SideView, Viewport};
+use crate::session::Session;
+use crate::ui::{self, UiModel};
+use ragdoll_sim::MethodKind;
+
+/// The scene renderer and the egui context and renderer for one target format.
+pub struct Compositor {
+    /// The egui context (kept across frames: panel sizes, plot state).
+    pub ctx: egui::Context,
+    /// The two halves of the last frame (physical pixels), for picking and panning.
+    pub viewports: [Viewport; 2],
+    egui: egui_wgpu::Renderer,
+    scene: Renderer,
+}
+
+impl Compositor {
+    /// Builds both renderers for targets of `format`; the 3D pass uses `samples` MSAA.
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat, samples: u32) -> Compositor {
+        Compositor {
+            ctx: egui::Context::default(),
+            egui: egui_wgpu::Renderer::new(
+                device,
+                format,
+                egui_wgpu::RendererOptions {
+                    msaa_samples: 1,
+                    depth_stencil_format: None,
+                    dithering: false,
+                    predictable_texture_filtering: false,
+                },
+            ),
+            scene: Renderer::new(device, format, samples),
+            viewports: [Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: 1.0,
+                height: 1.0,
+            }; 2],
+        }
+    }
+
+    /// Runs the UI on `raw` and draws the frame into `target` (`size` physical pixels).
+    /// Returns the actions the UI produced and egui's platform output (cursor, clipboard).
+    #[allow(clippy::too_many_arguments)]
+    pub fn frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        target: &wgpu::TextureView,
+        size: (u32, u32),
+        pixels_per_point: f32,
+        raw: egui::RawInput,
+        state: &AppState,
+        session: &Session,
+    ) -> (Vec<Action>, egui::PlatformOutput) {
+        let mut actions = Vec::new();
+        let mut area = egui::Rect::NOTHING;
+        let full = self.ctx.run_ui(raw, |ui| {
+            let mut model = UiModel {
+                state,
+                session,
+                pixels_per_point,
+                actions: &mut actions,
+            };
+            area = ui::build(ui, &mut model);
+        });
+        let viewports = ui::viewports(area, pixels_per_point);
+        self.viewports = viewports;
+        let sides = [
+            SideView {
+                kind: MethodKind::Particle,
+                snapshot: &session.snapshots[0],
+                viewport: viewports[0],
+            },
+            SideView {
+                kind: MethodKind::Multibody,
+                snapshot: &session.snapshots[1],
+                viewport: viewports[1],
+            },
+        ];
+        let frame = Frame {
+            camera: &state.camera,
+            ground: session.settings().ground,
+            sides: &sides,
+            show: state.show,
+        };
+
+        let mut encoder =
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        self.scene
+            .render(device, queue, &mut encoder, target, size, &frame);
+
+        for (id, deltas) in &full.textures_delta.set {
+            for delta in deltas {
+                self.egui.update_texture(device, queue, *id, delta);
+            }
+        }
+        let primitives = self.ctx.tessellate(full.shapes, full.pixels_per_point);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [size.0, size.1],
+            pixels_per_point: full.pixels_per_point,
+        };
+        let extra = self
+            .egui
+            .update_buffers(device, queue, &mut encoder, &primitives, &screen);
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            self.egui.render(&mut pass, &primitives, &screen);
+        }
+        queue.submit(extra.into_iter().chain([encoder.finish()]));
+        for id in &full.textures_delta.free {
+            self.egui.free_texture(id);
+        }
+        (actions, full.platform_output)
+    }
+}

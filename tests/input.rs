@@ -1,0 +1,131 @@
+//! The paper's keys (section 5.1.1) and ours, fed through the input mapping into the app
+//! state without a window.
+
+use glam::Vec2;
+use ragdoll_lab::app_state::{Action, AppState, Rebuild, SCENES};
+use ragdoll_lab::input::InputMapper;
+use ragdoll_lab::render::camera::OrbitCamera;
+use ragdoll_sim::scene::CameraDesc;
+use winit::event::MouseButton;
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+
+fn setup() -> (InputMapper, AppState) {
+    let camera = OrbitCamera::from_desc(&CameraDesc::default());
+    (InputMapper::new(), AppState::new(Some(1), 1, camera))
+}
+
+fn press(input: &mut InputMapper, state: &mut AppState, key: Key) {
+    if let Some(action) = input.key(&key, true) {
+        state.apply(action);
+    }
+    assert_eq!(input.key(&key, false), None, "releases do nothing");
+}
+
+fn ch(c: &str) -> Key {
+    Key::Character(c.into())
+}
+
+#[test]
+fn the_papers_keys_drive_the_state() {
+    let (mut input, mut state) = setup();
+    assert!(state.running, "started by default");
+
+    press(&mut input, &mut state, ch("s"));
+    assert!(!state.running, "S stops");
+    assert_eq!(state.steps_due(1.0, 1.0 / 60.0), 0, "stopped: no steps");
+
+    press(&mut input, &mut state, Key::Named(NamedKey::Space));
+    assert!(state.running, "Space starts");
+
+    press(&mut input, &mut state, ch("t"));
+    assert!(!state.running, "T pauses");
+    assert_eq!(state.steps_due(1.0, 1.0 / 60.0), 1, "T: exactly one step");
+    assert_eq!(state.steps_due(1.0, 1.0 / 60.0), 0, "and only one");
+
+    press(&mut input, &mut state, ch("S"));
+    assert!(state.running, "S starts again (shifted too)");
+
+    press(&mut input, &mut state, ch("2"));
+    assert_eq!(state.variant, 2, "2 selects variant 2");
+    assert_eq!(state.rebuild.take(), Some(Rebuild::Restart));
+
+    press(&mut input, &mut state, ch("1"));
+    assert_eq!(state.variant, 1, "1 resets to the first variant");
+    assert_eq!(state.rebuild.take(), Some(Rebuild::Restart));
+
+    press(&mut input, &mut state, Key::Named(NamedKey::Tab));
+    assert_eq!(state.scene, Some(2), "Tab: next scene");
+    assert_eq!(state.scene_name(), Some(SCENES[2]));
+    assert_eq!(state.rebuild.take(), Some(Rebuild::Load));
+
+    input.set_modifiers(ModifiersState::SHIFT);
+    press(&mut input, &mut state, Key::Named(NamedKey::Tab));
+    press(&mut input, &mut state, Key::Named(NamedKey::Tab));
+    assert_eq!(state.scene, Some(0), "Shift+Tab: previous scene");
+    press(&mut input, &mut state, Key::Named(NamedKey::Tab));
+    assert_eq!(state.scene, Some(SCENES.len() - 1), "wraps around");
+    input.set_modifiers(ModifiersState::empty());
+
+    press(&mut input, &mut state, ch("]"));
+    assert_eq!(state.time_scale(), 2.0, "] speeds up");
+    press(&mut input, &mut state, ch("["));
+    press(&mut input, &mut state, ch("["));
+    assert_eq!(state.time_scale(), 0.5, "[ slows down");
+
+    press(&mut input, &mut state, ch("b"));
+    assert_eq!(state.pending_shots, 1, "B shoots a box");
+    press(&mut input, &mut state, ch("r"));
+    assert_eq!(state.rebuild.take(), Some(Rebuild::Load), "R reloads");
+
+    assert!(!state.quit);
+    press(&mut input, &mut state, ch("q"));
+    assert!(state.quit, "Q quits");
+    let (mut input, mut state) = setup();
+    press(&mut input, &mut state, Key::Named(NamedKey::Escape));
+    assert!(state.quit, "Esc quits");
+}
+
+#[test]
+fn the_mouse_opens_the_menu_orbits_pans_zooms_and_grabs() {
+    let (mut input, mut state) = setup();
+    let apply = |state: &mut AppState, a: Option<Action>| {
+        if let Some(a) = a {
+            state.apply(a);
+        }
+    };
+
+    let a = input.cursor_moved(Vec2::new(100.0, 80.0));
+    assert_eq!(a, None, "moving with no button does nothing");
+    apply(&mut state, input.button(MouseButton::Right, true));
+    assert_eq!(state.menu, Some(Vec2::new(100.0, 80.0)), "right click opens the menu");
+
+    let before = state.camera;
+    apply(&mut state, input.button(MouseButton::Left, true));
+    assert_eq!(state.menu, None, "a left click elsewhere closes it");
+    apply(&mut state, input.cursor_moved(Vec2::new(140.0, 80.0)));
+    apply(&mut state, input.button(MouseButton::Left, false));
+    assert!(state.camera.yaw != before.yaw, "left drag orbits");
+    assert_eq!(state.camera.target, before.target);
+
+    apply(&mut state, input.button(MouseButton::Middle, true));
+    apply(&mut state, input.cursor_moved(Vec2::new(160.0, 100.0)));
+    apply(&mut state, input.button(MouseButton::Middle, false));
+    assert!(state.camera.target != before.target, "middle drag pans");
+
+    let d = state.camera.distance;
+    apply(&mut state, input.wheel(2.0));
+    assert!(state.camera.distance < d, "wheel forward zooms in");
+
+    input.set_modifiers(ModifiersState::CONTROL);
+    assert_eq!(
+        input.button(MouseButton::Left, true),
+        Some(Action::GrabStart(Vec2::new(160.0, 100.0))),
+        "Ctrl + left press grabs"
+    );
+    let yaw = state.camera.yaw;
+    let a = input.cursor_moved(Vec2::new(170.0, 90.0));
+    assert_eq!(a, Some(Action::GrabMove(Vec2::new(170.0, 90.0))));
+    apply(&mut state, a);
+    assert_eq!(state.camera.yaw, yaw, "a grab drag does not orbit");
+    assert_eq!(input.button(MouseButton::Left, false), Some(Action::GrabEnd));
+}
