@@ -33,6 +33,9 @@ pub(crate) struct Contact {
     pub e: f32,
     /// Normal multiplier of the current substep (0 when not touching).
     pub lambda_n: f32,
+    /// Index of the manifold (pair) this point belongs to; points of a manifold are
+    /// consecutive.
+    pub group: u32,
     /// Tangential (friction) multiplier spent in the current substep.
     pub lambda_t: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
