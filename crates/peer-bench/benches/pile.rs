@@ -25,7 +25,11 @@ fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec
         r.world.step();
         per_frame.push(t0.elapsed().as_secs_f64() * 1e3);
     }
-    let finite = r.world.bodies.iter().all(|(_, b)| b.translation().is_finite());
+    let finite = r
+        .world
+        .bodies
+        .iter()
+        .all(|(_, b)| b.translation().is_finite());
     let mean_ms = per_frame.iter().sum::<f64>() / frames as f64;
     (
         FrameCost {
@@ -86,5 +90,7 @@ fn main() {
             println!("  Rapier approximations: {}", approx.join("; "));
         }
     }
-    println!("ratio = our mean ms / Rapier's mean ms (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end");
+    println!(
+        "ratio = our mean ms / Rapier's mean ms (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end"
+    );
 }
