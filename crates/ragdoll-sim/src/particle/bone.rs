@@ -214,6 +214,11 @@ pub(crate) fn gram_schmidt(e1: Vec3, e2: Vec3) -> (Quat, bool) {
 
 /// Müller et al. 2016: iterate `q ← exp(ω) q` with
 /// `ω = Σ r_k × a_k / (|Σ r_k · a_k| + ε)` over the columns of `R(q)` and `A`.
+///
+/// Warm-started from the previous substep's frame the first step is already the
+/// substep's rotation `ω h`; the iteration stops after an update below
+/// [`EXTRACT_TOLERANCE`], the size of an f32 rounding of a unit quaternion — below it
+/// further steps only trade one rounding for another.
 pub(crate) fn extract_rotation(a: Mat3, mut q: Quat) -> Quat {
     for _ in 0..20 {
         let r = Mat3::from_quat(q);
@@ -226,9 +231,18 @@ pub(crate) fn extract_rotation(a: Mat3, mut q: Quat) -> Quat {
             break;
         }
         q = (Quat::from_axis_angle(omega / w, w) * q).normalize();
+        // Small updates are still applied (near a swing's turning point the whole
+        // substep rotation is this small; dropping it would damp the motion).
+        if w < EXTRACT_TOLERANCE {
+            break;
+        }
     }
     q
 }
+
+/// Rotation update (rad) below which [`extract_rotation`] has converged: a few f32
+/// ulps of a unit quaternion component (ε ≈ 1.2e-7).
+const EXTRACT_TOLERANCE: f32 = 1e-6;
 
 /// A static-or-moving side of a two-body constraint: a bone, or the world/ground.
 pub(crate) type Side = Option<usize>;
