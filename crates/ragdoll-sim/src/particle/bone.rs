@@ -95,13 +95,25 @@ impl Bone {
         }
     }
 
-    /// World inverse inertia `R I⁻¹ Rᵀ`.
-    pub fn inv_inertia(&self) -> Mat3 {
+    /// World inverse inertia applied to a vector, `R I⁻¹ Rᵀ v`, evaluated in the bone
+    /// frame: `I⁻¹` is diagonal there, so this is two quaternion rotations and three
+    /// products instead of forming the 3×3 world tensor on every correction (the
+    /// solver's hottest path: every positional correction needs it twice per side).
+    pub fn inv_inertia_mul(&self, v: Vec3) -> Vec3 {
         if self.is_static() {
-            return Mat3::ZERO;
+            return Vec3::ZERO;
         }
-        let r = Mat3::from_quat(self.rot);
-        r * Mat3::from_diagonal(self.inv_inertia_local) * r.transpose()
+        self.rot * (self.inv_inertia_local * (self.rot.inverse() * v))
+    }
+
+    /// The quadratic form `vᵀ R I⁻¹ Rᵀ v` (the angular part of a generalised inverse
+    /// mass), as `l · (I⁻¹ ∘ l)` with `l = q⁻¹ v` in the bone frame.
+    pub fn inv_inertia_quad(&self, v: Vec3) -> f32 {
+        if self.is_static() {
+            return 0.0;
+        }
+        let l = self.rot.inverse() * v;
+        l.dot(self.inv_inertia_local * l)
     }
 
     /// The frame origin now.
@@ -202,6 +214,11 @@ pub(crate) fn gram_schmidt(e1: Vec3, e2: Vec3) -> (Quat, bool) {
 
 /// Müller et al. 2016: iterate `q ← exp(ω) q` with
 /// `ω = Σ r_k × a_k / (|Σ r_k · a_k| + ε)` over the columns of `R(q)` and `A`.
+///
+/// Warm-started from the previous substep's frame the first step is already the
+/// substep's rotation `ω h`; the iteration stops after an update below
+/// [`EXTRACT_TOLERANCE`], the size of an f32 rounding of a unit quaternion — below it
+/// further steps only trade one rounding for another.
 pub(crate) fn extract_rotation(a: Mat3, mut q: Quat) -> Quat {
     for _ in 0..20 {
         let r = Mat3::from_quat(q);
@@ -214,9 +231,18 @@ pub(crate) fn extract_rotation(a: Mat3, mut q: Quat) -> Quat {
             break;
         }
         q = (Quat::from_axis_angle(omega / w, w) * q).normalize();
+        // Small updates are still applied (near a swing's turning point the whole
+        // substep rotation is this small; dropping it would damp the motion).
+        if w < EXTRACT_TOLERANCE {
+            break;
+        }
     }
     q
 }
+
+/// Rotation update (rad) below which [`extract_rotation`] has converged: a few f32
+/// ulps of a unit quaternion component (ε ≈ 1.2e-7).
+const EXTRACT_TOLERANCE: f32 = 1e-6;
 
 /// A static-or-moving side of a two-body constraint: a bone, or the world/ground.
 pub(crate) type Side = Option<usize>;
@@ -239,7 +265,7 @@ pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
                 return 0.0;
             }
             let rn = (p - b.center()).cross(n);
-            b.inv_mass() + rn.dot(b.inv_inertia() * rn)
+            b.inv_mass() + b.inv_inertia_quad(rn)
         }
         None => 0.0,
     }
@@ -248,7 +274,7 @@ pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
 /// Generalised inverse mass of a side for a rotation about unit `n`.
 pub(crate) fn rot_inv_mass(bones: &[Bone], s: Side, n: Vec3) -> f32 {
     match s {
-        Some(i) if !bones[i].is_static() => n.dot(bones[i].inv_inertia() * n),
+        Some(i) if !bones[i].is_static() => bones[i].inv_inertia_quad(n),
         _ => 0.0,
     }
 }
@@ -260,7 +286,7 @@ pub(crate) fn apply_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
         if b.is_static() {
             return;
         }
-        let dtheta = b.inv_inertia() * (at - b.center()).cross(p);
+        let dtheta = b.inv_inertia_mul((at - b.center()).cross(p));
         b.dcom += p * b.inv_mass();
         b.rot = rotate(b.rot, dtheta);
     }
@@ -273,7 +299,7 @@ pub(crate) fn apply_angular(bones: &mut [Bone], s: Side, l: Vec3) {
         if b.is_static() {
             return;
         }
-        let dtheta = b.inv_inertia() * l;
+        let dtheta = b.inv_inertia_mul(l);
         b.rot = rotate(b.rot, dtheta);
     }
 }

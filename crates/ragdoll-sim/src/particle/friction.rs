@@ -90,7 +90,7 @@ fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
         if b.is_static() {
             return;
         }
-        let dw = b.inv_inertia() * (at - b.center()).cross(p);
+        let dw = b.inv_inertia_mul((at - b.center()).cross(p));
         b.lin_vel += p * b.inv_mass();
         b.ang_vel += dw;
     }
@@ -136,7 +136,7 @@ pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitutio
             if let Some(i) = s {
                 let b = &mut bones[i];
                 if !b.is_static() {
-                    b.ang_vel += b.inv_inertia() * (c.n * (sign * l));
+                    b.ang_vel += b.inv_inertia_mul(c.n * (sign * l));
                 }
             }
         }

@@ -131,7 +131,7 @@ fn bone_velocities(w: &mut ParticleWorld) {
             l += (b.rot * *r).cross(*v - vc) * m;
         }
         b.lin_vel = vc;
-        b.ang_vel = b.inv_inertia() * l;
+        b.ang_vel = b.inv_inertia_mul(l);
     }
 }
 
