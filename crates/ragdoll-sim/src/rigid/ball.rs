@@ -58,6 +58,20 @@ impl JointSolve for BallJoint {
         self.point.solve(&self.frame, s, ctx, use_bias);
     }
 
+    fn project(&self, s: &mut BodyStates) {
+        if let Some(sw) = &self.swing {
+            sw.project(&self.frame, s);
+        }
+        if let Some(t) = &self.twist {
+            t.project(&self.frame, s);
+        }
+        self.point.project(
+            &self.frame,
+            s,
+            self.friction.max_torque > 0.0 && self.friction.holding,
+        );
+    }
+
     fn limit_violation(&self, s: &BodyStates) -> f32 {
         let sw = self
             .swing

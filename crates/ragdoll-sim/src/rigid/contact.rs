@@ -14,6 +14,7 @@
 
 use super::body::{BodyInfo, BodyStates};
 use super::broadphase::BroadPhase;
+use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -386,6 +387,38 @@ impl Contacts {
                 p.normal_impulse = new;
                 s.apply_impulse(a, p.ra, -p.normal * d);
                 s.apply_impulse(b, p.rb, p.normal * d);
+            }
+        }
+    }
+}
+
+impl Contacts {
+    /// One position-projection pass (see [`super::project`]): each point deeper than
+    /// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
+    /// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
+    /// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`).
+    pub fn project(&mut self, s: &mut BodyStates, awake: &[bool]) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            for p in &pair.points {
+                let sep = current_separation(p, s.com[a], s.rot[a], s.com[b], s.rot[b]);
+                let c =
+                    (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
+                if c == 0.0 {
+                    continue;
+                }
+                let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
+                let (ja, jb) = (ra.cross(p.normal), rb.cross(p.normal));
+                let k = s.inv_mass[a]
+                    + s.inv_mass[b]
+                    + ja.dot(s.inv_inertia[a] * ja)
+                    + jb.dot(s.inv_inertia[b] * jb);
+                if k <= 1e-20 {
+                    continue;
+                }
+                let impulse = p.normal * (-c / k);
+                s.apply_position_impulse(a, ra, -impulse);
+                s.apply_position_impulse(b, rb, impulse);
             }
         }
     }

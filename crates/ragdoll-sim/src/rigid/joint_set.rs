@@ -26,6 +26,9 @@ pub trait JointSolve {
     fn warm_start(&self, s: &mut BodyStates);
     /// One Gauss–Seidel update; `use_bias` false in the relax pass.
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
+    /// One position-projection update (see [`super::project`]); joints without a
+    /// rigid part (springs) keep the default, which does nothing.
+    fn project(&self, _s: &mut BodyStates) {}
     /// Distance between the anchor as seen from each body (m).
     fn gap(&self, s: &BodyStates) -> f32 {
         let (pa, pb) = self.frame().anchors(s);
@@ -255,6 +258,11 @@ impl JointSet {
     /// One iteration over joints touching an awake body.
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
         for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.solve(s, ctx, use_bias) });
+    }
+
+    /// One position-projection pass over joints touching an awake body.
+    pub fn project(&self, s: &mut BodyStates, awake: &[bool]) {
+        for_each_joint_ref!(self, j => if touches_awake(j.frame(), awake) { j.project(s) });
     }
 
     /// Largest joint gap now (m).

@@ -217,6 +217,18 @@ impl Swing {
         }
     }
 
+    /// Position projection of the hard rows, measured on the current pose (the rows of
+    /// the velocity solve are left as they are, for the warm start).
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let mut now = *self;
+        now.update(f, s);
+        match &now {
+            Swing::Cone { row, .. } => row.project(f, s),
+            Swing::Tight(p) => p.project(f, s),
+            Swing::Pyramid { rows, .. } => rows.iter().for_each(|r| r.project(f, s)),
+        }
+    }
+
     /// World axis and half-angle for drawing (the pyramid drawn as its wider cone).
     pub fn draw_cone(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
         match self {
@@ -331,6 +343,14 @@ impl AngleLimit {
     /// Re-applies accumulated impulses.
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         self.rows.iter().for_each(|r| r.warm_start(f, s));
+    }
+
+    /// Position projection of the range, measured on the current pose without touching
+    /// the solver's rows or the unwrapping memory.
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let mut now = *self;
+        now.update(f, s);
+        now.rows.iter().for_each(|r| r.project(f, s));
     }
 
     /// One update of both rows.
