@@ -34,7 +34,7 @@ pub trait JointSolve {
         let (pa, pb) = self.frame().anchors(s);
         pa.distance(pb)
     }
-    /// Excess of a limited angle beyond its limit (rad).
+    /// Excess of a limited angle beyond its hard limit (rad); soft limits do not count.
     fn limit_violation(&self, s: &BodyStates) -> f32;
 }
 
@@ -272,7 +272,7 @@ impl JointSet {
         m
     }
 
-    /// Largest limit violation now (rad).
+    /// Largest hard-limit violation now (rad).
     pub fn max_limit_violation(&self, s: &BodyStates) -> f32 {
         let mut m = 0.0f32;
         for_each_joint_ref!(self, j => m = m.max(j.limit_violation(s)));

@@ -161,6 +161,15 @@ impl Swing {
         }
     }
 
+    /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
+    pub fn is_hard(&self) -> bool {
+        match self {
+            Swing::Cone { row, .. } => row.kind == RowKind::Limit,
+            Swing::Tight(_) => true,
+            Swing::Pyramid { rows, .. } => rows[0].kind == RowKind::Limit,
+        }
+    }
+
     /// How far outside the limit the shaft is now (rad, 0 inside).
     pub fn violation(&self, f: &JointFrame, s: &BodyStates) -> f32 {
         match self {
@@ -332,6 +341,11 @@ impl AngleLimit {
         self.gauge.angle = angle;
         self.rows[0].set(axis, angle - self.range.min, MARGIN);
         self.rows[1].set(-axis, self.range.max - angle, MARGIN);
+    }
+
+    /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
+    pub fn is_hard(&self) -> bool {
+        self.rows[0].kind == RowKind::Limit
     }
 
     /// Excess beyond the range now (rad).
