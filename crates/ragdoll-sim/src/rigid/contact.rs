@@ -16,6 +16,7 @@ use super::body::{BodyInfo, BodyStates};
 use super::broadphase::BroadPhase;
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
+use crate::scene::Shape;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
@@ -28,6 +29,16 @@ use parry3d::shape::SharedShape;
 pub const SPECULATIVE_DISTANCE: f32 = 0.02;
 /// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
 pub const LINEAR_SLOP: f32 = 0.0005;
+/// Rolling resistance coefficient (Box2D v3's `rollingResistance`): a contact of a round
+/// body (capsule, cylinder, cone) resists the relative rotation of its bodies with at
+/// most `ρ r λₙ` of angular impulse, r the round body's rolling radius (its smallest half
+/// extent) and λₙ the pair's normal impulse. It stands for the deformation of real
+/// contacts, which a rigid round body lacks: without it a capsule on a level floor never
+/// stops rolling and its island never sleeps. 0.005 is between a steel wheel on rail
+/// (0.001) and a tyre on concrete (0.01–0.02): it stops scene 9's rolling head and
+/// obstacle within seconds; larger values (0.01–0.03, measured) let the limbs land
+/// differently enough that a hard limit is pushed past 2°.
+pub const ROLLING_RESISTANCE: f32 = 0.005;
 
 /// One contact point with its solver state.
 #[derive(Clone, Copy, Debug, Default)]
@@ -77,6 +88,10 @@ pub struct ContactPair {
     pub friction: f32,
     /// Combined restitution.
     pub restitution: f32,
+    /// `ρ r`: rolling resistance times rolling radius (m).
+    pub rolling_arm: f32,
+    /// Accumulated rolling-resistance angular impulse on b.
+    pub rolling_impulse: Vec3,
     /// Points of the last narrow phase.
     pub points: Vec<ContactPoint>,
     manifolds: Vec<ContactManifold<(), ()>>,
@@ -210,9 +225,23 @@ impl Contacts {
                     (Some(g), true) => (g.friction, g.restitution),
                     _ => (info[b as usize].friction, info[b as usize].restitution),
                 };
+                // Only round bodies roll; a box's rotation is already resisted by its
+                // contact points' friction.
+                let rolling = |i: usize| match info[i].shape {
+                    Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
+                        info[i].min_half_extent
+                    }
+                    _ => 0.0,
+                };
+                let radius = if b == anchor {
+                    rolling(a as usize)
+                } else {
+                    rolling(a as usize).max(rolling(b as usize))
+                };
                 ContactPair {
                     a,
                     b,
+                    rolling_arm: ROLLING_RESISTANCE * radius,
                     friction: (fa * fb).sqrt(),
                     restitution: ra.max(rb),
                     ..Default::default()
@@ -300,6 +329,8 @@ impl Contacts {
                 s.apply_impulse(a, p.ra, -imp);
                 s.apply_impulse(b, p.rb, imp);
             }
+            s.apply_angular_impulse(a, -pair.rolling_impulse);
+            s.apply_angular_impulse(b, pair.rolling_impulse);
         }
     }
 
@@ -354,6 +385,21 @@ impl Contacts {
                 let d = new - old;
                 s.apply_impulse(a, p.ra, -d);
                 s.apply_impulse(b, p.rb, d);
+            }
+            // Rolling resistance: drive the relative angular velocity to zero with at most
+            // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
+            if pair.rolling_arm > 0.0 {
+                let cap =
+                    pair.rolling_arm * pair.points.iter().map(|p| p.normal_impulse).sum::<f32>();
+                let k = s.inv_inertia[a] + s.inv_inertia[b];
+                if k.determinant().abs() > 1e-20 {
+                    let w = s.ang_vel[b] - s.ang_vel[a];
+                    let old = pair.rolling_impulse;
+                    let new = (old - k.inverse() * w).clamp_length_max(cap);
+                    pair.rolling_impulse = new;
+                    s.apply_angular_impulse(a, -(new - old));
+                    s.apply_angular_impulse(b, new - old);
+                }
             }
         }
     }
