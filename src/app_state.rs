@@ -183,7 +183,11 @@ impl AppState {
             }
             Action::NextScene | Action::PrevScene => {
                 let n = SCENES.len();
-                let delta = if action == Action::NextScene { 1 } else { n - 1 };
+                let delta = if action == Action::NextScene {
+                    1
+                } else {
+                    n - 1
+                };
                 // From an --af file, Tab enters the built-in list at its start.
                 self.scene = Some(self.scene.map_or(0, |i| (i + delta) % n));
                 self.variant = 1;

@@ -16,6 +16,8 @@ use std::sync::{Arc, Mutex};
 
 /// The target format: 8-bit sRGB, so the PNG holds what a screen would show.
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The same bytes seen without sRGB encoding, for egui (it blends in gamma space).
+const UI_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// An RGBA8 image, rows top to bottom.
 #[derive(Clone, Debug)]
@@ -32,7 +34,12 @@ impl Image {
     /// The pixel at (x, y).
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * self.width + x) * 4) as usize;
-        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2], self.rgba[i + 3]]
+        [
+            self.rgba[i],
+            self.rgba[i + 1],
+            self.rgba[i + 2],
+            self.rgba[i + 3],
+        ]
     }
 
     /// Writes a PNG.
@@ -60,6 +67,8 @@ pub struct Offscreen {
     height: u32,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
+    ui_view: wgpu::TextureView,
+    ui_format: wgpu::TextureFormat,
     readback: wgpu::Buffer,
     padded_row: u32,
     compositor: Option<Compositor>,
@@ -79,11 +88,20 @@ impl Offscreen {
         // Validation errors become values: collected here and returned after each frame.
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = errors.clone();
-        gpu.device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
+        gpu.device
+            .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                if let Ok(mut v) = sink.lock() {
+                    v.push(e.to_string());
+                }
+            }));
+        // GL (llvmpipe) cannot view one texture in two formats; egui then draws through
+        // the sRGB view (its colours a little lighter), as it says in a warning.
+        let view_formats_ok = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        let ui_format = if view_formats_ok { UI_FORMAT } else { FORMAT };
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("capture"),
             size: wgpu::Extent3d {
@@ -96,9 +114,13 @@ impl Offscreen {
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
+            view_formats: if view_formats_ok { &[UI_FORMAT] } else { &[] },
         });
         let view = texture.create_view(&Default::default());
+        let ui_view = texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(ui_format),
+            ..Default::default()
+        });
         let padded_row = (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
             * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -113,6 +135,8 @@ impl Offscreen {
             height,
             texture,
             view,
+            ui_view,
+            ui_format,
             readback,
             padded_row,
             compositor: None,
@@ -143,9 +167,9 @@ impl Offscreen {
     /// Renders the full frame (both halves, labels, and the panel if `state.panel`).
     pub fn render(&mut self, state: &AppState, session: &Session) -> Result<Image, AppError> {
         let samples = self.samples();
-        let compositor = self
-            .compositor
-            .get_or_insert_with(|| Compositor::new(&self.gpu.device, FORMAT, samples));
+        let compositor = self.compositor.get_or_insert_with(|| {
+            Compositor::new(&self.gpu.device, FORMAT, self.ui_format, samples)
+        });
         if compositor.ctx.cumulative_pass_nr() == 0 {
             // egui lays out auto-sized areas in a first, invisible pass; run it once so
             // the captured frame shows the settled layout.
@@ -153,6 +177,7 @@ impl Offscreen {
                 &self.gpu.device,
                 &self.gpu.queue,
                 &self.view,
+                &self.ui_view,
                 (self.width, self.height),
                 1.0,
                 egui::RawInput {
@@ -172,6 +197,7 @@ impl Offscreen {
             &self.gpu.device,
             &self.gpu.queue,
             &self.view,
+            &self.ui_view,
             (self.width, self.height),
             1.0,
             raw,
@@ -190,7 +216,9 @@ impl Offscreen {
         let mut encoder = self
             .gpu
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene"),
+            });
         renderer.render(
             &self.gpu.device,
             &self.gpu.queue,
@@ -206,8 +234,9 @@ impl Offscreen {
     /// Copies the target to the readback buffer and waits for it.
     fn read(&mut self) -> Result<Image, AppError> {
         let device = &self.gpu.device;
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("read"),
+        });
         encoder.copy_texture_to_buffer(
             self.texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -248,7 +277,9 @@ impl Offscreen {
         if let Ok(mut errors) = self.errors.lock()
             && !errors.is_empty()
         {
-            return Err(AppError::Gpu(errors.drain(..).collect::<Vec<_>>().join("; ")));
+            return Err(AppError::Gpu(
+                errors.drain(..).collect::<Vec<_>>().join("; "),
+            ));
         }
         Ok(Image {
             width: self.width,

@@ -179,4 +179,8 @@ pub struct BenchArgs {
     /// mean nothing).
     #[arg(long)]
     pub quick: bool,
+    /// Run only the rows whose first column is one of these (bones, timestep, iterations
+    /// or humans), e.g. `--only 1920` to profile one size.
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<f64>,
 }

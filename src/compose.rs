@@ -18,13 +18,20 @@ pub struct Compositor {
 }
 
 impl Compositor {
-    /// Builds both renderers for targets of `format`; the 3D pass uses `samples` MSAA.
-    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat, samples: u32) -> Compositor {
+    /// Builds both renderers: the 3D pass draws into views of `format` with `samples` MSAA,
+    /// egui into views of `ui_format` (egui blends in gamma space, so it wants the
+    /// non-sRGB view of an sRGB target where the platform offers one).
+    pub fn new(
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+        ui_format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Compositor {
         Compositor {
             ctx: egui::Context::default(),
             egui: egui_wgpu::Renderer::new(
                 device,
-                format,
+                ui_format,
                 egui_wgpu::RendererOptions {
                     msaa_samples: 1,
                     depth_stencil_format: None,
@@ -42,7 +49,8 @@ impl Compositor {
         }
     }
 
-    /// Runs the UI on `raw` and draws the frame into `target` (`size` physical pixels).
+    /// Runs the UI on `raw` and draws the frame into `target` (`size` physical pixels), the
+    /// egui layer through `ui_target` (a view of the same texture in the UI format).
     /// Returns the actions the UI produced and egui's platform output (cursor, clipboard).
     #[allow(clippy::too_many_arguments)]
     pub fn frame(
@@ -50,6 +58,7 @@ impl Compositor {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         target: &wgpu::TextureView,
+        ui_target: &wgpu::TextureView,
         size: (u32, u32),
         pixels_per_point: f32,
         raw: egui::RawInput,
@@ -88,8 +97,9 @@ impl Compositor {
             show: state.show,
         };
 
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
         self.scene
             .render(device, queue, &mut encoder, target, size, &frame);
 
@@ -111,7 +121,7 @@ impl Compositor {
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("egui"),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: target,
+                        view: ui_target,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {

@@ -1,7 +1,7 @@
 //! Builds the two methods from a scene, behind the common `Method` trait.
 
-use crate::cli::ParticleSolverArg;
 use crate::AppError;
+use crate::cli::ParticleSolverArg;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::{Method, SceneDesc};
 

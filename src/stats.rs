@@ -2,11 +2,11 @@
 //! JSON object; `--trace FILE` also writes every frame as JSON lines.
 
 use crate::cli::{MethodArg, ParticleSolverArg, StatsArgs};
-use crate::{methods, scenes, AppError};
+use crate::{AppError, methods, scenes};
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::scene::scene_mass_props;
 use ragdoll_sim::{BodyState, Method, SceneDesc};
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -119,7 +119,11 @@ fn trace_header(scene: &SceneDesc) -> Result<Value, AppError> {
     Ok(json!({"type": "header", "scene": scene.name, "variant": scene.variant, "bodies": bodies}))
 }
 
-fn trace_frame(method: &dyn Method, states: &mut Vec<BodyState>, particles: &mut Vec<glam::Vec3>) -> Value {
+fn trace_frame(
+    method: &dyn Method,
+    states: &mut Vec<BodyState>,
+    particles: &mut Vec<glam::Vec3>,
+) -> Value {
     method.body_states(states);
     method.particle_positions(particles);
     let bodies: Vec<Value> = states
@@ -189,12 +193,15 @@ pub fn measure(
             *ms += t0.elapsed().as_secs_f64() * 1e3;
             rec.record(m.time(), &m.sample());
             if let Some((w, path)) = trace_out.as_mut() {
-                writeln!(w, "{}", trace_frame(m.as_ref(), &mut states, &mut particles)).map_err(
-                    |source| AppError::Io {
-                        path: path.display().to_string(),
-                        source,
-                    },
-                )?;
+                writeln!(
+                    w,
+                    "{}",
+                    trace_frame(m.as_ref(), &mut states, &mut particles)
+                )
+                .map_err(|source| AppError::Io {
+                    path: path.display().to_string(),
+                    source,
+                })?;
             }
         }
     }

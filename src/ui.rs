@@ -68,6 +68,8 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
     let painter = ctx.layer_painter(LayerId::new(Order::Background, Id::unique("labels")));
     let (state, session) = (model.state, model.session);
     let mid = (area.min.x + (area.width() * 0.5).floor()).round();
+    // 14 px in a 720 px tall view, smaller in small captures (never below 8 px).
+    let font = (area.height() / 50.0).clamp(8.0, 14.0);
     for i in 0..2 {
         let x = if i == 0 { area.min.x } else { mid };
         let text = format!(
@@ -75,7 +77,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
             side_title(session, i),
             session.step_ms[i]
         );
-        let galley = painter.layout_no_wrap(text, FontId::proportional(14.0), Color32::WHITE);
+        let galley = painter.layout_no_wrap(text, FontId::proportional(font), Color32::WHITE);
         let pos = Pos2::new(x + 10.0, area.min.y + 10.0);
         let bg = Rect::from_min_size(pos, galley.size()).expand(6.0);
         painter.rect_filled(bg, 4.0, Color32::from_black_alpha(150));
@@ -97,7 +99,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
         if state.running { "running" } else { "stopped" },
         state.time_scale()
     );
-    let galley = painter.layout_no_wrap(clock, FontId::proportional(13.0), Color32::WHITE);
+    let galley = painter.layout_no_wrap(clock, FontId::proportional(font), Color32::WHITE);
     let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
     painter.rect_filled(
         Rect::from_min_size(pos, galley.size()).expand(5.0),
@@ -141,14 +143,23 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     ui.separator();
 
     ui.strong("Scene");
-    for (i, name) in SCENES.iter().enumerate() {
-        if ui
-            .selectable_label(state.scene == Some(i), format!("{} {name}", i + 1))
-            .clicked()
-        {
-            actions.push(Action::SelectScene(i));
-        }
-    }
+    let current = state.scene.map_or_else(
+        || session.loaded.desc.name.clone(),
+        |i| format!("{} {}", i + 1, SCENES[i]),
+    );
+    egui::ComboBox::new("scene", "")
+        .selected_text(current)
+        .width(200.0)
+        .show_ui(ui, |ui| {
+            for (i, name) in SCENES.iter().enumerate() {
+                if ui
+                    .selectable_label(state.scene == Some(i), format!("{} {name}", i + 1))
+                    .clicked()
+                {
+                    actions.push(Action::SelectScene(i));
+                }
+            }
+        });
     let desc = &session.loaded.desc;
     if !desc.variants.is_empty() {
         ui.strong("Variant");
@@ -248,12 +259,25 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
             ui.end_row();
         };
         row(ui, "step (ms)", &|i| format!("{:.3}", session.step_ms[i]));
-        row(ui, "energy (J)", &|i| format!("{:.2}", session.samples[i].energy));
-        row(ui, "kinetic (J)", &|i| format!("{:.2}", session.samples[i].kinetic));
-        row(ui, "bodies", &|i| session.methods[i].body_count().to_string());
-        row(ui, "particles", &|i| session.methods[i].particle_count().to_string());
+        row(ui, "energy (J)", &|i| {
+            format!("{:.2}", session.samples[i].energy)
+        });
+        row(ui, "kinetic (J)", &|i| {
+            format!("{:.2}", session.samples[i].kinetic)
+        });
+        row(ui, "bodies", &|i| {
+            session.methods[i].body_count().to_string()
+        });
+        row(ui, "particles", &|i| {
+            session.methods[i].particle_count().to_string()
+        });
         row(ui, "asleep", &|i| {
-            if session.samples[i].all_asleep { "yes" } else { "no" }.to_string()
+            if session.samples[i].all_asleep {
+                "yes"
+            } else {
+                "no"
+            }
+            .to_string()
         });
     });
 

@@ -3,6 +3,7 @@
 //! [`crate::input::InputMapper`] into [`crate::app_state::AppState`]; egui sees every
 //! event first and keeps the ones over its panel and menu.
 
+use crate::AppError;
 use crate::app_state::{Action, AppState, Rebuild, SCENES};
 use crate::cli::{SceneArgs, ViewArgs};
 use crate::compose::Compositor;
@@ -11,7 +12,6 @@ use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{self, Gpu};
 use crate::scenes::{self, LoadedScene};
 use crate::session::Session;
-use crate::AppError;
 use glam::Vec2;
 use std::sync::Arc;
 use std::time::Instant;
@@ -31,7 +31,11 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         .as_deref()
         .and_then(scenes::find_builtin)
         .map(|b| b.number as usize - 1)
-        .or(if args.scene.af.is_some() { None } else { Some(7) });
+        .or(if args.scene.af.is_some() {
+            None
+        } else {
+            Some(7)
+        });
     let mut state = AppState::new(
         scene,
         loaded.desc.variant,
@@ -124,10 +128,23 @@ impl App {
             .ok_or_else(|| AppError::Gpu("the adapter cannot draw into the window".into()))?;
         config.format = format;
         config.present_mode = wgpu::PresentMode::AutoVsync;
+        // egui wants the non-sRGB view of an sRGB surface, where the platform allows one.
+        let view_formats_ok = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::SURFACE_VIEW_FORMATS);
+        let ui_format = if view_formats_ok && format.is_srgb() {
+            config.view_formats = vec![format.remove_srgb_suffix()];
+            format.remove_srgb_suffix()
+        } else {
+            format
+        };
         surface.configure(&gpu.device, &config);
         let compositor = Compositor::new(
             &gpu.device,
             format,
+            ui_format,
             gpu::msaa_samples(&gpu.adapter, format),
         );
         let egui = egui_winit::State::new(
@@ -206,7 +223,8 @@ impl App {
             Ok(session) => {
                 let scene_changed = session.loaded.desc.name != self.session.loaded.desc.name;
                 if scene_changed {
-                    self.state.camera = OrbitCamera::from_desc(&session.loaded.desc.settings.camera);
+                    self.state.camera =
+                        OrbitCamera::from_desc(&session.loaded.desc.settings.camera);
                 }
                 self.state.variant = session.loaded.desc.variant;
                 self.session = session;
@@ -222,17 +240,15 @@ impl App {
             variant: Some(self.state.variant),
             ..self.args.scene.clone()
         };
-        match self.state.scene {
-            Some(i) => {
-                args.af = None;
-                args.scene = Some(SCENES[i].to_string());
-                let on_disk = scenes::find_builtin(SCENES[i]).map(|b| b.asset_path());
-                if from_disk && let Some(path) = on_disk.filter(|p| p.exists()) {
-                    args.scene = None;
-                    args.af = Some(path);
-                }
+        // Without a built-in scene this is the --af file, read from disk again.
+        if let Some(i) = self.state.scene {
+            args.af = None;
+            args.scene = Some(SCENES[i].to_string());
+            let on_disk = scenes::find_builtin(SCENES[i]).map(|b| b.asset_path());
+            if from_disk && let Some(path) = on_disk.filter(|p| p.exists()) {
+                args.scene = None;
+                args.af = Some(path);
             }
-            None => {} // the --af file, read from disk again
         }
         scenes::load(&args)
     }
@@ -258,7 +274,9 @@ impl App {
         }
         self.session.refresh();
 
-        let Some(w) = self.window.as_mut() else { return };
+        let Some(w) = self.window.as_mut() else {
+            return;
+        };
         let size = w.window.inner_size();
         if size.width == 0 || size.height == 0 {
             return; // minimised
@@ -283,12 +301,17 @@ impl App {
             }
         };
         let view = frame.texture.create_view(&Default::default());
+        let ui_view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: w.config.view_formats.first().copied(),
+            ..Default::default()
+        });
         let raw = w.egui.take_egui_input(&w.window);
         let ppp = egui_winit::pixels_per_point(&w.compositor.ctx, &w.window);
         let (actions, output) = w.compositor.frame(
             &w.gpu.device,
             &w.gpu.queue,
             &view,
+            &ui_view,
             (frame.texture.width(), frame.texture.height()),
             ppp,
             raw,
@@ -334,13 +357,14 @@ impl ApplicationHandler for App {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
-        let Some(w) = self.window.as_mut() else { return };
+        let Some(w) = self.window.as_mut() else {
+            return;
+        };
         // Keys belong to the app (egui would move its focus on Tab and press focused
         // buttons on Space) except while a slider's number field is being edited.
         let editing = w.compositor.ctx.text_edit_focused();
         let is_key = matches!(event, WindowEvent::KeyboardInput { .. });
-        let consumed =
-            (!is_key || editing) && w.egui.on_window_event(&w.window, &event).consumed;
+        let consumed = (!is_key || editing) && w.egui.on_window_event(&w.window, &event).consumed;
         let action = match &event {
             WindowEvent::CloseRequested => {
                 event_loop.exit();
@@ -379,8 +403,7 @@ impl ApplicationHandler for App {
             WindowEvent::MouseInput { state, button, .. }
                 if !consumed || *state == ElementState::Released =>
             {
-                self.input
-                    .button(*button, *state == ElementState::Pressed)
+                self.input.button(*button, *state == ElementState::Pressed)
             }
             _ if consumed => None,
             WindowEvent::MouseWheel { delta, .. } => self.input.wheel(match delta {

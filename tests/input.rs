@@ -97,7 +97,11 @@ fn the_mouse_opens_the_menu_orbits_pans_zooms_and_grabs() {
     let a = input.cursor_moved(Vec2::new(100.0, 80.0));
     assert_eq!(a, None, "moving with no button does nothing");
     apply(&mut state, input.button(MouseButton::Right, true));
-    assert_eq!(state.menu, Some(Vec2::new(100.0, 80.0)), "right click opens the menu");
+    assert_eq!(
+        state.menu,
+        Some(Vec2::new(100.0, 80.0)),
+        "right click opens the menu"
+    );
 
     let before = state.camera;
     apply(&mut state, input.button(MouseButton::Left, true));
@@ -127,5 +131,17 @@ fn the_mouse_opens_the_menu_orbits_pans_zooms_and_grabs() {
     assert_eq!(a, Some(Action::GrabMove(Vec2::new(170.0, 90.0))));
     apply(&mut state, a);
     assert_eq!(state.camera.yaw, yaw, "a grab drag does not orbit");
-    assert_eq!(input.button(MouseButton::Left, false), Some(Action::GrabEnd));
+    assert_eq!(
+        input.button(MouseButton::Left, false),
+        Some(Action::GrabEnd)
+    );
+}
+
+#[test]
+fn tab_walks_the_built_in_scenes_in_table_order() {
+    let names: Vec<&str> = ragdoll_lab::scenes::builtin_scenes()
+        .iter()
+        .map(|s| s.name)
+        .collect();
+    assert_eq!(names, SCENES.to_vec());
 }

@@ -117,8 +117,14 @@ fn rest_pose_renders_blue_left_red_right_with_bodies_in_place() {
     let min_body = (half * H / 100) as usize;
     assert!(left_blue > min_body, "left half blue pixels: {left_blue}");
     assert!(right_red > min_body, "right half red pixels: {right_red}");
-    assert!(left_red * 20 < left_blue, "left: {left_red} red vs {left_blue} blue");
-    assert!(right_blue * 20 < right_red, "right: {right_blue} blue vs {right_red} red");
+    assert!(
+        left_red * 20 < left_blue,
+        "left: {left_red} red vs {left_blue} blue"
+    );
+    assert!(
+        right_blue * 20 < right_red,
+        "right: {right_blue} blue vs {right_red} red"
+    );
 
     // Where the bodies are: the cube (x = −0.9, low) is in the left part of each half,
     // the capsule (x = +0.9, high) in the right part, above the cube's centre.
@@ -134,10 +140,18 @@ fn rest_pose_renders_blue_left_red_right_with_bodies_in_place() {
                 }
             }
         }
-        assert!(lo.2 > 100 && hi.2 > 50, "both bodies visible: {} {}", lo.2, hi.2);
+        assert!(
+            lo.2 > 100 && hi.2 > 50,
+            "both bodies visible: {} {}",
+            lo.2,
+            hi.2
+        );
         let cube_y = lo.1 / lo.2 as f64;
         let capsule_y = hi.1 / hi.2 as f64;
-        assert!(capsule_y < cube_y - 10.0, "capsule above cube: {capsule_y} vs {cube_y}");
+        assert!(
+            capsule_y < cube_y - 10.0,
+            "capsule above cube: {capsule_y} vs {cube_y}"
+        );
     }
 
     // Shadows: some ground pixels under the bodies are much darker than the open ground.
@@ -150,5 +164,8 @@ fn rest_pose_renders_blue_left_red_right_with_bodies_in_place() {
         .min()
         .unwrap();
     let ground_sum = ground[0] as u32 + ground[1] as u32 + ground[2] as u32;
-    assert!(darkest * 10 < ground_sum * 7, "a shadow darker than ground: {darkest} vs {ground_sum}");
+    assert!(
+        darkest * 10 < ground_sum * 7,
+        "a shadow darker than ground: {darkest} vs {ground_sum}"
+    );
 }

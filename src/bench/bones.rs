@@ -8,7 +8,7 @@
 //! and the log-log slope of the cost (1 = linear, 2 = every pair).
 
 use super::table::{Table, opt, pct};
-use super::{Flavor, Report, RunTiming, Size, pct_cell, progress, scenes, time_flavors};
+use super::{Flavor, Report, RowFilter, RunTiming, Size, pct_cell, progress, scenes, time_flavors};
 use crate::AppError;
 use serde_json::{Value, json};
 
@@ -50,7 +50,7 @@ pub fn growth_exponent(n1: usize, t1: f64, n2: usize, t2: f64) -> f64 {
 }
 
 /// Runs test 11.
-pub fn run(size: Size) -> Result<Report, AppError> {
+pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let wanted: Vec<(usize, Option<(f64, f64)>)> = match size {
         Size::Full => PAPER
             .iter()
@@ -65,7 +65,7 @@ pub fn run(size: Size) -> Result<Report, AppError> {
     let mut table = Table::new(
         format!(
             "Test 11 (table 3): 100% * t_real/t_sim against bones, dt = {TIMESTEP} s, \
-             {ITERATIONS} iterations, two joints per three bones; us = microseconds per bone per step"
+             {ITERATIONS} iterations, two joints per three bones; us = CPU microseconds per bone per step"
         ),
         &[
             "Bones",
@@ -83,6 +83,9 @@ pub fn run(size: Size) -> Result<Report, AppError> {
     // (bones, t_real per step) per flavor, for the growth slope.
     let mut cost: Vec<Vec<(usize, f64)>> = vec![Vec::new(); Flavor::ALL.len()];
     for &(bones, paper) in &wanted {
+        if !only.keeps(bones as f64) {
+            continue;
+        }
         progress(&format!("bones: {bones}"));
         let scene = scenes::figures(bones / 3, TIMESTEP, ITERATIONS);
         let seconds = match size {

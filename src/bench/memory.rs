@@ -14,7 +14,7 @@
 //! memory are not heap and are not counted; neither method keeps state there.
 
 use super::table::Table;
-use super::{Flavor, Report, Size, progress, scenes};
+use super::{Flavor, Report, RowFilter, Size, progress, scenes};
 use crate::AppError;
 use serde_json::{Value, json};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -153,7 +153,7 @@ pub const PAPER: [(usize, f64, f64); 12] = [
 ];
 
 /// Runs test 9.
-pub fn run(size: Size) -> Result<Report, AppError> {
+pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let rows_wanted: &[(usize, f64, f64)] = match size {
         Size::Full => &PAPER,
         Size::Quick => &PAPER[..2],
@@ -177,6 +177,9 @@ pub fn run(size: Size) -> Result<Report, AppError> {
     );
     let mut rows = Vec::new();
     for &(bones, paper_particle, paper_constraint) in rows_wanted {
+        if !only.keeps(bones as f64) {
+            continue;
+        }
         progress(&format!("memory: {bones} bones"));
         let scene = scenes::stacked_boxes(bones);
         let mut cells = vec![

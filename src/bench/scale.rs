@@ -9,7 +9,7 @@
 //! single-threaded one.
 
 use super::table::Table;
-use super::{Flavor, Report, Size, progress, time_method};
+use super::{Flavor, Report, RowFilter, Size, progress, time_method};
 use crate::cli::SceneArgs;
 use crate::{AppError, scenes};
 use serde_json::json;
@@ -54,12 +54,21 @@ pub fn pile(humans: u32) -> Result<ragdoll_sim::SceneDesc, AppError> {
 /// Mean and median ms per frame of one method on one pile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameCost {
-    /// Mean wall-clock ms per frame over the run.
+    /// Mean CPU ms per frame over the run (the stepping thread's CPU time).
     pub mean_ms: f64,
+    /// Mean wall-clock ms per frame over the run.
+    pub wall_ms: f64,
     /// Median frame (ms).
     pub median_ms: f64,
+    /// Slowest frame (ms).
+    pub max_ms: f64,
     /// Still finite at the end.
     pub finite: bool,
+    /// Mean height of the bodies' centres of mass at the end (m): a sanity check that
+    /// two engines simulated the same thing (the pile fell and came to rest).
+    pub final_mean_height: f64,
+    /// Every body is asleep at the end.
+    pub asleep_at_end: bool,
 }
 
 /// Builds `flavor` on `scene` and times `frames` frames.
@@ -70,23 +79,31 @@ pub fn measure(
 ) -> Result<FrameCost, AppError> {
     let mut method = flavor.build(scene)?;
     let t = time_method(method.as_mut(), frames);
+    let mut states = Vec::new();
+    method.body_states(&mut states);
+    let final_mean_height =
+        states.iter().map(|b| b.com.y as f64).sum::<f64>() / states.len().max(1) as f64;
     Ok(FrameCost {
+        final_mean_height,
+        asleep_at_end: method.sample().all_asleep,
         mean_ms: t.mean_step_ms(),
+        wall_ms: 1e3 * t.t_wall / t.steps as f64,
         median_ms: t.median_step_ms,
+        max_ms: t.max_step_ms,
         finite: t.finite,
     })
 }
 
 /// Runs the scale table.
-pub fn run(size: Size) -> Result<Report, AppError> {
+pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
     let (humans, frames): (&[u32], usize) = match size {
         Size::Full => (&HUMANS, FRAMES),
         Size::Quick => (&[1, 2], 5),
     };
     let mut table = Table::new(
         format!(
-            "Scale: pile of humans, {frames} frames at 1/60 s, ms per frame (mean / median); \
-             us = microseconds per bone per frame"
+            "Scale: pile of humans, {frames} frames at 1/60 s, ms per frame (mean CPU / median \
+             wall-clock); us = CPU microseconds per bone per frame"
         ),
         &[
             "Humans",
@@ -100,6 +117,9 @@ pub fn run(size: Size) -> Result<Report, AppError> {
     );
     let mut rows = Vec::new();
     for &n in humans {
+        if !only.keeps(n as f64) {
+            continue;
+        }
         let scene = pile(n)?;
         let bones = scene.dynamic_body_count();
         for threads in thread_counts() {
@@ -137,6 +157,8 @@ pub fn run(size: Size) -> Result<Report, AppError> {
             ]);
             let ms = |c: Option<FrameCost>| c.map(|c| c.mean_ms);
             let median = |c: Option<FrameCost>| c.map(|c| c.median_ms);
+            let max = |c: Option<FrameCost>| c.map(|c| c.max_ms);
+            let wall = |c: Option<FrameCost>| c.map(|c| c.wall_ms);
             rows.push(json!({
                 "humans": n,
                 "bones": bones,
@@ -145,6 +167,10 @@ pub fn run(size: Size) -> Result<Report, AppError> {
                 "multibody_ms_per_frame": ms(costs[1]),
                 "particle_median_ms": median(costs[0]),
                 "multibody_median_ms": median(costs[1]),
+                "particle_wall_ms_per_frame": wall(costs[0]),
+                "multibody_wall_ms_per_frame": wall(costs[1]),
+                "particle_max_ms": max(costs[0]),
+                "multibody_max_ms": max(costs[1]),
             }));
         }
     }

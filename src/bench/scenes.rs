@@ -8,7 +8,8 @@
 //! - test 12: "the number of boxes are 9": three such figures dropped onto each other, so
 //!   the iterations have joints and contacts to work on.
 //!
-//! The pile of humans for the scale table is the built-in `pile` scene (scene 10).
+//! Sleeping is off in all of them (see [`base_scene`]). The pile of humans for the scale
+//! table is the built-in `pile` scene (scene 10), with its own settings.
 
 use glam::{Quat, Vec3};
 use ragdoll_sim::SceneDesc;
@@ -109,7 +110,10 @@ pub fn nine_boxes(iterations: u32) -> SceneDesc {
     scene
 }
 
-fn base_scene(name: String, settings: Settings) -> SceneDesc {
+/// A scene with sleeping off: the paper's methods never slept, and a figure asleep
+/// after its first second would make the realtime tables time nothing.
+fn base_scene(name: String, mut settings: Settings) -> SceneDesc {
+    settings.sleep.time = f32::MAX;
     SceneDesc {
         name,
         settings,

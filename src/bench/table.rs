@@ -73,10 +73,12 @@ impl Table {
 /// A percentage with no decimals, as the paper prints them ("303%").
 pub fn pct(x: f64) -> String {
     if x.is_finite() {
-        if x < 10.0 {
-            format!("{x:.1}%")
-        } else {
+        // Our figures are often far below the paper's: keep two significant digits.
+        if x >= 10.0 || x <= 0.0 {
             format!("{x:.0}%")
+        } else {
+            let decimals = (1.0 - x.log10().floor()) as usize;
+            format!("{x:.decimals$}%")
         }
     } else {
         "-".into()
@@ -98,5 +100,12 @@ mod tests {
         t.row(vec!["10".into(), "1".into()]);
         let s = t.render();
         assert_eq!(s, "T\n a  bbb\n-------\n10    1\n\n");
+    }
+
+    #[test]
+    fn percentages_keep_two_significant_digits() {
+        assert_eq!(pct(303.4), "303%");
+        assert_eq!(pct(5.96), "6.0%");
+        assert_eq!(pct(0.0123), "0.012%");
     }
 }

@@ -57,12 +57,17 @@ pub fn offscreen() -> Result<Gpu, AppError> {
 /// Opens a device on `adapter` with limits any adapter, llvmpipe on GL included, offers.
 pub fn open(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu, AppError> {
     let info = adapter.get_info();
-    log::info!("adapter: {} ({:?}, {:?})", info.name, info.backend, info.device_type);
+    log::info!(
+        "adapter: {} ({:?}, {:?})",
+        info.name,
+        info.backend,
+        info.device_type
+    );
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("ragdoll-lab"),
         required_features: wgpu::Features::empty(),
-        required_limits: wgpu::Limits::downlevel_webgl2_defaults()
-            .using_resolution(adapter.limits()),
+        required_limits:
+            wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits()),
         ..Default::default()
     }))
     .map_err(|e| AppError::Gpu(format!("cannot open a device on {}: {e}", info.name)))?;

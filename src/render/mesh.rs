@@ -82,7 +82,11 @@ pub fn unit_capsule(segments: u32, rings: u32) -> MeshData {
     for &(theta, cap) in &ring_rows {
         for j in 0..cols {
             let phi = TAU * j as f32 / segments as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             m.push(n, n, cap);
         }
     }
@@ -120,7 +124,8 @@ pub fn unit_round(segments: u32, apex_radius: f32) -> MeshData {
     }
     for j in 0..segments {
         let a = 2 * j;
-        m.indices.extend_from_slice(&[a, a + 2, a + 1, a + 1, a + 2, a + 3]);
+        m.indices
+            .extend_from_slice(&[a, a + 2, a + 1, a + 1, a + 2, a + 3]);
     }
     let mut disc = |y: f32, r: f32, up: bool| {
         if r <= 0.0 {

@@ -454,7 +454,10 @@ impl Renderer {
         );
 
         let mut meshes = HashMap::new();
-        meshes.insert(MeshKey::Cube, GpuMesh::new(device, &mesh::unit_cube(), "cube"));
+        meshes.insert(
+            MeshKey::Cube,
+            GpuMesh::new(device, &mesh::unit_cube(), "cube"),
+        );
         meshes.insert(
             MeshKey::Capsule,
             GpuMesh::new(device, &mesh::unit_capsule(24, 16), "capsule"),
@@ -584,7 +587,13 @@ impl Renderer {
     }
 
     /// Fills the instance, line, ground and camera buffers for `frame`.
-    fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, frame: &Frame, size: (u32, u32)) {
+    fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &Frame,
+        size: (u32, u32),
+    ) {
         let mut instances: Vec<Instance> = Vec::new();
         let mut lines: Vec<LineVertex> = Vec::new();
         self.draws.clear();
@@ -618,11 +627,13 @@ impl Renderer {
         }
         self.instances
             .write(device, queue, bytemuck::cast_slice(&instances));
-        self.lines.write(device, queue, bytemuck::cast_slice(&lines));
+        self.lines
+            .write(device, queue, bytemuck::cast_slice(&lines));
         self.has_ground = ground.is_some();
         if let Some(g) = ground {
             let quad = ground_quad(&g, frame.camera.target);
-            self.ground.write(device, queue, bytemuck::cast_slice(&quad));
+            self.ground
+                .write(device, queue, bytemuck::cast_slice(&quad));
         }
     }
 
@@ -662,10 +673,10 @@ impl Renderer {
                 ),
                 Shape::ConvexHull { points } => {
                     let key = Arc::as_ptr(points) as *const Vec3 as usize;
-                    if !self.meshes.contains_key(&MeshKey::Hull(key)) {
-                        let data = mesh::convex_hull(points);
-                        self.meshes
-                            .insert(MeshKey::Hull(key), GpuMesh::new(device, &data, "hull"));
+                    if let std::collections::hash_map::Entry::Vacant(e) =
+                        self.meshes.entry(MeshKey::Hull(key))
+                    {
+                        e.insert(GpuMesh::new(device, &mesh::convex_hull(points), "hull"));
                         // Keep the points alive so the address cannot be reused by another hull.
                         self.hulls.insert(key, points.clone());
                     }
@@ -811,7 +822,14 @@ fn side_lines(side: &SideView, show: ShowOptions, out: &mut Vec<LineVertex>) {
         let c = palette::linear(palette::CONTACT);
         for contact in &snap.contacts {
             let p = contact.point;
-            seg(p, p + contact.normal * scale * 3.0, c);
+            // The normal's axis, drawn on its upper side so it is not buried in the ground
+            // (a normal from a body into the ground points down).
+            let n = if contact.normal.y < 0.0 {
+                -contact.normal
+            } else {
+                contact.normal
+            };
+            seg(p, p + n * scale * 2.0, c);
             let s = scale * 0.5;
             seg(p - Vec3::X * s, p + Vec3::X * s, c);
             seg(p - Vec3::Z * s, p + Vec3::Z * s, c);
@@ -821,7 +839,11 @@ fn side_lines(side: &SideView, show: ShowOptions, out: &mut Vec<LineVertex>) {
         let c = palette::linear(palette::LIMIT);
         let len = scale * 6.0;
         for joint in &snap.joints {
-            seg(joint.anchor, joint.anchor2, palette::linear([1.0, 0.2, 0.2]));
+            seg(
+                joint.anchor,
+                joint.anchor2,
+                palette::linear([1.0, 0.2, 0.2]),
+            );
             match joint.limit {
                 LimitShape::None => {}
                 LimitShape::Cone { axis, half_angle } => {
@@ -850,7 +872,8 @@ fn side_lines(side: &SideView, show: ShowOptions, out: &mut Vec<LineVertex>) {
                     max,
                 } => {
                     let at = |a: f32| {
-                        joint.anchor + Quat::from_axis_angle(axis.normalize_or_zero(), a) * reference * len
+                        joint.anchor
+                            + Quat::from_axis_angle(axis.normalize_or_zero(), a) * reference * len
                     };
                     const N: usize = 16;
                     for k in 0..N {

@@ -43,14 +43,18 @@ pub fn body(kind: MethodKind, role: BodyRole, index: usize) -> [f32; 4] {
             }
         }
         BodyRole::Asleep => {
-            let c = if blue { BLUES[index % 4] } else { REDS[index % 4] };
+            let c = if blue {
+                BLUES[index % 4]
+            } else {
+                REDS[index % 4]
+            };
             [c[0] * 0.6, c[1] * 0.6, c[2] * 0.6]
         }
         BodyRole::Fixed => {
             if blue {
-                [0.32, 0.38, 0.50]
+                [0.22, 0.30, 0.58]
             } else {
-                [0.50, 0.36, 0.34]
+                [0.58, 0.26, 0.22]
             }
         }
         BodyRole::Grabbed => {

@@ -14,24 +14,47 @@
 mod rapier_scene;
 
 use ragdoll_lab::bench::scale::{self, FrameCost};
-use ragdoll_lab::bench::{Flavor, median};
+use ragdoll_lab::bench::{Flavor, median, thread_cpu_seconds};
 use std::time::Instant;
 
 fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec<String>) {
     let mut r = rapier_scene::build(scene);
     let mut per_frame = Vec::with_capacity(frames);
+    let cpu0 = thread_cpu_seconds();
     for _ in 0..frames {
         let t0 = Instant::now();
         r.world.step();
         per_frame.push(t0.elapsed().as_secs_f64() * 1e3);
     }
-    let finite = r.world.bodies.iter().all(|(_, b)| b.translation().is_finite());
-    let mean_ms = per_frame.iter().sum::<f64>() / frames as f64;
+    let mean_ms = 1e3 * (thread_cpu_seconds() - cpu0) / frames as f64;
+    let finite = r
+        .world
+        .bodies
+        .iter()
+        .all(|(_, b)| b.translation().is_finite());
+    let dynamic: Vec<_> = r
+        .world
+        .bodies
+        .iter()
+        .filter(|(_, b)| b.is_dynamic())
+        .collect();
+    let final_mean_height = dynamic
+        .iter()
+        .map(|(_, b)| b.center_of_mass().y as f64)
+        .sum::<f64>()
+        / dynamic.len().max(1) as f64;
+    let asleep_at_end = dynamic.iter().all(|(_, b)| b.is_sleeping());
+    let wall_ms = per_frame.iter().sum::<f64>() / frames as f64;
+    let max_ms = per_frame.iter().copied().fold(0.0, f64::max);
     (
         FrameCost {
             mean_ms,
+            wall_ms,
             median_ms: median(&mut per_frame),
+            max_ms,
             finite,
+            final_mean_height,
+            asleep_at_end,
         },
         r.approximations,
     )
@@ -52,7 +75,9 @@ fn main() {
     if humans.is_empty() {
         humans = scale::HUMANS.to_vec();
     }
-    println!("Pile of humans, {frames} frames at 1/60 s, one thread; ms per frame (mean / median)");
+    println!(
+        "Pile of humans, {frames} frames at 1/60 s, one thread; ms per frame (mean CPU / median wall-clock)"
+    );
     println!(
         "{:>6} {:>6} {:>17} {:>17} {:>6} {:>17} {:>6}",
         "humans", "bones", "rapier", "multibody", "ratio", "particle", "ratio"
@@ -76,15 +101,38 @@ fn main() {
             Ok(c) => (cell(&c), format!("{:.2}", c.mean_ms / rapier.mean_ms)),
             Err(e) => (format!("error: {e}"), "-".into()),
         };
-        let (mb, mb_ratio) = cells(ours(Flavor::Multibody));
-        let (pa, pa_ratio) = cells(ours(Flavor::ParticleImproved));
+        let mb_run = ours(Flavor::Multibody);
+        let pa_run = ours(Flavor::ParticleImproved);
+        let (mb_cost, pa_cost) = (mb_run.clone().ok(), pa_run.clone().ok());
+        let (mb, mb_ratio) = cells(mb_run);
+        let (pa, pa_ratio) = cells(pa_run);
         println!(
             "{n:>6} {bones:>6} {:>17} {mb:>17} {mb_ratio:>6} {pa:>17} {pa_ratio:>6}",
             cell(&rapier)
         );
+        let state = |name: &str, c: Option<FrameCost>| {
+            c.map(|c| {
+                format!(
+                    "{name} {:.3} m{}",
+                    c.final_mean_height,
+                    if c.asleep_at_end { " (asleep)" } else { "" }
+                )
+            })
+        };
+        let states: Vec<String> = [
+            state("rapier", Some(rapier)),
+            state("multibody", mb_cost),
+            state("particle", pa_cost),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        println!("  mean body height at the end: {}", states.join(", "));
         if n == 1 && !approx.is_empty() {
             println!("  Rapier approximations: {}", approx.join("; "));
         }
     }
-    println!("ratio = our mean ms / Rapier's mean ms (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end");
+    println!(
+        "ratio = our mean CPU ms / Rapier's mean CPU ms (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end"
+    );
 }

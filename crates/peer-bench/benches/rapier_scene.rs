@@ -18,6 +18,13 @@ use ragdoll_sim::SceneDesc;
 use ragdoll_sim::scene::{BodyRef, JointKind, Shape, SwingLimit, scene_mass_props};
 use rapier3d::prelude::*;
 
+/// Rapier limits: an axis and its `[min, max]`.
+type Limits = Vec<(JointAxis, [f32; 2])>;
+
+/// A joint in Rapier's terms: locked axes, world anchor, the world orientation of the
+/// joint frame on body1 and on body2 at rest, and the limits.
+type JointFrames = (JointAxesMask, Vec3, Quat, Quat, Limits);
+
 /// The Rapier world and what could not be carried over.
 pub struct RapierScene {
     /// The world, ready to step.
@@ -47,8 +54,9 @@ fn collider(shape: &Shape) -> ColliderBuilder {
             radius,
             ..
         } => ColliderBuilder::cone(*half_height, *radius),
-        Shape::ConvexHull { points } => ColliderBuilder::convex_hull(points)
-            .unwrap_or_else(|| ColliderBuilder::ball(Shape::local_half_extents(shape).max_element())),
+        Shape::ConvexHull { points } => ColliderBuilder::convex_hull(points).unwrap_or_else(|| {
+            ColliderBuilder::ball(Shape::local_half_extents(shape).max_element())
+        }),
     }
 }
 
@@ -91,9 +99,7 @@ pub fn build(scene: &SceneDesc) -> RapierScene {
             .restitution(b.restitution)
             .restitution_combine_rule(CoefficientCombineRule::Max)
             .build();
-        world
-            .colliders
-            .insert_with_parent(c, h, &mut world.bodies);
+        world.colliders.insert_with_parent(c, h, &mut world.bodies);
         handles.push(h);
         poses.push(pose(b.pose.position, b.pose.rotation));
         if !b.self_collision {
@@ -118,14 +124,10 @@ pub fn build(scene: &SceneDesc) -> RapierScene {
             .friction_combine_rule(CoefficientCombineRule::GeometricMean)
             .restitution(g.restitution)
             .build();
-        world
-            .colliders
-            .insert_with_parent(c, h, &mut world.bodies);
+        world.colliders.insert_with_parent(c, h, &mut world.bodies);
     }
     // Joints to the world attach to a fixed body at the origin.
-    let world_body = world
-        .bodies
-        .insert(RigidBodyBuilder::fixed().build());
+    let world_body = world.bodies.insert(RigidBodyBuilder::fixed().build());
 
     for c in &scene.constraints {
         let h1 = handles[c.body1.index()];
@@ -135,70 +137,109 @@ pub fn build(scene: &SceneDesc) -> RapierScene {
             BodyRef::World => (world_body, Pose::IDENTITY),
         };
         // World frames of the joint on body1 and body2 at rest, and the joint's axes.
-        let (mask, anchor, r1, r2, limits): (JointAxesMask, Vec3, Quat, Quat, Vec<(JointAxis, [f32; 2])>) =
-            match &c.kind {
-                JointKind::BallAndSocket { anchor, swing, twist, .. } => {
-                    let mut limits = Vec::new();
-                    let (r1, r2) = match swing {
-                        Some(SwingLimit::Cone { axis, half_angle, shaft }) => {
-                            limits.push((JointAxis::AngY, [-half_angle, *half_angle]));
-                            limits.push((JointAxis::AngZ, [-half_angle, *half_angle]));
-                            (frame_with_x(*shaft), frame_with_x(*axis))
-                        }
-                        Some(SwingLimit::Pyramid { axis, half_angle1, half_angle2, roll, shaft }) => {
-                            limits.push((JointAxis::AngY, [-half_angle1, *half_angle1]));
-                            limits.push((JointAxis::AngZ, [-half_angle2, *half_angle2]));
-                            let roll = Quat::from_rotation_x(*roll);
-                            (frame_with_x(*shaft) * roll, frame_with_x(*axis) * roll)
-                        }
-                        None => match twist {
-                            Some(t) => (frame_with_x(t.axis), frame_with_x(t.axis)),
-                            None => (Quat::IDENTITY, Quat::IDENTITY),
-                        },
-                    };
-                    if let Some(t) = twist {
-                        limits.push((JointAxis::AngX, [t.min, t.max]));
-                        if swing.is_some() {
-                            approximations.push(format!("{}: twist measured about the swing axis", c.name));
-                        }
+        let (mask, anchor, r1, r2, limits): JointFrames = match &c.kind {
+            JointKind::BallAndSocket {
+                anchor,
+                swing,
+                twist,
+                ..
+            } => {
+                let mut limits = Vec::new();
+                let (r1, r2) = match swing {
+                    Some(SwingLimit::Cone {
+                        axis,
+                        half_angle,
+                        shaft,
+                    }) => {
+                        limits.push((JointAxis::AngY, [-half_angle, *half_angle]));
+                        limits.push((JointAxis::AngZ, [-half_angle, *half_angle]));
+                        (frame_with_x(*shaft), frame_with_x(*axis))
                     }
-                    (JointAxesMask::LOCKED_SPHERICAL_AXES, *anchor, r1, r2, limits)
-                }
-                JointKind::Hinge { anchor, axis, limit } => {
-                    let r = frame_with_x(*axis);
-                    let limits = limit.map(|l| vec![(JointAxis::AngX, [l.min, l.max])]).unwrap_or_default();
-                    (JointAxesMask::LOCKED_REVOLUTE_AXES, *anchor, r, r, limits)
-                }
-                JointKind::Universal { anchor, shaft1, shaft2, swing, axis_ranges } => {
-                    // Free about both shafts, locked about their common perpendicular.
-                    let r = frame_with_x(shaft1.cross(*shaft2));
-                    if swing.is_some() || axis_ranges.is_some() {
-                        approximations.push(format!("{}: universal joint limits ignored", c.name));
+                    Some(SwingLimit::Pyramid {
+                        axis,
+                        half_angle1,
+                        half_angle2,
+                        roll,
+                        shaft,
+                    }) => {
+                        limits.push((JointAxis::AngY, [-half_angle1, *half_angle1]));
+                        limits.push((JointAxis::AngZ, [-half_angle2, *half_angle2]));
+                        let roll = Quat::from_rotation_x(*roll);
+                        (frame_with_x(*shaft) * roll, frame_with_x(*axis) * roll)
                     }
-                    (
-                        JointAxesMask::LOCKED_SPHERICAL_AXES | JointAxesMask::ANG_X,
-                        *anchor,
-                        r,
-                        r,
-                        Vec::new(),
-                    )
+                    None => match twist {
+                        Some(t) => (frame_with_x(t.axis), frame_with_x(t.axis)),
+                        None => (Quat::IDENTITY, Quat::IDENTITY),
+                    },
+                };
+                if let Some(t) = twist {
+                    limits.push((JointAxis::AngX, [t.min, t.max]));
+                    if swing.is_some() {
+                        approximations
+                            .push(format!("{}: twist measured about the swing axis", c.name));
+                    }
                 }
-                JointKind::Fixed => (
-                    JointAxesMask::LOCKED_FIXED_AXES,
-                    p1.translation,
-                    Quat::IDENTITY,
-                    Quat::IDENTITY,
+                (
+                    JointAxesMask::LOCKED_SPHERICAL_AXES,
+                    *anchor,
+                    r1,
+                    r2,
+                    limits,
+                )
+            }
+            JointKind::Hinge {
+                anchor,
+                axis,
+                limit,
+            } => {
+                let r = frame_with_x(*axis);
+                let limits = limit
+                    .map(|l| vec![(JointAxis::AngX, [l.min, l.max])])
+                    .unwrap_or_default();
+                (JointAxesMask::LOCKED_REVOLUTE_AXES, *anchor, r, r, limits)
+            }
+            JointKind::Universal {
+                anchor,
+                shaft1,
+                shaft2,
+                swing,
+                axis_ranges,
+            } => {
+                // Free about both shafts, locked about their common perpendicular.
+                let r = frame_with_x(shaft1.cross(*shaft2));
+                if swing.is_some() || axis_ranges.is_some() {
+                    approximations.push(format!("{}: universal joint limits ignored", c.name));
+                }
+                (
+                    JointAxesMask::LOCKED_SPHERICAL_AXES | JointAxesMask::ANG_X,
+                    *anchor,
+                    r,
+                    r,
                     Vec::new(),
-                ),
-                JointKind::Slider { axis } => {
-                    let r = frame_with_x(*axis);
-                    (JointAxesMask::LOCKED_PRISMATIC_AXES, p1.translation, r, r, Vec::new())
-                }
-                JointKind::Spring { .. } => {
-                    approximations.push(format!("{}: spring not modelled", c.name));
-                    continue;
-                }
-            };
+                )
+            }
+            JointKind::Fixed => (
+                JointAxesMask::LOCKED_FIXED_AXES,
+                p1.translation,
+                Quat::IDENTITY,
+                Quat::IDENTITY,
+                Vec::new(),
+            ),
+            JointKind::Slider { axis } => {
+                let r = frame_with_x(*axis);
+                (
+                    JointAxesMask::LOCKED_PRISMATIC_AXES,
+                    p1.translation,
+                    r,
+                    r,
+                    Vec::new(),
+                )
+            }
+            JointKind::Spring { .. } => {
+                approximations.push(format!("{}: spring not modelled", c.name));
+                continue;
+            }
+        };
         let mut joint = GenericJointBuilder::new(mask)
             .local_frame1(p1.inverse() * pose(anchor, r1))
             .local_frame2(p2.inverse() * pose(anchor, r2))

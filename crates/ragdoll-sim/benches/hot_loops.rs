@@ -39,7 +39,11 @@ enum Which {
     Multibody,
 }
 
-const ALL: [Which; 3] = [Which::ParticleImproved, Which::ParticlePaper, Which::Multibody];
+const ALL: [Which; 3] = [
+    Which::ParticleImproved,
+    Which::ParticlePaper,
+    Which::Multibody,
+];
 
 impl std::fmt::Display for Which {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -57,7 +61,9 @@ fn build(which: Which, scene: &SceneDesc, settle_steps: usize) -> Box<dyn Method
     scene.settings.sleep.time = 1e9;
     let scene = &scene;
     let mut m: Box<dyn Method> = match which {
-        Which::ParticleImproved => Box::new(ParticleWorld::new(scene, ParticleSolver::Improved).unwrap()),
+        Which::ParticleImproved => {
+            Box::new(ParticleWorld::new(scene, ParticleSolver::Improved).unwrap())
+        }
         Which::ParticlePaper => Box::new(ParticleWorld::new(scene, ParticleSolver::Paper).unwrap()),
         Which::Multibody => Box::new(MultibodyWorld::new(scene).unwrap()),
     };
@@ -92,7 +98,11 @@ fn chain() -> SceneDesc {
     let pitch = 0.25;
     for i in 0..20 {
         // Laid out horizontally so it swings down.
-        s.bodies.push(cube(format!("b{i}"), Vec3::new(pitch * (i as f32 + 0.5), 2.0, 0.0), 0.1));
+        s.bodies.push(cube(
+            format!("b{i}"),
+            Vec3::new(pitch * (i as f32 + 0.5), 2.0, 0.0),
+            0.1,
+        ));
         s.constraints.push(ConstraintDesc {
             name: format!("j{i}"),
             body1: BodyId(i),

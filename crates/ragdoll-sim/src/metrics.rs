@@ -5,7 +5,7 @@
 //! energy scale, so both methods are measured by the same code.
 
 use crate::method::Sample;
-use crate::scene::{scene_mass_props, SceneDesc, SceneError};
+use crate::scene::{SceneDesc, SceneError, scene_mass_props};
 use glam::Vec3;
 
 /// Potential energy that is there to lose (J):

@@ -88,7 +88,11 @@ impl Bone {
 
     /// Inverse mass seen by the solver.
     pub fn inv_mass(&self) -> f32 {
-        if self.is_static() { 0.0 } else { 1.0 / self.mass }
+        if self.is_static() {
+            0.0
+        } else {
+            1.0 / self.mass
+        }
     }
 
     /// World inverse inertia `R I⁻¹ Rᵀ`.
@@ -161,9 +165,8 @@ impl Bone {
         let p = u;
         let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
         let mut a = Mat3::ZERO;
-        for k in 0..4 {
-            let d = p[k] - c;
-            let r = self.rest[k];
+        for (pk, r) in p.iter().zip(&self.rest) {
+            let d = *pk - c;
             a += Mat3::from_cols(d * r.x, d * r.y, d * r.z);
         }
         self.dcom = c;
@@ -203,8 +206,8 @@ pub(crate) fn extract_rotation(a: Mat3, mut q: Quat) -> Quat {
     for _ in 0..20 {
         let r = Mat3::from_quat(q);
         let num = r.x_axis.cross(a.x_axis) + r.y_axis.cross(a.y_axis) + r.z_axis.cross(a.z_axis);
-        let den = (r.x_axis.dot(a.x_axis) + r.y_axis.dot(a.y_axis) + r.z_axis.dot(a.z_axis)).abs()
-            + 1e-9;
+        let den =
+            (r.x_axis.dot(a.x_axis) + r.y_axis.dot(a.y_axis) + r.z_axis.dot(a.z_axis)).abs() + 1e-9;
         let omega = num / den;
         let w = omega.length();
         if !w.is_finite() || w < 1e-9 {

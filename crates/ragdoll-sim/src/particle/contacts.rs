@@ -33,6 +33,9 @@ pub(crate) struct Contact {
     pub e: f32,
     /// Normal multiplier of the current substep (0 when not touching).
     pub lambda_n: f32,
+    /// Index of the manifold (pair) this point belongs to; points of a manifold are
+    /// consecutive.
+    pub group: u32,
     /// Tangential (friction) multiplier spent in the current substep.
     pub lambda_t: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
@@ -70,7 +73,12 @@ impl Filter {
 }
 
 /// Candidate pairs from a sort-and-sweep along X over AABBs loosened by `margin[i]`.
-pub(crate) fn broad_phase(bones: &[Bone], margin: &[f32], filter: &Filter, out: &mut Vec<(usize, usize)>) {
+pub(crate) fn broad_phase(
+    bones: &[Bone],
+    margin: &[f32],
+    filter: &Filter,
+    out: &mut Vec<(usize, usize)>,
+) {
     out.clear();
     let aabbs: Vec<_> = bones
         .iter()
@@ -110,7 +118,14 @@ pub(crate) fn shape_pair(
     manifolds.clear();
     let mut ws = None;
     if DefaultQueryDispatcher
-        .contact_manifolds(&pos12, bones[i].shape.as_ref(), bones[j].shape.as_ref(), prediction, manifolds, &mut ws)
+        .contact_manifolds(
+            &pos12,
+            bones[i].shape.as_ref(),
+            bones[j].shape.as_ref(),
+            prediction,
+            manifolds,
+            &mut ws,
+        )
         .is_err()
     {
         return;
@@ -139,7 +154,14 @@ pub(crate) fn ground_pair(
     manifolds.clear();
     let mut ws = None;
     if DefaultQueryDispatcher
-        .contact_manifolds(&pos12, &plane, bones[i].shape.as_ref(), prediction, manifolds, &mut ws)
+        .contact_manifolds(
+            &pos12,
+            &plane,
+            bones[i].shape.as_ref(),
+            prediction,
+            manifolds,
+            &mut ws,
+        )
         .is_err()
     {
         return;

@@ -15,9 +15,9 @@
 //! Energy: every step is a projection or a dissipative velocity change; the only source
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
-use super::contacts::{broad_phase, ground_pair, shape_pair, Contact};
-use super::friction::{point_velocity, solve_position, solve_velocity};
-use super::{sleeping, ParticleWorld};
+use super::contacts::{Contact, broad_phase, ground_pair, shape_pair};
+use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
+use super::{ParticleWorld, sleeping};
 use crate::scene::Ground;
 use glam::Vec3;
 
@@ -37,11 +37,14 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
+    let mut group_count = 0u32;
     let mu_of = |i: usize| bones[i].friction;
     for &(i, j) in &pairs {
         let prediction = margins[i] + margins[j];
         let mu = (mu_of(i) * mu_of(j)).sqrt();
         let e = bones[i].restitution.max(bones[j].restitution);
+        let group = group_count;
+        group_count += 1;
         shape_pair(bones, i, j, prediction, &mut w.manifolds, |pa, pb, n, _| {
             contacts.push(Contact {
                 a: i,
@@ -52,7 +55,8 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                 mu,
                 e,
                 lambda_n: 0.0,
-                    lambda_t: 0.0,
+                group,
+                lambda_t: 0.0,
                 vn_before: 0.0,
             });
         });
@@ -65,6 +69,8 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
             let mu = (b.friction * ground.friction).sqrt();
             let e = b.restitution.max(ground.restitution);
             let g: &Ground = &ground;
+            let group = group_count;
+            group_count += 1;
             ground_pair(bones, i, g, margins[i], &mut w.manifolds, |pa, pb, n, _| {
                 contacts.push(Contact {
                     a: i,
@@ -75,6 +81,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
                     mu,
                     e,
                     lambda_n: 0.0,
+                    group,
                     lambda_t: 0.0,
                     vn_before: 0.0,
                 });
@@ -83,6 +90,27 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     }
     w.contacts = contacts;
     w.pairs = pairs;
+}
+
+/// Contacts, manifold by manifold (consecutive contacts of one group): each point's
+/// normal correction, then its friction against the manifold's Coulomb cone so far.
+fn contact_pass(bones: &mut [super::bone::Bone], contacts: &mut [Contact]) {
+    let mut start = 0;
+    while start < contacts.len() {
+        let g = contacts[start].group;
+        let end = contacts[start..]
+            .iter()
+            .position(|c| c.group != g)
+            .map_or(contacts.len(), |k| start + k);
+        let group = &mut contacts[start..end];
+        let mut spent: f32 = group.iter().map(|c| c.lambda_t).sum();
+        for k in 0..group.len() {
+            solve_normal(bones, &mut group[k]);
+            let normal: f32 = group.iter().map(|c| c.lambda_n).sum();
+            spent += solve_friction(bones, &mut group[k], normal, spent);
+        }
+        start = end;
+    }
 }
 
 /// Derives each bone's velocity from its particles: `v = Σ m v_i / M` and
@@ -99,8 +127,8 @@ fn bone_velocities(w: &mut ParticleWorld) {
         let vc = (vi[0] + vi[1] + vi[2] + vi[3]) * 0.25;
         let m = b.mass * 0.25;
         let mut l = Vec3::ZERO;
-        for k in 0..4 {
-            l += (b.rot * b.rest[k]).cross(vi[k] - vc) * m;
+        for (r, v) in b.rest.iter().zip(&vi) {
+            l += (b.rot * *r).cross(*v - vc) * m;
         }
         b.lin_vel = vc;
         b.ang_vel = b.inv_inertia() * l;
@@ -151,10 +179,10 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                 continue;
             }
             let mut u = [Vec3::ZERO; 4];
-            for k in 0..4 {
+            for (k, uk) in u.iter_mut().enumerate() {
                 let p = b.particles[k] as usize;
                 w.particles.v[p] += s.gravity * h;
-                u[k] = b.rot * b.rest[k] + w.particles.v[p] * h;
+                *uk = b.rot * b.rest[k] + w.particles.v[p] * h;
             }
             b.shape_match(&u);
         }
@@ -164,13 +192,13 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             c.lambda_t = 0.0;
             let pa = w.bones[c.a].world(c.ra);
             let pb = super::bone::side_world(&w.bones, c.b, c.rb);
-            c.vn_before = (point_velocity(&w.bones, Some(c.a), pa) - point_velocity(&w.bones, c.b, pb)).dot(c.n);
+            c.vn_before = (point_velocity(&w.bones, Some(c.a), pa)
+                - point_velocity(&w.bones, c.b, pb))
+            .dot(c.n);
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
-            for c in w.contacts.iter_mut() {
-                solve_position(&mut w.bones, c);
-            }
+            contact_pass(&mut w.bones, &mut w.contacts);
             for j in &w.joints {
                 j.solve(&mut w.bones, h);
             }

@@ -6,9 +6,9 @@
 //! particles, since the frame is — and corrects it with the point's generalised inverse
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
 
-use super::bone::{angular, positional, side_rot, side_world, Bone, Side};
+use super::bone::{Bone, Side, angular, positional, side_rot, side_world};
 
-use super::limits::{perpendicular, AngleLimit, Swing, SwingLimit};
+use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
 use glam::{Quat, Vec3};
 
@@ -107,12 +107,22 @@ impl RestFrames<'_> {
 
 fn swing_limit(f: &RestFrames, a: Side, b: Side, s: &SwingDesc) -> SwingLimit {
     match *s {
-        SwingDesc::Cone { axis, half_angle, shaft } => SwingLimit {
+        SwingDesc::Cone {
+            axis,
+            half_angle,
+            shaft,
+        } => SwingLimit {
             shaft_a: f.local_dir(a, shaft),
             axis_b: f.local_dir(b, axis),
             kind: Swing::Cone { half_angle },
         },
-        SwingDesc::Pyramid { axis, half_angle1, half_angle2, roll, shaft } => {
+        SwingDesc::Pyramid {
+            axis,
+            half_angle1,
+            half_angle2,
+            roll,
+            shaft,
+        } => {
             let u = Quat::from_axis_angle(axis, roll) * perpendicular(axis);
             let v = axis.cross(u);
             SwingLimit {
@@ -158,10 +168,16 @@ impl Joint {
             has_anchor: kind.anchor().is_some() || matches!(kind, JointKind::Fixed),
         };
         match kind {
-            JointKind::BallAndSocket { swing, twist, limit_style, .. } => {
+            JointKind::BallAndSocket {
+                swing,
+                twist,
+                limit_style,
+                ..
+            } => {
                 j.swing = swing.as_ref().map(|s| swing_limit(f, a, b, s));
                 if let Some(t) = twist {
-                    j.angle_limits.push(angle_limit(f, a, b, t.axis, t.min, t.max));
+                    j.angle_limits
+                        .push(angle_limit(f, a, b, t.axis, t.min, t.max));
                 }
                 // The PyODE tutorial softens its limits because explicit restoring
                 // torques cannot be stiff and stable at once; a position-level limit can,
@@ -169,7 +185,13 @@ impl Joint {
                 // limit itself). `limit_compliance` stays for springy limits.
                 let _ = limit_style;
             }
-            JointKind::Universal { shaft1, shaft2, swing, axis_ranges, .. } => {
+            JointKind::Universal {
+                shaft1,
+                shaft2,
+                swing,
+                axis_ranges,
+                ..
+            } => {
                 j.kind = JointType::Universal {
                     shaft_a: f.local_dir(a, *shaft1),
                     shaft_b: f.local_dir(b, *shaft2),
@@ -178,8 +200,10 @@ impl Joint {
                 if let Some([r1, r2]) = axis_ranges {
                     // PyODE's stops: rotation about shaft 2 (body2's axis) and about
                     // shaft 1; measured as angles about those axes from rest.
-                    j.angle_limits.push(angle_limit(f, a, b, *shaft2, r1.min, r1.max));
-                    j.angle_limits.push(angle_limit(f, a, b, *shaft1, r2.min, r2.max));
+                    j.angle_limits
+                        .push(angle_limit(f, a, b, *shaft2, r1.min, r1.max));
+                    j.angle_limits
+                        .push(angle_limit(f, a, b, *shaft1, r2.min, r2.max));
                 }
             }
             JointKind::Hinge { axis, limit, .. } => {
@@ -188,14 +212,26 @@ impl Joint {
                     axis_b: f.local_dir(b, *axis),
                 };
                 if let Some(l) = limit {
-                    j.angle_limits.push(angle_limit(f, a, b, *axis, l.min, l.max));
+                    j.angle_limits
+                        .push(angle_limit(f, a, b, *axis, l.min, l.max));
                 }
             }
             JointKind::Slider { axis } => {
-                j.kind = JointType::Slider { axis_b: f.local_dir(b, *axis) };
+                j.kind = JointType::Slider {
+                    axis_b: f.local_dir(b, *axis),
+                };
             }
             JointKind::Fixed => j.kind = JointType::Fixed,
-            JointKind::Spring { anchor1, anchor2, stretch, compress, rest_length, min_length, max_length, .. } => {
+            JointKind::Spring {
+                anchor1,
+                anchor2,
+                stretch,
+                compress,
+                rest_length,
+                min_length,
+                max_length,
+                ..
+            } => {
                 j.anchor_a = f.local_point(a, *anchor1);
                 j.anchor_b = f.local_point(b, *anchor2);
                 j.kind = JointType::Spring {
@@ -212,7 +248,10 @@ impl Joint {
 
     /// The anchor as seen from body1 and from body2 (world).
     pub fn anchors(&self, bones: &[Bone]) -> (Vec3, Vec3) {
-        (side_world(bones, self.a, self.anchor_a), side_world(bones, self.b, self.anchor_b))
+        (
+            side_world(bones, self.a, self.anchor_a),
+            side_world(bones, self.b, self.anchor_b),
+        )
     }
 
     /// Joint gap (m): distance between the anchor seen from each bone.
@@ -228,7 +267,9 @@ impl Joint {
 
     /// Largest limit excess (rad).
     pub fn limit_violation(&self, bones: &[Bone]) -> f32 {
-        let mut v = self.swing.map_or(0.0, |s| s.violation(bones, self.a, self.b));
+        let mut v = self
+            .swing
+            .map_or(0.0, |s| s.violation(bones, self.a, self.b));
         for l in &self.angle_limits {
             v = v.max(l.violation(bones, self.a, self.b));
         }
@@ -268,7 +309,13 @@ impl Joint {
                 let n = s1.cross(s2);
                 let l = n.length();
                 if l > 1e-9 {
-                    angular(bones, a, b, -n / l * s1.dot(s2).clamp(-1.0, 1.0).asin(), 0.0);
+                    angular(
+                        bones,
+                        a,
+                        b,
+                        -n / l * s1.dot(s2).clamp(-1.0, 1.0).asin(),
+                        0.0,
+                    );
                 }
             }
             JointType::Fixed | JointType::Slider { .. } => {
@@ -279,7 +326,13 @@ impl Joint {
         }
         let (pa, pb) = self.anchors(bones);
         match self.kind {
-            JointType::Spring { stretch, compress, rest, min, max } => {
+            JointType::Spring {
+                stretch,
+                compress,
+                rest,
+                min,
+                max,
+            } => {
                 let d = pb - pa;
                 let len = d.length();
                 if len > 1e-9 {

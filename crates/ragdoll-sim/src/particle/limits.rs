@@ -7,7 +7,7 @@
 //! section 3.3.3 "joint limits") that rotates the bones back onto the limit, split by
 //! generalised inverse inertia.
 
-use super::bone::{angular, side_rot, Bone, Side};
+use super::bone::{Bone, Side, angular, side_rot};
 use glam::{Quat, Vec3};
 
 /// A swing limit in the bones' frames.

@@ -42,24 +42,33 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
     broad_phase(&bones, &zero, &w.filter, &mut pairs);
     let mut manifolds = Vec::new();
     for &(i, j) in &pairs {
-        shape_pair(&bones, i, j, 0.0, &mut manifolds, |_, _, _, d| pen = pen.max(-d));
+        shape_pair(&bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
+            pen = pen.max(-d)
+        });
     }
     if let Some(ground) = w.scene.settings.ground {
         for (i, b) in bones.iter().enumerate() {
             if !b.fixed {
-                ground_pair(&bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| pen = pen.max(-d));
+                ground_pair(&bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| {
+                    pen = pen.max(-d)
+                });
             }
         }
     }
     let gap = w.joints.iter().map(|j| j.gap(&w.bones)).fold(0.0, f32::max);
-    let limit = w.joints.iter().map(|j| j.limit_violation(&w.bones)).fold(0.0, f32::max);
+    let limit = w
+        .joints
+        .iter()
+        .map(|j| j.limit_violation(&w.bones))
+        .fold(0.0, f32::max);
     let stretch = w
         .bones
         .iter()
         .filter(|b| !b.fixed)
         .map(|b| b.stretch(&p.x))
         .fold(0.0, f32::max);
-    let all_asleep = w.solver == ParticleSolver::Improved && w.bones.iter().all(|b| b.fixed || b.asleep);
+    let all_asleep =
+        w.solver == ParticleSolver::Improved && w.bones.iter().all(|b| b.fixed || b.asleep);
     Sample {
         energy: kinetic + potential,
         kinetic,
@@ -103,11 +112,22 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
             ParticleSolver::Paper => {
                 let x = &w.particles.frame_start;
                 let p0 = x[b.particles[0] as usize];
-                let (r, _) = gram_schmidt(x[b.particles[1] as usize] - p0, x[b.particles[2] as usize] - p0);
-                let prev = crate::scene::Pose { position: p0, rotation: r }.mul_pose(&b.shape_in_bone);
+                let (r, _) = gram_schmidt(
+                    x[b.particles[1] as usize] - p0,
+                    x[b.particles[2] as usize] - p0,
+                );
+                let prev = crate::scene::Pose {
+                    position: p0,
+                    rotation: r,
+                }
+                .mul_pose(&b.shape_in_bone);
                 let prev_com = prev.transform_point(b.shape_com);
                 let (axis, angle) = (pose.rotation * prev.rotation.inverse()).to_axis_angle();
-                let angle = if angle > std::f32::consts::PI { angle - std::f32::consts::TAU } else { angle };
+                let angle = if angle > std::f32::consts::PI {
+                    angle - std::f32::consts::TAU
+                } else {
+                    angle
+                };
                 ((com - prev_com) / dt, axis * angle / dt)
             }
         };

@@ -25,10 +25,12 @@ mod placement;
 mod sleeping;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
-use crate::scene::{mass_props, validate, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape};
+use crate::scene::{
+    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, mass_props, validate,
+};
 use crate::snapshot::{
-    BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance, ParticleRole,
-    RenderSnapshot, StickInstance, StickRole,
+    BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
+    ParticleRole, RenderSnapshot, StickInstance, StickRole,
 };
 use bone::{Bone, EDGES};
 use contacts::{Contact, Filter};
@@ -78,14 +80,29 @@ pub struct ParticleWorld {
 /// The parry3d shape of a scene shape.
 fn parry_shape(body: &BodyDesc) -> Result<SharedShape, SceneError> {
     Ok(match &body.shape {
-        Shape::Box { half_extents } => SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
-        Shape::Capsule { half_height, radius } => SharedShape::capsule_y(*half_height, *radius),
-        Shape::Cylinder { half_height, radius, .. } => SharedShape::cylinder(*half_height, *radius),
-        Shape::Cone { half_height, radius, .. } => SharedShape::cone(*half_height, *radius),
-        Shape::ConvexHull { points } => SharedShape::convex_hull(points).ok_or_else(|| SceneError::Degenerate {
-            body: body.name.clone(),
-            what: "its convex hull could not be built".into(),
-        })?,
+        Shape::Box { half_extents } => {
+            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
+        }
+        Shape::Capsule {
+            half_height,
+            radius,
+        } => SharedShape::capsule_y(*half_height, *radius),
+        Shape::Cylinder {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cylinder(*half_height, *radius),
+        Shape::Cone {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cone(*half_height, *radius),
+        Shape::ConvexHull { points } => {
+            SharedShape::convex_hull(points).ok_or_else(|| SceneError::Degenerate {
+                body: body.name.clone(),
+                what: "its convex hull could not be built".into(),
+            })?
+        }
     })
 }
 
@@ -192,15 +209,29 @@ impl ParticleWorld {
         };
         bone.rest = p.rest;
         bone.stick_rest = EDGES.map(|(a, b)| p.rest[a].distance(p.rest[b]));
-        bone.inv_inertia_local = p.principal_inertia.map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
+        bone.inv_inertia_local = p
+            .principal_inertia
+            .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
         let s = &self.scene.settings;
         let (dt, g) = (s.timestep, s.gravity);
-        let h = if self.solver == ParticleSolver::Improved { dt / improved::substeps(s) as f32 } else { dt };
+        let h = if self.solver == ParticleSolver::Improved {
+            dt / improved::substeps(s) as f32
+        } else {
+            dt
+        };
         let movable = !desc.is_fixed();
         for k in 0..4 {
             let x = bone.world(p.rest[k]);
             let v = desc.linear_velocity + desc.angular_velocity.cross(x - bone.com);
-            bone.particles[k] = self.particles.push(x, v, g, dt, h, if movable { mp.mass * 0.25 } else { 0.0 }, movable);
+            bone.particles[k] = self.particles.push(
+                x,
+                v,
+                g,
+                dt,
+                h,
+                if movable { mp.mass * 0.25 } else { 0.0 },
+                movable,
+            );
         }
         Ok(bone)
     }
@@ -240,7 +271,9 @@ impl ParticleWorld {
         let mut manifolds = Vec::new();
         for (i, j) in pairs {
             let mut overlap = false;
-            contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| overlap |= d < -1e-3);
+            contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
+                overlap |= d < -1e-3
+            });
             if overlap {
                 self.filter.exclude(i, j);
             }
@@ -283,16 +316,28 @@ fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
 
 /// The mouse grab in improved mode: a soft XPBD point constraint to the target.
 pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
-    let Some(i) = bones.iter().position(|b| b.body == g.body.index()) else { return };
+    let Some(i) = bones.iter().position(|b| b.body == g.body.index()) else {
+        return;
+    };
     let local = bones[i].shape_in_bone.transform_point(g.local_point);
     let p = bones[i].world(local);
     // Compliance 1e-3 m/N: a stiff but yielding spring, independent of the substep.
-    bone::positional(bones, Some(i), None, p, g.target, g.target - p, 1e-3 / (h * h));
+    bone::positional(
+        bones,
+        Some(i),
+        None,
+        p,
+        g.target,
+        g.target - p,
+        1e-3 / (h * h),
+    );
 }
 
 /// The mouse grab in paper mode: pull the bone's particles towards the target.
 pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
-    let Some(i) = w.bones.iter().position(|b| b.body == g.body.index()) else { return };
+    let Some(i) = w.bones.iter().position(|b| b.body == g.body.index()) else {
+        return;
+    };
     let local = w.bones[i].shape_in_bone.transform_point(g.local_point);
     let p = w.bones[i].world(local);
     let d = (g.target - p) * 0.05;
@@ -335,7 +380,10 @@ impl Method for ParticleWorld {
 
     fn set_settings(&mut self, settings: &Settings) {
         let old = self.scene.settings.timestep;
-        if self.solver == ParticleSolver::Paper && old != settings.timestep && settings.timestep > 0.0 {
+        if self.solver == ParticleSolver::Paper
+            && old != settings.timestep
+            && settings.timestep > 0.0
+        {
             self.particles.rescale_verlet(old, settings.timestep);
         }
         self.scene.settings = settings.clone();
@@ -389,7 +437,11 @@ impl Method for ParticleWorld {
         for c in &self.contacts {
             let pa = self.bones[c.a].world(c.ra);
             let pb = bone::side_world(&self.bones, c.b, c.rb);
-            out.contacts.push(ContactInstance { point: pa, normal: c.n, depth: (pa - pb).dot(c.n) });
+            out.contacts.push(ContactInstance {
+                point: pa,
+                normal: c.n,
+                depth: (pa - pb).dot(c.n),
+            });
         }
         for j in &self.joints {
             if !j.has_anchor {
@@ -417,8 +469,16 @@ impl Method for ParticleWorld {
                     _ => LimitShape::None,
                 },
             };
-            out.joints.push(JointInstance { anchor: a, anchor2: b, limit });
-            out.sticks.push(StickInstance { a, b, role: StickRole::Joint });
+            out.joints.push(JointInstance {
+                anchor: a,
+                anchor2: b,
+                limit,
+            });
+            out.sticks.push(StickInstance {
+                a,
+                b,
+                role: StickRole::Joint,
+            });
         }
     }
 
@@ -448,11 +508,15 @@ impl Method for ParticleWorld {
         let mut best: Option<RayHit> = None;
         for b in &self.bones {
             let pose = b.parry_pose();
-            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true) {
-                if best.is_none_or(|h| t < h.distance) {
-                    let local = b.shape_pose().inverse_transform_point(origin + dir * t);
-                    best = Some(RayHit { body: BodyId(b.body as u32), distance: t, local_point: local });
-                }
+            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true)
+                && best.is_none_or(|h| t < h.distance)
+            {
+                let local = b.shape_pose().inverse_transform_point(origin + dir * t);
+                best = Some(RayHit {
+                    body: BodyId(b.body as u32),
+                    distance: t,
+                    local_point: local,
+                });
             }
         }
         best
@@ -484,15 +548,24 @@ impl Method for ParticleWorld {
                 let x = &self.particles.x;
                 let shape_pose = bone.shape_pose();
                 bone.paper_frame(x);
-                let frame = Pose { position: bone.com, rotation: bone.rot };
-                bone.rest = bone.particles.map(|p| frame.inverse_transform_point(x[p as usize]));
+                let frame = Pose {
+                    position: bone.com,
+                    rotation: bone.rot,
+                };
+                bone.rest = bone
+                    .particles
+                    .map(|p| frame.inverse_transform_point(x[p as usize]));
                 bone.shape_in_bone = Pose {
                     position: frame.inverse_transform_point(shape_pose.position),
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
                 };
                 if let Some(st) = self.paper.as_mut() {
                     for (k, &(a, b)) in EDGES.iter().enumerate() {
-                        st.sticks.push(paper::Stick { a: bone.particles[a], b: bone.particles[b], rest: bone.stick_rest[k] });
+                        st.sticks.push(paper::Stick {
+                            a: bone.particles[a],
+                            b: bone.particles[b],
+                            rest: bone.stick_rest[k],
+                        });
                     }
                 }
             }

@@ -26,10 +26,10 @@
 //!   bones move towards the current ones by `0.00025 / N · c_i`.
 //! - N rounds of relaxation and projection per step. Fixed bones take no correction.
 
-use super::bone::{gram_schmidt, EDGES};
+use super::ParticleWorld;
+use super::bone::{EDGES, gram_schmidt};
 use super::contacts::{broad_phase, ground_pair, shape_pair};
 use super::placement::{fill_far_apart, independent, paper_candidates};
-use super::ParticleWorld;
 use crate::scene::{JointKind, SceneDesc, SwingLimit};
 use glam::{Quat, Vec3};
 
@@ -114,11 +114,14 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
     for c in &scene.constraints {
         let b1 = c.body1.index();
         let b2 = c.body2.body().map(|b| b.index());
-        let fixed = scene.bodies[b1].is_fixed() && b2.is_none_or(|b| scene.bodies[b].is_fixed());
-        let world_tied = b2.is_none();
-        let movable = !fixed && !world_tied && !(scene.bodies[b1].is_fixed() || b2.is_some_and(|b| scene.bodies[b].is_fixed()));
+        // A joint particle moves only when both bones do (the world and fixed bones
+        // hold it).
+        let movable =
+            !scene.bodies[b1].is_fixed() && b2.is_some_and(|b| !scene.bodies[b].is_fixed());
         let pts: Vec<Vec3> = match &c.kind {
-            JointKind::BallAndSocket { anchor, .. } | JointKind::Universal { anchor, .. } => vec![*anchor],
+            JointKind::BallAndSocket { anchor, .. } | JointKind::Universal { anchor, .. } => {
+                vec![*anchor]
+            }
             JointKind::Hinge { anchor, axis, .. } => {
                 let ext = |i: usize| {
                     let b = &scene.bodies[i];
@@ -156,7 +159,9 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
             for p in explicit {
                 let wp = body.pose.transform_point(p);
                 chosen.push(wp);
-                let shared = joint_points[i].iter().find(|(q, _)| q.distance(wp) < 1e-3 * size.max(1e-3));
+                let shared = joint_points[i]
+                    .iter()
+                    .find(|(q, _)| q.distance(wp) < 1e-3 * size.max(1e-3));
                 ids.push(match shared {
                     Some(&(_, id)) => id,
                     None => u32::MAX,
@@ -213,7 +218,10 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         let x = &w.particles.x;
         let pos: [Vec3; 4] = particles.map(|p| x[p as usize]);
         let (rot, _) = gram_schmidt(pos[1] - pos[0], pos[2] - pos[0]);
-        let frame = crate::scene::Pose { position: pos[0], rotation: rot };
+        let frame = crate::scene::Pose {
+            position: pos[0],
+            rotation: rot,
+        };
         let inv = crate::scene::Pose {
             position: -(rot.inverse() * pos[0]),
             rotation: rot.inverse(),
@@ -226,7 +234,11 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         bone.rot = rot;
         bone.shape_in_bone = inv.mul_pose(&poses[i]);
         for (k, &(a, b)) in EDGES.iter().enumerate() {
-            st.sticks.push(Stick { a: particles[a], b: particles[b], rest: bone.stick_rest[k] });
+            st.sticks.push(Stick {
+                a: particles[a],
+                b: particles[b],
+                rest: bone.stick_rest[k],
+            });
         }
         for s in satellites {
             for &p in &particles {
@@ -247,7 +259,8 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
                 if let Some(b2) = b2 {
                     for &p in &w.bones[b1].particles.clone() {
                         for &q in &w.bones[b2].particles.clone() {
-                            let rest = w.particles.x[p as usize].distance(w.particles.x[q as usize]);
+                            let rest =
+                                w.particles.x[p as usize].distance(w.particles.x[q as usize]);
                             st.sticks.push(Stick { a: p, b: q, rest });
                         }
                     }
@@ -255,16 +268,22 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
                     for &p in &w.bones[b1].particles.clone() {
                         let x = w.particles.x[p as usize];
                         let anchor = w.particles.push(x, Vec3::ZERO, g, dt, dt, 0.0, false);
-                        st.sticks.push(Stick { a: p, b: anchor, rest: 0.0 });
+                        st.sticks.push(Stick {
+                            a: p,
+                            b: anchor,
+                            rest: 0.0,
+                        });
                     }
                 }
             }
             JointKind::Hinge { limit: Some(l), .. } => {
                 let ids = &joint_particles[ci];
                 let (p1, p2) = (ids[0], ids[1]);
-                st.hinges.push(hinge_limit(w, b1, b2, p1, p2, l.min, l.max, dt));
+                st.hinges
+                    .push(hinge_limit(w, b1, b2, p1, p2, l.min, l.max, dt));
             }
-            JointKind::BallAndSocket { swing: Some(s), .. } | JointKind::Universal { swing: Some(s), .. } => {
+            JointKind::BallAndSocket { swing: Some(s), .. }
+            | JointKind::Universal { swing: Some(s), .. } => {
                 let joint = joint_particles[ci][0];
                 st.cones.push(cone_limit(w, b1, b2, joint, s, dt));
             }
@@ -293,7 +312,16 @@ fn farthest_from_line(w: &ParticleWorld, bone: usize, p1: Vec3, axis: Vec3, skip
 }
 
 #[allow(clippy::too_many_arguments)]
-fn hinge_limit(w: &mut ParticleWorld, b1: usize, b2: Option<usize>, p1: u32, p2: u32, min: f32, max: f32, dt: f32) -> HingeLimit {
+fn hinge_limit(
+    w: &mut ParticleWorld,
+    b1: usize,
+    b2: Option<usize>,
+    p1: u32,
+    p2: u32,
+    min: f32,
+    max: f32,
+    dt: f32,
+) -> HingeLimit {
     let x1 = w.particles.x[p1 as usize];
     let axis = (w.particles.x[p2 as usize] - x1).normalize();
     let ref_b = farthest_from_line(w, b1, x1, axis, &[p1, p2]);
@@ -303,8 +331,10 @@ fn hinge_limit(w: &mut ParticleWorld, b1: usize, b2: Option<usize>, p1: u32, p2:
         Some(b) => farthest_from_line(w, b, x1, axis, &[p1, p2]),
         None => {
             // The world has no particles: a fixed one off the axis, opposite bone B.
-            let off = -radial.normalize_or(axis.any_orthonormal_vector()) * radial.length().max(0.05);
-            w.particles.push(x1 + off, Vec3::ZERO, Vec3::ZERO, dt, dt, 0.0, false)
+            let off =
+                -radial.normalize_or(axis.any_orthonormal_vector()) * radial.length().max(0.05);
+            w.particles
+                .push(x1 + off, Vec3::ZERO, Vec3::ZERO, dt, dt, 0.0, false)
         }
     };
     let xa = w.particles.x[ref_a as usize];
@@ -324,10 +354,27 @@ fn hinge_limit(w: &mut ParticleWorld, b1: usize, b2: Option<usize>, p1: u32, p2:
     }
 }
 
-fn cone_limit(w: &mut ParticleWorld, b1: usize, b2: Option<usize>, joint: u32, s: &SwingLimit, dt: f32) -> ConeLimit {
+fn cone_limit(
+    w: &mut ParticleWorld,
+    b1: usize,
+    b2: Option<usize>,
+    joint: u32,
+    s: &SwingLimit,
+    dt: f32,
+) -> ConeLimit {
     let (axis, theta, shaft) = match *s {
-        SwingLimit::Cone { axis, half_angle, shaft } => (axis, half_angle, shaft),
-        SwingLimit::Pyramid { axis, half_angle1, half_angle2, shaft, .. } => (axis, half_angle1.max(half_angle2), shaft),
+        SwingLimit::Cone {
+            axis,
+            half_angle,
+            shaft,
+        } => (axis, half_angle, shaft),
+        SwingLimit::Pyramid {
+            axis,
+            half_angle1,
+            half_angle2,
+            shaft,
+            ..
+        } => (axis, half_angle1.max(half_angle2), shaft),
     };
     let xj = w.particles.x[joint as usize];
     let x = &w.particles.x;
@@ -348,9 +395,21 @@ fn cone_limit(w: &mut ParticleWorld, b1: usize, b2: Option<usize>, joint: u32, s
             .particles
             .iter()
             .filter(|&&p| p != joint)
-            .min_by(|&&a, &&b| (x[a as usize] - xj).dot(axis).total_cmp(&(x[b as usize] - xj).dot(axis)))
+            .min_by(|&&a, &&b| {
+                (x[a as usize] - xj)
+                    .dot(axis)
+                    .total_cmp(&(x[b as usize] - xj).dot(axis))
+            })
             .unwrap_or(&w.bones[b].particles[3]),
-        None => w.particles.push(xj - axis * a_len.max(0.05), Vec3::ZERO, Vec3::ZERO, dt, dt, 0.0, false),
+        None => w.particles.push(
+            xj - axis * a_len.max(0.05),
+            Vec3::ZERO,
+            Vec3::ZERO,
+            dt,
+            dt,
+            0.0,
+            false,
+        ),
     };
     ConeLimit {
         bone_a: b2,
@@ -388,8 +447,20 @@ fn update_frames(w: &mut ParticleWorld) {
 
 /// Handles the deepest contact between bone `a` and `b` (or the ground): 3.5.1–3.5.3,
 /// then the friction of 3.6.
-fn handle(w: &mut ParticleWorld, a: usize, b: Option<usize>, p: Vec3, n: Vec3, d: f32, iterations: u32) {
-    let ma = if w.bones[a].fixed { f32::INFINITY } else { w.bones[a].mass };
+fn handle(
+    w: &mut ParticleWorld,
+    a: usize,
+    b: Option<usize>,
+    p: Vec3,
+    n: Vec3,
+    d: f32,
+    iterations: u32,
+) {
+    let ma = if w.bones[a].fixed {
+        f32::INFINITY
+    } else {
+        w.bones[a].mass
+    };
     let mb = match b {
         Some(b) if !w.bones[b].fixed => w.bones[b].mass,
         _ => f32::INFINITY,
@@ -406,7 +477,11 @@ fn handle(w: &mut ParticleWorld, a: usize, b: Option<usize>, p: Vec3, n: Vec3, d
         let ids = w.bones[bone].particles.map(|q| q as usize);
         let dist = ids.map(|i| p.distance(w.particles.x[i]));
         let total: f32 = dist.iter().sum();
-        let c = if total > 1e-9 { dist.map(|di| (1.0 - di / total) / 3.0) } else { [0.25; 4] };
+        let c = if total > 1e-9 {
+            dist.map(|di| (1.0 - di / total) / 3.0)
+        } else {
+            [0.25; 4]
+        };
         let lambda = 1.0 / c.iter().map(|ci| ci * ci).sum::<f32>();
         for k in 0..4 {
             let i = ids[k];
@@ -442,7 +517,12 @@ impl Deepest {
             return;
         }
         if self.count == 0 || depth > self.depth + 1e-6 {
-            *self = Deepest { depth, sum_p: (pa + pb) * 0.5, sum_n: n, count: 1 };
+            *self = Deepest {
+                depth,
+                sum_p: (pa + pb) * 0.5,
+                sum_n: n,
+                count: 1,
+            };
         } else if depth >= self.depth - 1e-6 {
             self.sum_p += (pa + pb) * 0.5;
             self.sum_n += n;
@@ -459,10 +539,20 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
     let mut manifolds = std::mem::take(&mut w.manifolds);
     for &(i, j) in &pairs {
         let mut deep = Deepest::default();
-        shape_pair(&w.bones, i, j, 0.0, &mut manifolds, |pa, pb, n, d| deep.add(pa, pb, n, d));
+        shape_pair(&w.bones, i, j, 0.0, &mut manifolds, |pa, pb, n, d| {
+            deep.add(pa, pb, n, d)
+        });
         if deep.count > 0 {
             let n = deep.sum_n.normalize_or_zero();
-            handle(w, i, Some(j), deep.sum_p / deep.count as f32, n, deep.depth, iterations);
+            handle(
+                w,
+                i,
+                Some(j),
+                deep.sum_p / deep.count as f32,
+                n,
+                deep.depth,
+                iterations,
+            );
             w.bones[i].paper_frame(&w.particles.x);
             w.bones[j].paper_frame(&w.particles.x);
         }
@@ -473,10 +563,20 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
                 continue;
             }
             let mut deep = Deepest::default();
-            ground_pair(&w.bones, i, &ground, 0.0, &mut manifolds, |pa, pb, n, d| deep.add(pa, pb, n, d));
+            ground_pair(&w.bones, i, &ground, 0.0, &mut manifolds, |pa, pb, n, d| {
+                deep.add(pa, pb, n, d)
+            });
             if deep.count > 0 {
                 let n = deep.sum_n.normalize_or_zero();
-                handle(w, i, None, deep.sum_p / deep.count as f32, n, deep.depth, iterations);
+                handle(
+                    w,
+                    i,
+                    None,
+                    deep.sum_p / deep.count as f32,
+                    n,
+                    deep.depth,
+                    iterations,
+                );
                 w.bones[i].paper_frame(&w.particles.x);
             }
         }
@@ -521,7 +621,13 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
     w.particles.verlet(g, dt);
     for _ in 0..n {
         for stick in &st.sticks {
-            satisfy(&mut w.particles.x, &w.particles.inv_mass, stick.a, stick.b, stick.rest);
+            satisfy(
+                &mut w.particles.x,
+                &w.particles.inv_mass,
+                stick.a,
+                stick.b,
+                stick.rest,
+            );
         }
         solve_limits(w, st);
         if let Some(grab) = w.grab {

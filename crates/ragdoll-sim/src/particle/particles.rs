@@ -33,9 +33,23 @@ impl Particles {
     /// Verlet's velocity lives half a step back: `(x₀ − x₋₁)/Δt = v(−Δt/2)`. Starting it
     /// there, `x₋₁ = x₀ − v Δt + ½ g Δt²`, makes free fall exact (eq. 41 is exact for a
     /// parabola); the velocity form gets `v − ½ g h` for its substep `h`.
-    pub fn push(&mut self, x: Vec3, v: Vec3, gravity: Vec3, dt: f32, h: f32, mass: f32, movable: bool) -> u32 {
+    #[allow(clippy::too_many_arguments)] // one call site per placement; all plain values
+    pub fn push(
+        &mut self,
+        x: Vec3,
+        v: Vec3,
+        gravity: Vec3,
+        dt: f32,
+        h: f32,
+        mass: f32,
+        movable: bool,
+    ) -> u32 {
         let i = self.x.len() as u32;
-        let (v, g) = if movable { (v, gravity) } else { (Vec3::ZERO, Vec3::ZERO) };
+        let (v, g) = if movable {
+            (v, gravity)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        };
         self.x.push(x);
         let prev = x - v * dt + g * (0.5 * dt * dt);
         self.x_prev.push(prev);
@@ -44,7 +58,7 @@ impl Particles {
         self.mass.push(mass);
         self.inv_mass.push(if movable { 1.0 } else { 0.0 });
         self.joint.push(false);
-        i as u32
+        i
     }
 
     /// Number of particles.

@@ -78,7 +78,8 @@ pub(crate) fn point_mass_props(mass: f32, rest: &[Vec3; 4]) -> (Vec3, Mat3) {
     let mut inertia = Mat3::ZERO;
     for p in rest {
         let r = *p - com;
-        inertia += (Mat3::IDENTITY * r.length_squared() - Mat3::from_cols(r * r.x, r * r.y, r * r.z)) * m;
+        inertia +=
+            (Mat3::IDENTITY * r.length_squared() - Mat3::from_cols(r * r.x, r * r.y, r * r.z)) * m;
     }
     (com, inertia)
 }
@@ -90,9 +91,10 @@ pub(crate) fn paper_candidates(shape: &Shape) -> [Vec3; 8] {
     let h = shape.local_half_extents();
     let s = match shape {
         Shape::Box { .. } => Vec3::ONE,
-        Shape::Capsule { half_height, radius } => {
-            Vec3::new(0.7, half_height / (half_height + radius), 0.7)
-        }
+        Shape::Capsule {
+            half_height,
+            radius,
+        } => Vec3::new(0.7, half_height / (half_height + radius), 0.7),
         _ => Vec3::new(0.6, 0.6, 0.6),
     };
     std::array::from_fn(|k| {
@@ -133,7 +135,10 @@ pub(crate) fn fill_far_apart(chosen: &mut Vec<Vec3>, candidates: &[Vec3], size: 
             if !independent(chosen, c, size) {
                 continue;
             }
-            let d = chosen.iter().map(|q| q.distance(c)).fold(f32::INFINITY, f32::min);
+            let d = chosen
+                .iter()
+                .map(|q| q.distance(c))
+                .fold(f32::INFINITY, f32::min);
             if best.is_none_or(|(bd, _)| d > bd) {
                 best = Some((d, c));
             }
@@ -148,7 +153,7 @@ pub(crate) fn fill_far_apart(chosen: &mut Vec<Vec3>, candidates: &[Vec3], size: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{mass_props, BodyDesc, MassSpec};
+    use crate::scene::{BodyDesc, MassSpec, mass_props};
 
     fn check_reproduces(shape: Shape) {
         let b = BodyDesc::new("b", shape, Pose::IDENTITY, MassSpec::Mass(3.0));
@@ -157,18 +162,37 @@ mod tests {
         // Map the particles to the shape frame and compare there.
         let rest = p.rest.map(|r| p.bone_in_shape.transform_point(r));
         let (com, inertia) = point_mass_props(mp.mass, &rest);
-        assert!((com - mp.local_com).length() < 1e-5, "com {com} vs {}", mp.local_com);
-        let scale = mp.inertia.x_axis.x.max(mp.inertia.y_axis.y).max(mp.inertia.z_axis.z);
+        assert!(
+            (com - mp.local_com).length() < 1e-5,
+            "com {com} vs {}",
+            mp.local_com
+        );
+        let scale = mp
+            .inertia
+            .x_axis
+            .x
+            .max(mp.inertia.y_axis.y)
+            .max(mp.inertia.z_axis.z);
         for c in 0..3 {
             let d = (inertia.col(c) - mp.inertia.col(c)).abs().max_element();
-            assert!(d < 1e-4 * scale, "inertia column {c}: {} vs {}", inertia.col(c), mp.inertia.col(c));
+            assert!(
+                d < 1e-4 * scale,
+                "inertia column {c}: {} vs {}",
+                inertia.col(c),
+                mp.inertia.col(c)
+            );
         }
     }
 
     #[test]
     fn box_particles_are_alternate_corners_over_sqrt3() {
         let half = Vec3::new(0.3, 0.1, 0.2);
-        let b = BodyDesc::new("b", Shape::Box { half_extents: half }, Pose::IDENTITY, MassSpec::Mass(2.0));
+        let b = BodyDesc::new(
+            "b",
+            Shape::Box { half_extents: half },
+            Pose::IDENTITY,
+            MassSpec::Mass(2.0),
+        );
         let p = particulate(&mass_props(&b).unwrap());
         for (r, s) in p.rest.iter().zip(CORNERS) {
             assert!((*r - s * half / 3f32.sqrt()).length() < 1e-5, "{r}");
@@ -178,9 +202,20 @@ mod tests {
 
     #[test]
     fn round_shapes_and_hulls_reproduce_mass_com_inertia() {
-        check_reproduces(Shape::Capsule { half_height: 0.2, radius: 0.05 });
-        check_reproduces(Shape::Cylinder { half_height: 0.1, radius: 0.3, sides: 0 });
-        check_reproduces(Shape::Cone { half_height: 0.2, radius: 0.1, sides: 0 });
+        check_reproduces(Shape::Capsule {
+            half_height: 0.2,
+            radius: 0.05,
+        });
+        check_reproduces(Shape::Cylinder {
+            half_height: 0.1,
+            radius: 0.3,
+            sides: 0,
+        });
+        check_reproduces(Shape::Cone {
+            half_height: 0.2,
+            radius: 0.1,
+            sides: 0,
+        });
         let pts: Vec<Vec3> = vec![
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(0.4, 0.1, 0.0),

@@ -49,7 +49,8 @@ pub(crate) fn update(
         if b.fixed {
             continue;
         }
-        let slow = b.asleep || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
+        let slow = b.asleep
+            || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
         b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
         let (p, q) = b.still_anchor;
         let turned = (b.rot * q.inverse()).to_axis_angle().1;
@@ -64,17 +65,19 @@ pub(crate) fn update(
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
     for j in joints {
-        if let (Some(a), Some(b)) = (j.a, j.b) {
-            if dynamic(bones, a) && dynamic(bones, b) {
-                union(&mut parent, a, b);
-            }
+        if let (Some(a), Some(b)) = (j.a, j.b)
+            && dynamic(bones, a)
+            && dynamic(bones, b)
+        {
+            union(&mut parent, a, b);
         }
     }
     for c in contacts {
-        if let Some(b) = c.b {
-            if dynamic(bones, c.a) && dynamic(bones, b) {
-                union(&mut parent, c.a, b);
-            }
+        if let Some(b) = c.b
+            && dynamic(bones, c.a)
+            && dynamic(bones, b)
+        {
+            union(&mut parent, c.a, b);
         }
     }
     let mut min_time = vec![f32::INFINITY; n];
