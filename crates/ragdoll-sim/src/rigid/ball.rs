@@ -58,14 +58,35 @@ impl JointSolve for BallJoint {
         self.point.solve(&self.frame, s, ctx, use_bias);
     }
 
+    fn project(&self, s: &mut BodyStates) {
+        if let Some(sw) = &self.swing {
+            sw.project(&self.frame, s);
+        }
+        if let Some(t) = &self.twist {
+            t.project(&self.frame, s);
+        }
+        self.point.project(
+            &self.frame,
+            s,
+            self.friction.max_torque > 0.0 && self.friction.holding,
+        );
+    }
+
     fn limit_violation(&self, s: &BodyStates) -> f32 {
+        // Hard limits only: the soft flex/twist limits of the PyODE tutorial push back
+        // with a torque proportional to the excess and are exceeded by design (seed
+        // pyode-ragdoll-tutorial.txt: "the reactive torque will not stop the joint from
+        // at least temporarily exceeding the angle limits, but this is actually
+        // desirable"), so they do not count as violations.
         let sw = self
             .swing
             .as_ref()
+            .filter(|l| l.is_hard())
             .map_or(0.0, |l| l.violation(&self.frame, s));
         let tw = self
             .twist
             .as_ref()
+            .filter(|l| l.is_hard())
             .map_or(0.0, |l| l.violation(&self.frame, s));
         sw.max(tw)
     }

@@ -66,6 +66,31 @@ impl BodyStates {
     pub fn apply_angular_impulse(&mut self, i: usize, l: Vec3) {
         self.ang_vel[i] += self.inv_inertia[i] * l;
     }
+
+    /// Moves body `i` as the *position* impulse `p` at offset `r` would (the projection
+    /// pass): `Δx = p/m`, rotation by `Δθ = I⁻¹ (r × p)`. Velocities are untouched.
+    #[inline]
+    pub fn apply_position_impulse(&mut self, i: usize, r: Vec3, p: Vec3) {
+        self.com[i] += p * self.inv_mass[i];
+        self.rotate(i, self.inv_inertia[i] * r.cross(p));
+    }
+
+    /// Rotates body `i` by the angular position impulse `l`: `Δθ = I⁻¹ l`.
+    #[inline]
+    pub fn apply_angular_position_impulse(&mut self, i: usize, l: Vec3) {
+        self.rotate(i, self.inv_inertia[i] * l);
+    }
+
+    /// `q += ½ (Δθ, 0) q`, renormalised: the first-order rotation by the small vector `Δθ`.
+    #[inline]
+    fn rotate(&mut self, i: usize, dtheta: Vec3) {
+        if dtheta == Vec3::ZERO {
+            return;
+        }
+        let q = self.rot[i];
+        let dq = Quat::from_xyzw(dtheta.x, dtheta.y, dtheta.z, 0.0) * q;
+        self.rot[i] = (q + dq * 0.5).normalize();
+    }
 }
 
 /// Cold per-body data: what the scene said, and what the solver derives from it once.

@@ -14,7 +14,9 @@
 
 use super::body::{BodyInfo, BodyStates};
 use super::broadphase::BroadPhase;
+use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
+use crate::scene::Shape;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
@@ -27,6 +29,16 @@ use parry3d::shape::SharedShape;
 pub const SPECULATIVE_DISTANCE: f32 = 0.02;
 /// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
 pub const LINEAR_SLOP: f32 = 0.0005;
+/// Rolling resistance coefficient (Box2D v3's `rollingResistance`): a contact of a round
+/// body (capsule, cylinder, cone) resists the relative rotation of its bodies with at
+/// most `ρ r λₙ` of angular impulse, r the round body's rolling radius (its smallest half
+/// extent) and λₙ the pair's normal impulse. It stands for the deformation of real
+/// contacts, which a rigid round body lacks: without it a capsule on a level floor never
+/// stops rolling and its island never sleeps. 0.005 is between a steel wheel on rail
+/// (0.001) and a tyre on concrete (0.01–0.02): it stops scene 9's rolling head and
+/// obstacle within seconds; larger values (0.01–0.03, measured) let the limbs land
+/// differently enough that a hard limit is pushed past 2°.
+pub const ROLLING_RESISTANCE: f32 = 0.005;
 
 /// One contact point with its solver state.
 #[derive(Clone, Copy, Debug, Default)]
@@ -76,6 +88,10 @@ pub struct ContactPair {
     pub friction: f32,
     /// Combined restitution.
     pub restitution: f32,
+    /// `ρ r`: rolling resistance times rolling radius (m).
+    pub rolling_arm: f32,
+    /// Accumulated rolling-resistance angular impulse on b.
+    pub rolling_impulse: Vec3,
     /// Points of the last narrow phase.
     pub points: Vec<ContactPoint>,
     manifolds: Vec<ContactManifold<(), ()>>,
@@ -209,9 +225,23 @@ impl Contacts {
                     (Some(g), true) => (g.friction, g.restitution),
                     _ => (info[b as usize].friction, info[b as usize].restitution),
                 };
+                // Only round bodies roll; a box's rotation is already resisted by its
+                // contact points' friction.
+                let rolling = |i: usize| match info[i].shape {
+                    Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
+                        info[i].min_half_extent
+                    }
+                    _ => 0.0,
+                };
+                let radius = if b == anchor {
+                    rolling(a as usize)
+                } else {
+                    rolling(a as usize).max(rolling(b as usize))
+                };
                 ContactPair {
                     a,
                     b,
+                    rolling_arm: ROLLING_RESISTANCE * radius,
                     friction: (fa * fb).sqrt(),
                     restitution: ra.max(rb),
                     ..Default::default()
@@ -299,6 +329,8 @@ impl Contacts {
                 s.apply_impulse(a, p.ra, -imp);
                 s.apply_impulse(b, p.rb, imp);
             }
+            s.apply_angular_impulse(a, -pair.rolling_impulse);
+            s.apply_angular_impulse(b, pair.rolling_impulse);
         }
     }
 
@@ -354,6 +386,21 @@ impl Contacts {
                 s.apply_impulse(a, p.ra, -d);
                 s.apply_impulse(b, p.rb, d);
             }
+            // Rolling resistance: drive the relative angular velocity to zero with at most
+            // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
+            if pair.rolling_arm > 0.0 {
+                let cap =
+                    pair.rolling_arm * pair.points.iter().map(|p| p.normal_impulse).sum::<f32>();
+                let k = s.inv_inertia[a] + s.inv_inertia[b];
+                if k.determinant().abs() > 1e-20 {
+                    let w = s.ang_vel[b] - s.ang_vel[a];
+                    let old = pair.rolling_impulse;
+                    let new = (old - k.inverse() * w).clamp_length_max(cap);
+                    pair.rolling_impulse = new;
+                    s.apply_angular_impulse(a, -(new - old));
+                    s.apply_angular_impulse(b, new - old);
+                }
+            }
         }
     }
 
@@ -386,6 +433,38 @@ impl Contacts {
                 p.normal_impulse = new;
                 s.apply_impulse(a, p.ra, -p.normal * d);
                 s.apply_impulse(b, p.rb, p.normal * d);
+            }
+        }
+    }
+}
+
+impl Contacts {
+    /// One position-projection pass (see [`super::project`]): each point deeper than
+    /// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
+    /// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
+    /// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`).
+    pub fn project(&mut self, s: &mut BodyStates, awake: &[bool]) {
+        for pair in Self::active(&mut self.pairs, awake) {
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            for p in &pair.points {
+                let sep = current_separation(p, s.com[a], s.rot[a], s.com[b], s.rot[b]);
+                let c =
+                    (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
+                if c == 0.0 {
+                    continue;
+                }
+                let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
+                let (ja, jb) = (ra.cross(p.normal), rb.cross(p.normal));
+                let k = s.inv_mass[a]
+                    + s.inv_mass[b]
+                    + ja.dot(s.inv_inertia[a] * ja)
+                    + jb.dot(s.inv_inertia[b] * jb);
+                if k <= 1e-20 {
+                    continue;
+                }
+                let impulse = p.normal * (-c / k);
+                s.apply_position_impulse(a, ra, -impulse);
+                s.apply_position_impulse(b, rb, impulse);
             }
         }
     }

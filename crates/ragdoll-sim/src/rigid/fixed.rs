@@ -33,6 +33,11 @@ impl JointSolve for FixedJoint {
         self.point.solve(&self.frame, s, ctx, use_bias);
     }
 
+    fn project(&self, s: &mut BodyStates) {
+        self.lock.project(&self.frame, s);
+        self.point.project(&self.frame, s, false);
+    }
+
     fn limit_violation(&self, _: &BodyStates) -> f32 {
         0.0
     }

@@ -54,6 +54,18 @@ impl JointSolve for HingeJoint {
         self.friction.solve(&self.frame, s, ctx);
     }
 
+    fn project(&self, s: &mut BodyStates) {
+        if let Some(l) = &self.limit {
+            l.project(&self.frame, s);
+        }
+        self.align.project(&self.frame, s);
+        self.point.project(
+            &self.frame,
+            s,
+            self.friction.max_torque > 0.0 && self.friction.holding,
+        );
+    }
+
     fn limit_violation(&self, s: &BodyStates) -> f32 {
         self.limit
             .as_ref()

@@ -11,6 +11,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::body::BodyStates;
+use super::project::{ANGULAR_SLOP, JOINT_SLOP, MAX_ANGULAR_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::{Softness, Spring, StepContext};
 use glam::{Mat3, Quat, Vec3};
 
@@ -78,6 +79,13 @@ impl JointFrame {
         s.apply_angular_impulse(self.a, l);
         s.apply_angular_impulse(self.b, -l);
     }
+
+    /// Rotates a by the angular position impulse `l` and b by `−l` (projection pass).
+    #[inline]
+    pub fn rotate_apart(&self, s: &mut BodyStates, l: Vec3) {
+        s.apply_angular_position_impulse(self.a, l);
+        s.apply_angular_position_impulse(self.b, -l);
+    }
 }
 
 /// Soft coefficients for a bilateral row: the joint softness while solving, rigid
@@ -116,6 +124,36 @@ impl PointPart {
         self.impulse += p;
         s.apply_impulse(f.a, ra, -p);
         s.apply_impulse(f.b, rb, p);
+    }
+
+    /// Position projection: moves both bodies by `P = −K⁻¹ C` so the anchors meet, the
+    /// error clamped to [`MAX_LINEAR_CORRECTION`].
+    ///
+    /// Gaps below [`JOINT_SLOP`] are left to the velocity solver: a resting figure's
+    /// joints sag that much under load, and closing it every step would make the figure
+    /// creep. With `translate_only` (a joint held by its friction) the bodies are only
+    /// translated, so the correction does not turn the joint past what friction holds.
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates, translate_only: bool) {
+        let (ra, rb) = f.offsets(s);
+        let c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
+        if c.length_squared() <= JOINT_SLOP * JOINT_SLOP {
+            return;
+        }
+        let c = c.clamp_length_max(MAX_LINEAR_CORRECTION);
+        if translate_only {
+            let m = s.inv_mass[f.a] + s.inv_mass[f.b];
+            if m > 0.0 {
+                let p = -c / m;
+                s.com[f.a] -= p * s.inv_mass[f.a];
+                s.com[f.b] += p * s.inv_mass[f.b];
+            }
+            return;
+        }
+        let k = point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb);
+        let Some(k_inv) = invert(k) else { return };
+        let p = -(k_inv * c);
+        s.apply_position_impulse(f.a, ra, -p);
+        s.apply_position_impulse(f.b, rb, p);
     }
 }
 
@@ -180,6 +218,15 @@ impl AngularLock3 {
         self.impulse += l;
         f.apply_angular(s, l);
     }
+
+    /// Position projection: rotates the bodies back towards the rest orientation.
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let c = self.error(f, s).clamp_length_max(MAX_ANGULAR_CORRECTION);
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+            return;
+        };
+        f.rotate_apart(s, -(k_inv * c));
+    }
 }
 
 /// Keeps a direction fixed in a aligned with one fixed in b: two rows about the
@@ -243,6 +290,22 @@ impl AlignPart {
         self.impulse[0] += l0;
         self.impulse[1] += l1;
         f.apply_angular(s, u * l0 + v * l1);
+    }
+
+    /// Position projection: rotates the bodies so the two directions align again.
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let (da, db, u, v) = self.basis(f, s);
+        let e = db.cross(da).clamp_length_max(MAX_ANGULAR_CORRECTION);
+        let m = f.inv_inertia_sum(s);
+        let (k11, k12, k22) = (u.dot(m * u), u.dot(m * v), v.dot(m * v));
+        let det = k11 * k22 - k12 * k12;
+        if !(det.abs() > 1e-20) {
+            return;
+        }
+        let r = [u.dot(e), v.dot(e)];
+        let l0 = -(k22 * r[0] - k12 * r[1]) / det;
+        let l1 = -(k11 * r[1] - k12 * r[0]) / det;
+        f.rotate_apart(s, u * l0 + v * l1);
     }
 }
 
@@ -353,6 +416,26 @@ impl AxisRow {
         self.impulse = new;
         f.apply_angular(s, self.axis * (new - old));
     }
+
+    /// Position projection of a hard limit or an equality with the axis and value last
+    /// set: `Δθ = −C/k` along the axis, a limit only when violated by more than
+    /// [`ANGULAR_SLOP`] (soft limits are springs by design and are left alone).
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let c = match self.kind {
+            RowKind::Limit if self.active => (self.c + ANGULAR_SLOP).min(0.0),
+            RowKind::Equality => self.c,
+            _ => return,
+        };
+        if c == 0.0 {
+            return;
+        }
+        let k = self.axis.dot(f.inv_inertia_sum(s) * self.axis);
+        if !(k > 1e-20) {
+            return;
+        }
+        let c = c.clamp(-MAX_ANGULAR_CORRECTION, MAX_ANGULAR_CORRECTION);
+        f.rotate_apart(s, self.axis * (-c / k));
+    }
 }
 
 /// Joint friction as a capped motor (Doom 3 `friction`): drives the relative angular
@@ -364,6 +447,8 @@ pub struct FrictionMotor {
     pub max_torque: f32,
     /// Accumulated angular impulse on a.
     pub impulse: Vec3,
+    /// Whether the last update held the joint (impulse below the cap: sticking).
+    pub holding: bool,
 }
 
 impl FrictionMotor {
@@ -374,6 +459,7 @@ impl FrictionMotor {
         FrictionMotor {
             max_torque: friction * mass_a * g * arm.max(0.05),
             impulse: Vec3::ZERO,
+            holding: false,
         }
     }
 
@@ -395,7 +481,8 @@ impl FrictionMotor {
         let old = self.impulse;
         let mut new = old - k_inv * f.rel_ang_vel(s);
         let cap = self.max_torque * ctx.h;
-        if new.length_squared() > cap * cap {
+        self.holding = new.length_squared() <= cap * cap;
+        if !self.holding {
             new = new.normalize() * cap;
         }
         self.impulse = new;

@@ -26,12 +26,15 @@ pub trait JointSolve {
     fn warm_start(&self, s: &mut BodyStates);
     /// One Gauss–Seidel update; `use_bias` false in the relax pass.
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
+    /// One position-projection update (see [`super::project`]); joints without a
+    /// rigid part (springs) keep the default, which does nothing.
+    fn project(&self, _s: &mut BodyStates) {}
     /// Distance between the anchor as seen from each body (m).
     fn gap(&self, s: &BodyStates) -> f32 {
         let (pa, pb) = self.frame().anchors(s);
         pa.distance(pb)
     }
-    /// Excess of a limited angle beyond its limit (rad).
+    /// Excess of a limited angle beyond its hard limit (rad); soft limits do not count.
     fn limit_violation(&self, s: &BodyStates) -> f32;
 }
 
@@ -257,6 +260,11 @@ impl JointSet {
         for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.solve(s, ctx, use_bias) });
     }
 
+    /// One position-projection pass over joints touching an awake body.
+    pub fn project(&self, s: &mut BodyStates, awake: &[bool]) {
+        for_each_joint_ref!(self, j => if touches_awake(j.frame(), awake) { j.project(s) });
+    }
+
     /// Largest joint gap now (m).
     pub fn max_gap(&self, s: &BodyStates) -> f32 {
         let mut m = 0.0f32;
@@ -264,7 +272,7 @@ impl JointSet {
         m
     }
 
-    /// Largest limit violation now (rad).
+    /// Largest hard-limit violation now (rad).
     pub fn max_limit_violation(&self, s: &BodyStates) -> f32 {
         let mut m = 0.0f32;
         for_each_joint_ref!(self, j => m = m.max(j.limit_violation(s)));

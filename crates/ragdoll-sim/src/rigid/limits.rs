@@ -161,6 +161,15 @@ impl Swing {
         }
     }
 
+    /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
+    pub fn is_hard(&self) -> bool {
+        match self {
+            Swing::Cone { row, .. } => row.kind == RowKind::Limit,
+            Swing::Tight(_) => true,
+            Swing::Pyramid { rows, .. } => rows[0].kind == RowKind::Limit,
+        }
+    }
+
     /// How far outside the limit the shaft is now (rad, 0 inside).
     pub fn violation(&self, f: &JointFrame, s: &BodyStates) -> f32 {
         match self {
@@ -214,6 +223,18 @@ impl Swing {
             Swing::Pyramid { rows, .. } => {
                 rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias))
             }
+        }
+    }
+
+    /// Position projection of the hard rows, measured on the current pose (the rows of
+    /// the velocity solve are left as they are, for the warm start).
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let mut now = *self;
+        now.update(f, s);
+        match &now {
+            Swing::Cone { row, .. } => row.project(f, s),
+            Swing::Tight(p) => p.project(f, s),
+            Swing::Pyramid { rows, .. } => rows.iter().for_each(|r| r.project(f, s)),
         }
     }
 
@@ -322,6 +343,11 @@ impl AngleLimit {
         self.rows[1].set(-axis, self.range.max - angle, MARGIN);
     }
 
+    /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
+    pub fn is_hard(&self) -> bool {
+        self.rows[0].kind == RowKind::Limit
+    }
+
     /// Excess beyond the range now (rad).
     pub fn violation(&self, f: &JointFrame, s: &BodyStates) -> f32 {
         let (_, a) = self.gauge.measure(f, s);
@@ -331,6 +357,14 @@ impl AngleLimit {
     /// Re-applies accumulated impulses.
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         self.rows.iter().for_each(|r| r.warm_start(f, s));
+    }
+
+    /// Position projection of the range, measured on the current pose without touching
+    /// the solver's rows or the unwrapping memory.
+    pub fn project(&self, f: &JointFrame, s: &mut BodyStates) {
+        let mut now = *self;
+        now.update(f, s);
+        now.rows.iter().for_each(|r| r.project(f, s));
     }
 
     /// One update of both rows.

@@ -8,7 +8,8 @@
 //! - [`ball`], [`hinge`], [`universal`], [`fixed`], [`slider`], [`spring`]: one file per
 //!   joint type; [`joint_set`]: the arrays of them.
 //! - [`broadphase`], [`contact`]: collision detection and the contact solver.
-//! - [`island`]: islands and sleeping; [`solver`]: the step.
+//! - [`island`]: islands and sleeping; [`solver`]: the step; [`project`]: the position
+//!   projection after it.
 //! - [`world`]: [`MultibodyWorld`], the `Method`.
 
 pub mod ball;
@@ -22,6 +23,7 @@ pub mod island;
 pub mod joint;
 pub mod joint_set;
 pub mod limits;
+pub mod project;
 pub mod slider;
 pub mod soft;
 pub mod solver;

@@ -11,13 +11,15 @@
 //! 5. relax: solve again without bias, removing the velocity the position feedback
 //!    added, so pushing out does not become bouncing.
 //!
-//! After the substeps, the restitution pass; then sleeping.
+//! After the substeps, the restitution pass, the position projection ([`super::project`]:
+//! what the soft constraints let give way is put back, positions only); then sleeping.
 
 use super::body::{BodyInfo, BodyStates};
 use super::contact::Contacts;
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::project;
 use super::soft::{Softness, StepContext};
 use crate::scene::Settings;
 
@@ -98,6 +100,7 @@ pub fn step(
         contacts.solve(s, awake, &ctx, false);
     }
     contacts.restitution(s, awake, settings.restitution_threshold);
+    project::project_positions(s, joints, contacts, awake, &settings.sleep);
 
     if islands.update_sleep(s, dynamic, &settings.sleep, dt, time + dt) {
         refresh_awake(s, info, islands, awake, dynamic);

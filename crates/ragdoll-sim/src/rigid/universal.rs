@@ -32,6 +32,18 @@ pub struct UniversalJoint {
     pub friction: FrictionMotor,
 }
 
+impl UniversalJoint {
+    /// The cross row measured on the current pose (impulse kept).
+    fn cross_row_now(&self, s: &BodyStates) -> AxisRow {
+        let f = &self.frame;
+        let s1 = s.rot[f.a] * self.shaft_a;
+        let s2 = s.rot[f.b] * self.shaft_b;
+        let mut row = self.cross_row;
+        row.set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
+        row
+    }
+}
+
 impl JointSolve for UniversalJoint {
     fn frame(&self) -> &JointFrame {
         &self.frame
@@ -39,10 +51,7 @@ impl JointSolve for UniversalJoint {
 
     fn prepare(&mut self, s: &BodyStates) {
         let f = &self.frame;
-        let s1 = s.rot[f.a] * self.shaft_a;
-        let s2 = s.rot[f.b] * self.shaft_b;
-        self.cross_row
-            .set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
+        self.cross_row = self.cross_row_now(s);
         if let Some(sw) = &mut self.swing {
             sw.update(f, s);
         }
@@ -75,6 +84,22 @@ impl JointSolve for UniversalJoint {
         }
         self.cross_row.solve(f, s, ctx, use_bias);
         self.point.solve(f, s, ctx, use_bias);
+    }
+
+    fn project(&self, s: &mut BodyStates) {
+        let f = &self.frame;
+        if let Some(sw) = &self.swing {
+            sw.project(f, s);
+        }
+        if let Some(r) = &self.ranges {
+            r.iter().for_each(|l| l.project(f, s));
+        }
+        self.cross_row_now(s).project(f, s);
+        self.point.project(
+            f,
+            s,
+            self.friction.max_torque > 0.0 && self.friction.holding,
+        );
     }
 
     fn limit_violation(&self, s: &BodyStates) -> f32 {

@@ -305,6 +305,8 @@ impl Method for MultibodyWorld {
             kinetic,
             max_penetration: self.max_penetration(),
             max_joint_gap: self.joints.max_gap(&self.states),
+            // Hard limits only; soft (PyODE tutorial) limits are exceeded by design, see
+            // `BallJoint::limit_violation`.
             max_limit_violation_deg: self.joints.max_limit_violation(&self.states).to_degrees(),
             max_bone_stretch: None,
             all_asleep: (0..self.info.len()).all(|i| !self.dynamic[i] || self.islands.asleep[i]),
