@@ -26,7 +26,7 @@ mod sleeping;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
-    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, mass_props, validate,
+    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, collider, mass_props, validate,
 };
 use crate::snapshot::{
     BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
@@ -77,35 +77,6 @@ pub struct ParticleWorld {
     time: f64,
 }
 
-/// The parry3d shape of a scene shape.
-fn parry_shape(body: &BodyDesc) -> Result<SharedShape, SceneError> {
-    Ok(match &body.shape {
-        Shape::Box { half_extents } => {
-            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
-        }
-        Shape::Capsule {
-            half_height,
-            radius,
-        } => SharedShape::capsule_y(*half_height, *radius),
-        Shape::Cylinder {
-            half_height,
-            radius,
-            ..
-        } => SharedShape::cylinder(*half_height, *radius),
-        Shape::Cone {
-            half_height,
-            radius,
-            ..
-        } => SharedShape::cone(*half_height, *radius),
-        Shape::ConvexHull { points } => {
-            SharedShape::convex_hull(points).ok_or_else(|| SceneError::Degenerate {
-                body: body.name.clone(),
-                what: "its convex hull could not be built".into(),
-            })?
-        }
-    })
-}
-
 impl ParticleWorld {
     /// Builds the world for a scene with the given solver. Fails with a [`SceneError`]
     /// saying what and where when the description cannot be simulated.
@@ -132,7 +103,7 @@ impl ParticleWorld {
         }
         // Shapes first so an unusable hull is reported before anything is built.
         for b in &scene.bodies {
-            parry_shape(b)?;
+            collider(b)?;
         }
         match solver {
             ParticleSolver::Improved => {
@@ -174,7 +145,7 @@ impl ParticleWorld {
             prev_com: desc.pose.position,
             prev_rot: desc.pose.rotation,
             shape_in_bone: Pose::IDENTITY,
-            shape: parry_shape(desc).unwrap_or_else(|_| SharedShape::ball(0.01)),
+            shape: collider(desc).unwrap_or_else(|_| SharedShape::ball(0.01)),
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             mass,
             inv_inertia_local: Vec3::ZERO,

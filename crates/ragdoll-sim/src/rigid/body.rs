@@ -136,31 +136,6 @@ pub struct BodyInfo {
     pub projectile: bool,
 }
 
-/// The parry3d collider for a scene shape. Round shapes in parry3d are Y-aligned like
-/// ours; a cone's base is at −half_height and its apex at +half_height in both.
-pub fn collider(shape: &Shape) -> Option<SharedShape> {
-    Some(match shape {
-        Shape::Box { half_extents } => {
-            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
-        }
-        Shape::Capsule {
-            half_height,
-            radius,
-        } => SharedShape::capsule_y(*half_height, *radius),
-        Shape::Cylinder {
-            half_height,
-            radius,
-            ..
-        } => SharedShape::cylinder(*half_height, *radius),
-        Shape::Cone {
-            half_height,
-            radius,
-            ..
-        } => SharedShape::cone(*half_height, *radius),
-        Shape::ConvexHull { points } => SharedShape::convex_hull(points)?,
-    })
-}
-
 impl BodyInfo {
     /// Cold data of one body from its description and mass properties.
     pub fn new(desc: &BodyDesc, mp: &MassProps, collider: SharedShape, figure: u32) -> BodyInfo {

@@ -1,7 +1,7 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{BodyInfo, BodyStates, collider};
+use super::body::{BodyInfo, BodyStates};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -9,7 +9,8 @@ use super::solver;
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
 use crate::scene::{
-    BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, mass_props, validate,
+    BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, collider, mass_props,
+    validate,
 };
 use crate::snapshot::{BodyInstance, BodyRole, ContactInstance, RenderSnapshot};
 use glam::{Quat, Vec3};
@@ -56,10 +57,7 @@ impl MultibodyWorld {
         let mut info = Vec::with_capacity(n);
         for (i, b) in scene.bodies.iter().enumerate() {
             let mp = mass_props(b)?;
-            let shape = collider(&b.shape).ok_or_else(|| SceneError::Degenerate {
-                body: b.name.clone(),
-                what: "its convex hull cannot be built".into(),
-            })?;
+            let shape = collider(b)?;
             let fig = root(&mut figure, i as u32);
             info.push(BodyInfo::new(b, &mp, shape, fig));
             let com = b.pose.transform_point(mp.local_com);
@@ -361,7 +359,7 @@ impl Method for MultibodyWorld {
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
         let i = self.info.len();
-        let (Ok(mp), Some(shape)) = (mass_props(desc), collider(&desc.shape)) else {
+        let (Ok(mp), Ok(shape)) = (mass_props(desc), collider(desc)) else {
             // A degenerate projectile is not added; the caller gets the id it would have had.
             return BodyId(i as u32);
         };

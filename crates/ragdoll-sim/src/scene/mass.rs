@@ -8,7 +8,39 @@ use super::SceneError;
 use super::desc::{BodyDesc, MassSpec, SceneDesc, Shape};
 use glam::{Mat3, Vec3};
 use parry3d::mass_properties::MassProperties;
-use parry3d::shape::{ConvexPolyhedron, Shape as _};
+use parry3d::shape::{ConvexPolyhedron, Shape as _, SharedShape};
+
+/// The parry3d collider of a body's shape, shared by both methods so they collide the
+/// same geometry. Round shapes in parry3d are Y-aligned like ours; a cone's base is at
+/// −half_height and its apex at +half_height in both. Fails for a convex hull parry
+/// cannot build (flat or fewer than four points), naming the body.
+pub fn collider(body: &BodyDesc) -> Result<SharedShape, SceneError> {
+    Ok(match &body.shape {
+        Shape::Box { half_extents } => {
+            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z)
+        }
+        Shape::Capsule {
+            half_height,
+            radius,
+        } => SharedShape::capsule_y(*half_height, *radius),
+        Shape::Cylinder {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cylinder(*half_height, *radius),
+        Shape::Cone {
+            half_height,
+            radius,
+            ..
+        } => SharedShape::cone(*half_height, *radius),
+        Shape::ConvexHull { points } => {
+            SharedShape::convex_hull(points).ok_or_else(|| SceneError::Degenerate {
+                body: body.name.clone(),
+                what: "its convex hull cannot be built".into(),
+            })?
+        }
+    })
+}
 
 /// Mass, centre of mass and inertia of one body, in its shape frame.
 #[derive(Clone, Copy, Debug, PartialEq)]

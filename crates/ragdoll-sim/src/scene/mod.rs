@@ -12,7 +12,7 @@ pub mod md5mesh;
 mod validate;
 
 pub use desc::*;
-pub use mass::{MassProps, mass_props, scene_mass_props};
+pub use mass::{MassProps, collider, mass_props, scene_mass_props};
 pub use validate::validate;
 
 use thiserror::Error;
