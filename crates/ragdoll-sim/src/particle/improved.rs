@@ -243,8 +243,12 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         }
     }
     let mut newly = Vec::new();
+    let held = w
+        .grab
+        .and_then(|g| w.bones.iter().position(|b| b.body == g.body.index()));
     sleeping::update(
         &mut w.bones,
+        held,
         &w.joints,
         &w.contacts,
         &s.sleep,

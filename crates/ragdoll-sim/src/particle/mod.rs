@@ -292,7 +292,12 @@ pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
     };
     let local = bones[i].shape_in_bone.transform_point(g.local_point);
     let p = bones[i].world(local);
-    // Compliance 1e-3 m/N: a stiff but yielding spring, independent of the substep.
+    // A 5 Hz spring on the bone's own mass, like Box2D's mouse joint: compliance
+    // α = 1/k with k = m ω², ω = 2π·5 s⁻¹. Scaled by the mass so a light hand and a heavy
+    // chest follow the mouse alike; for the human's 15 kg chest k ≈ 15 kN/m, so the rest
+    // of the body hanging from it (≈ 400 N) stretches it by about 3 cm.
+    let omega = std::f32::consts::TAU * 5.0;
+    let compliance = 1.0 / (bones[i].mass.max(1e-3) * omega * omega);
     bone::positional(
         bones,
         Some(i),
@@ -300,7 +305,7 @@ pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
         p,
         g.target,
         g.target - p,
-        1e-3 / (h * h),
+        compliance / (h * h),
     );
 }
 
@@ -497,8 +502,12 @@ impl Method for ParticleWorld {
         if let Some(g) = grab {
             for b in self.bones.iter_mut() {
                 if b.body == g.body.index() {
+                    // Both rest timers restart, or the island's longest-resting bone
+                    // puts it straight back to sleep.
                     b.asleep = false;
                     b.sleep_time = 0.0;
+                    b.still_time = 0.0;
+                    b.still_anchor = (b.center(), b.rot);
                 }
             }
         }

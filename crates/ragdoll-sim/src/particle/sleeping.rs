@@ -33,9 +33,13 @@ fn union(parent: &mut [u32], a: usize, b: usize) {
 }
 
 /// Updates sleep timers and puts islands to sleep or wakes them. Returns the bones that
-/// just fell asleep so the caller can zero their particles' velocities.
+/// just fell asleep so the caller can zero their particles' velocities. A `held` bone
+/// (the mouse grab) never rests: the user is moving it, however slowly, so its island
+/// stays awake until it is let go.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn update(
     bones: &mut [Bone],
+    held: Option<usize>,
     joints: &[Joint],
     contacts: &[Contact],
     s: &SleepSettings,
@@ -61,6 +65,12 @@ pub(crate) fn update(
             b.still_anchor = (b.center(), b.rot);
             b.still_time = 0.0;
         }
+    }
+    if let Some(b) = held.and_then(|i| bones.get_mut(i)) {
+        b.asleep = false;
+        b.sleep_time = 0.0;
+        b.still_time = 0.0;
+        b.still_anchor = (b.center(), b.rot);
     }
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
