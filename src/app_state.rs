@@ -127,8 +127,14 @@ pub struct AppState {
     pub camera: OrbitCamera,
     /// Viewport height in pixels, for panning at the right speed.
     pub viewport_height: f32,
+    /// The last error a user action ran into (a missing variant, a broken file on R),
+    /// and when: the window shows it for [`NOTICE_SECONDS`] over the scene it kept.
+    pub notice: Option<(String, std::time::Instant)>,
     accumulator: f64,
 }
+
+/// How long an error notice stays on screen (s).
+pub const NOTICE_SECONDS: f32 = 6.0;
 
 impl AppState {
     /// The state at start-up: running (the paper's "started by default").
@@ -149,6 +155,7 @@ impl AppState {
             quit: false,
             camera,
             viewport_height: 720.0,
+            notice: None,
             accumulator: 0.0,
         }
     }

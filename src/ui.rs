@@ -107,6 +107,25 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
         Color32::from_black_alpha(150),
     );
     painter.galley(pos, galley, Color32::WHITE);
+    if let Some((text, at)) = &state.notice
+        && at.elapsed().as_secs_f32() < crate::app_state::NOTICE_SECONDS
+    {
+        let wrap = (area.width() - 20.0).max(50.0);
+        let galley = painter.layout(
+            text.clone(),
+            FontId::proportional(font),
+            Color32::WHITE,
+            wrap,
+        );
+        let above = pos.y - 14.0 - galley.size().y;
+        let at = Pos2::new(area.min.x + 10.0, above);
+        painter.rect_filled(
+            Rect::from_min_size(at, galley.size()).expand(5.0),
+            4.0,
+            Color32::from_rgba_unmultiplied(150, 20, 20, 220),
+        );
+        painter.galley(at, galley, Color32::WHITE);
+    }
     if state.show.names {
         let ppp = model.pixels_per_point;
         for (vp, snap) in viewports(area, ppp).iter().zip(&session.snapshots) {

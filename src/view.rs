@@ -201,6 +201,14 @@ impl App {
         }
     }
 
+    /// A failed action keeps the scene that runs: the state goes back to its variant,
+    /// and the error is logged and shown in the window, where the user looks.
+    fn report(&mut self, e: AppError) {
+        log::error!("{e}");
+        self.state.variant = self.session.loaded.desc.variant;
+        self.state.notice = Some((e.to_string(), std::time::Instant::now()));
+    }
+
     /// Reloads or rebuilds the scene the state asks for; on failure keeps the old one.
     fn rebuild(&mut self, kind: Rebuild) {
         let result = match kind {
@@ -210,7 +218,7 @@ impl App {
                 if loaded.desc.variant != self.state.variant {
                     match self.load(false) {
                         Ok(l) => loaded = l,
-                        Err(e) => return report(e),
+                        Err(e) => return self.report(e),
                     }
                 }
                 Session::new(loaded, self.state.particle_solver)
@@ -227,10 +235,11 @@ impl App {
                         OrbitCamera::from_desc(&session.loaded.desc.settings.camera);
                 }
                 self.state.variant = session.loaded.desc.variant;
+                self.state.notice = None;
                 self.session = session;
                 self.grab_viewport = None;
             }
-            Err(e) => report(e),
+            Err(e) => self.report(e),
         }
     }
 
@@ -331,11 +340,6 @@ impl App {
             event_loop.exit();
         }
     }
-}
-
-fn report(e: AppError) {
-    log::error!("{e}");
-    eprintln!("{e}");
 }
 
 impl ApplicationHandler for App {
