@@ -15,7 +15,7 @@
 //! are read; meshes, weights and everything after the joints block are skipped.
 
 use super::af::AfError;
-use super::af::lexer::{Pos, Tok, Token, tokenize};
+use super::af::lexer::{Cursor, Pos, Tok, tokenize};
 use glam::{Quat, Vec3};
 use std::path::Path;
 
@@ -62,11 +62,9 @@ pub fn load(path: &Path) -> Result<Md5Skeleton, AfError> {
 pub fn parse(text: &str, file: &str) -> Result<Md5Skeleton, AfError> {
     let tokens = tokenize(text, file)?;
     let mut r = Reader {
-        t: &tokens,
-        i: 0,
-        file,
+        c: Cursor::new(&tokens, file),
     };
-    let version_pos = r.peek().pos;
+    let version_pos = r.c.peek().pos;
     r.ident("MD5Version")?;
     let version = r.number("the md5 version")?;
     if version != 10.0 {
@@ -79,7 +77,7 @@ pub fn parse(text: &str, file: &str) -> Result<Md5Skeleton, AfError> {
     let mut declared = None;
     // Skip header keys until the joints block.
     loop {
-        let t = r.next();
+        let t = r.c.next();
         match &t.tok {
             Tok::Ident(k) if k == "numJoints" => declared = Some((r.number("numJoints")?, t.pos)),
             Tok::Ident(k) if k == "joints" => break,
@@ -96,13 +94,13 @@ pub fn parse(text: &str, file: &str) -> Result<Md5Skeleton, AfError> {
     r.expect(&Tok::LBrace, "`{` after `joints`")?;
     let mut joints: Vec<Md5Joint> = Vec::new();
     loop {
-        let t = r.next();
+        let t = r.c.next();
         let name = match &t.tok {
             Tok::RBrace => break,
             Tok::Str(s) => s.clone(),
-            _ => return Err(r.unexpected(t, "a quoted joint name or `}`")),
+            _ => return Err(r.c.unexpected(t, "a quoted joint name or `}`")),
         };
-        let parent_pos = r.peek().pos;
+        let parent_pos = r.c.peek().pos;
         let parent = r.number("the parent index")?;
         let parent = if parent == -1.0 {
             None
@@ -142,54 +140,32 @@ pub fn parse(text: &str, file: &str) -> Result<Md5Skeleton, AfError> {
 }
 
 struct Reader<'a> {
-    t: &'a [Token],
-    i: usize,
-    file: &'a str,
+    c: Cursor<'a>,
 }
 
 impl<'a> Reader<'a> {
-    fn peek(&self) -> &'a Token {
-        &self.t[self.i.min(self.t.len() - 1)]
-    }
-
-    fn next(&mut self) -> &'a Token {
-        let t = self.peek();
-        if t.tok != Tok::Eof {
-            self.i += 1;
-        }
-        t
-    }
-
-    fn unexpected(&self, t: &Token, what: &str) -> AfError {
-        AfError::at(
-            self.file,
-            t.pos,
-            format!("expected {what}, found {}", t.tok.describe()),
-        )
-    }
-
     fn expect(&mut self, tok: &Tok, what: &str) -> Result<Pos, AfError> {
-        let t = self.next();
+        let t = self.c.next();
         if &t.tok == tok {
             Ok(t.pos)
         } else {
-            Err(self.unexpected(t, what))
+            Err(self.c.unexpected(t, what))
         }
     }
 
     fn ident(&mut self, word: &str) -> Result<(), AfError> {
-        let t = self.next();
+        let t = self.c.next();
         match &t.tok {
             Tok::Ident(s) if s == word => Ok(()),
-            _ => Err(self.unexpected(t, &format!("`{word}`"))),
+            _ => Err(self.c.unexpected(t, &format!("`{word}`"))),
         }
     }
 
     fn number(&mut self, what: &str) -> Result<f64, AfError> {
-        let t = self.next();
+        let t = self.c.next();
         match t.tok {
             Tok::Num(n) if n.is_finite() => Ok(n),
-            _ => Err(self.unexpected(t, &format!("a number ({what})"))),
+            _ => Err(self.c.unexpected(t, &format!("a number ({what})"))),
         }
     }
 

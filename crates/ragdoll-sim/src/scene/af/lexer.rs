@@ -64,6 +64,57 @@ pub struct Token {
     pub pos: Pos,
 }
 
+/// A read position in a token list from [`tokenize`], shared by the `.af` parser and
+/// the md5mesh reader so both report "expected X, found Y" the same way.
+pub(crate) struct Cursor<'a> {
+    tokens: &'a [Token],
+    i: usize,
+    file: &'a str,
+}
+
+impl<'a> Cursor<'a> {
+    /// A cursor at the first of `tokens` (which end with [`Tok::Eof`]) of `file`.
+    pub(crate) fn new(tokens: &'a [Token], file: &'a str) -> Cursor<'a> {
+        Cursor { tokens, i: 0, file }
+    }
+
+    /// The file the tokens come from, for error positions.
+    pub(crate) fn file(&self) -> &'a str {
+        self.file
+    }
+
+    /// The next token, not consumed. The list ends with Eof and [`Cursor::next`] never
+    /// moves past it, so there is always one.
+    pub(crate) fn peek(&self) -> &'a Token {
+        &self.tokens[self.i.min(self.tokens.len().saturating_sub(1))]
+    }
+
+    /// Consumes and returns the next token (Eof stays put).
+    pub(crate) fn next(&mut self) -> &'a Token {
+        let t = self.peek();
+        if t.tok != Tok::Eof {
+            self.i += 1;
+        }
+        t
+    }
+
+    /// Un-reads the token `next` just returned, so an error can point at it.
+    pub(crate) fn back(&mut self, t: &Token) {
+        if t.tok != Tok::Eof {
+            self.i -= 1;
+        }
+    }
+
+    /// "expected `what`, found …" at token `t`.
+    pub(crate) fn unexpected(&self, t: &Token, what: &str) -> AfError {
+        AfError::at(
+            self.file,
+            t.pos,
+            format!("expected {what}, found {}", t.tok.describe()),
+        )
+    }
+}
+
 /// Splits `text` into tokens, ending with [`Tok::Eof`].
 pub fn tokenize(text: &str, file: &str) -> Result<Vec<Token>, AfError> {
     let chars: Vec<char> = text.chars().collect();

@@ -16,7 +16,7 @@
 //! module only keeps every value with its position for the error messages.
 
 use super::AfError;
-use super::lexer::{Pos, Tok, Token};
+use super::lexer::{Cursor, Pos, Tok, Token};
 
 /// A value after a key, with where it starts.
 #[derive(Clone, Debug, PartialEq)]
@@ -119,21 +119,17 @@ fn is_container(kind: &str) -> bool {
 /// Parses tokens into blocks.
 pub fn parse(tokens: &[Token], file: &str) -> Result<Vec<Block>, AfError> {
     let mut p = Parser {
-        t: tokens,
-        i: 0,
-        file,
+        c: Cursor::new(tokens, file),
     };
     let mut blocks = Vec::new();
-    while p.peek().tok != Tok::Eof {
+    while p.c.peek().tok != Tok::Eof {
         blocks.push(p.block(0)?);
     }
     Ok(blocks)
 }
 
 struct Parser<'a> {
-    t: &'a [Token],
-    i: usize,
-    file: &'a str,
+    c: Cursor<'a>,
 }
 
 /// Nesting deeper than this is certainly a mistake; the limit keeps a hostile file from
@@ -141,38 +137,22 @@ struct Parser<'a> {
 const MAX_DEPTH: usize = 16;
 
 impl<'a> Parser<'a> {
-    fn peek(&self) -> &'a Token {
-        // The token list always ends with Eof, and `next` never moves past it.
-        &self.t[self.i.min(self.t.len() - 1)]
-    }
-
-    fn next(&mut self) -> &'a Token {
-        let t = self.peek();
-        if t.tok != Tok::Eof {
-            self.i += 1;
-        }
-        t
-    }
-
     fn err(&self, pos: Pos, message: String) -> AfError {
-        AfError::at(self.file, pos, message)
+        AfError::at(self.c.file(), pos, message)
     }
 
+    /// "expected `what`, found …" at the next token.
     fn expected(&self, what: &str) -> AfError {
-        let t = self.peek();
-        self.err(
-            t.pos,
-            format!("expected {what}, found {}", t.tok.describe()),
-        )
+        self.c.unexpected(self.c.peek(), what)
     }
 
     fn block(&mut self, depth: usize) -> Result<Block, AfError> {
         if depth > MAX_DEPTH {
             return Err(self.expected("fewer nested blocks"));
         }
-        let t = self.next();
+        let t = self.c.next();
         let Tok::Ident(kind) = &t.tok else {
-            self.i -= usize::from(t.tok != Tok::Eof);
+            self.c.back(t);
             return Err(self.expected(
                 "a block such as `settings {`, `body \"name\" {` or `hinge \"name\" {`",
             ));
@@ -181,7 +161,7 @@ impl<'a> Parser<'a> {
         if !KINDS.iter().any(|k| k.eq_ignore_ascii_case(&kind)) {
             // A block opens with a name or `{`; anything else suggests a key that an
             // extra `}` has pushed out of its block.
-            let hint = match self.peek().tok {
+            let hint = match self.c.peek().tok {
                 Tok::Str(_) | Tok::LBrace => "",
                 _ => " (is it a key after an extra `}` that closed its block too soon?)",
             };
@@ -195,10 +175,10 @@ impl<'a> Parser<'a> {
         }
         let mut header = Vec::new();
         loop {
-            let t = self.peek();
+            let t = self.c.peek();
             match &t.tok {
                 Tok::LBrace => {
-                    self.next();
+                    self.c.next();
                     break;
                 }
                 Tok::Str(s) => header.push(Value::Str(s.clone(), t.pos)),
@@ -209,7 +189,7 @@ impl<'a> Parser<'a> {
             if header.len() > 3 {
                 return Err(self.expected(&format!("`{{` to open the `{kind}` block")));
             }
-            self.next();
+            self.c.next();
         }
         let mut block = Block {
             kind,
@@ -220,10 +200,10 @@ impl<'a> Parser<'a> {
         };
         let container = is_container(&block.kind);
         loop {
-            let t = self.peek();
+            let t = self.c.peek();
             match &t.tok {
                 Tok::RBrace => {
-                    self.next();
+                    self.c.next();
                     return Ok(block);
                 }
                 Tok::Eof => {
@@ -237,7 +217,7 @@ impl<'a> Parser<'a> {
                 }
                 Tok::Ident(_) if container => block.children.push(self.block(depth + 1)?),
                 Tok::Ident(key) => {
-                    self.next();
+                    self.c.next();
                     let values = self.values(key, depth)?;
                     block.entries.push(Entry {
                         key: key.clone(),
@@ -257,8 +237,8 @@ impl<'a> Parser<'a> {
 
     fn values(&mut self, key: &str, depth: usize) -> Result<Vec<Value>, AfError> {
         let mut values = vec![self.value(key, depth)?];
-        while self.peek().tok == Tok::Comma {
-            self.next();
+        while self.c.peek().tok == Tok::Comma {
+            self.c.next();
             values.push(self.value(key, depth)?);
         }
         Ok(values)
@@ -268,27 +248,27 @@ impl<'a> Parser<'a> {
         if depth > MAX_DEPTH {
             return Err(self.expected("fewer nested parentheses"));
         }
-        let t = self.peek();
+        let t = self.c.peek();
         let v = match &t.tok {
             Tok::Num(n) => Value::Num(*n, t.pos),
             Tok::Str(s) => Value::Str(s.clone(), t.pos),
             Tok::Ident(s) => {
-                self.next();
-                if self.peek().tok == Tok::LParen {
-                    self.next();
+                self.c.next();
+                if self.c.peek().tok == Tok::LParen {
+                    self.c.next();
                     let list = self.list(key, depth)?;
                     return Ok(Value::Call(s.clone(), list, t.pos));
                 }
                 return Ok(Value::Ident(s.clone(), t.pos));
             }
             Tok::LParen => {
-                self.next();
+                self.c.next();
                 let list = self.list(key, depth)?;
                 return Ok(Value::Group(list, t.pos));
             }
             _ => return Err(self.expected(&format!("a value for `{key}`"))),
         };
-        self.next();
+        self.c.next();
         Ok(v)
     }
 
@@ -296,13 +276,13 @@ impl<'a> Parser<'a> {
     fn list(&mut self, key: &str, depth: usize) -> Result<Vec<Value>, AfError> {
         let mut out = Vec::new();
         loop {
-            match self.peek().tok {
+            match self.c.peek().tok {
                 Tok::RParen => {
-                    self.next();
+                    self.c.next();
                     return Ok(out);
                 }
                 Tok::Comma if !out.is_empty() => {
-                    self.next();
+                    self.c.next();
                 }
                 Tok::Eof | Tok::LBrace | Tok::RBrace => {
                     return Err(self.expected(&format!("`)` closing a list in `{key}`")));
