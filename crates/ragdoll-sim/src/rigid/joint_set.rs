@@ -174,7 +174,8 @@ impl JointSet {
                         ranges: axis_ranges.map(|r| {
                             [
                                 AngleLimit::new(&frame, s, *shaft1, r[0], LimitStyle::Hard),
-                                AngleLimit::new(&frame, s, *shaft2, r[1], LimitStyle::Hard),
+                                AngleLimit::new(&frame, s, *shaft2, r[1], LimitStyle::Hard)
+                                    .about_body2(),
                             ]
                         }),
                         friction: friction(&frame),

@@ -254,6 +254,12 @@ impl Swing {
 /// right-handed, followed continuously past ±π. Reference directions perpendicular to
 /// the axis are fixed in each body; body2's is first swung onto the plane perpendicular
 /// to body1's axis by the shortest arc, so swing does not read as twist.
+///
+/// The axis is body1's unless [`AngleGauge::on_body2`] is set: a universal joint's
+/// second shaft is fixed in body2, and once body1 has turned about the first shaft its
+/// copy of the second points elsewhere (90° of hip flexion turns it onto the first
+/// shaft's old neighbour), so measuring or pushing about body1's copy mixes the two
+/// angles and the stop pushes about the wrong axis.
 #[derive(Clone, Copy, Debug)]
 pub struct AngleGauge {
     /// Axis in a.
@@ -266,6 +272,8 @@ pub struct AngleGauge {
     pub ref_b: Vec3,
     /// Last unwrapped angle (rad).
     pub angle: f32,
+    /// Measure about body2's copy of the axis, swinging body1's reference onto it.
+    pub on_body2: bool,
 }
 
 impl AngleGauge {
@@ -278,17 +286,27 @@ impl AngleGauge {
             ref_a: f.dir_in_a(s, r),
             ref_b: f.dir_in_b(s, r),
             angle: 0.0,
+            on_body2: false,
         }
     }
 
-    /// Current world axis (body1's) and unwrapped angle, without updating the memory.
+    /// Current world axis (body1's, or body2's with [`AngleGauge::on_body2`]) and
+    /// unwrapped angle, without updating the memory.
     pub fn measure(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
         let ta = s.rot[f.a] * self.axis_a;
         let tb = s.rot[f.b] * self.axis_b;
-        let ra = s.rot[f.a] * self.ref_a;
-        let rb = Quat::from_rotation_arc(tb, ta) * (s.rot[f.b] * self.ref_b);
-        let raw = ta.dot(rb.cross(ra)).atan2(rb.dot(ra));
-        (ta, unwrap_angle(self.angle, raw))
+        let mut ra = s.rot[f.a] * self.ref_a;
+        let mut rb = s.rot[f.b] * self.ref_b;
+        // Swing the other body's reference onto the plane perpendicular to the axis.
+        let axis = if self.on_body2 {
+            ra = Quat::from_rotation_arc(ta, tb) * ra;
+            tb
+        } else {
+            rb = Quat::from_rotation_arc(tb, ta) * rb;
+            ta
+        };
+        let raw = axis.dot(rb.cross(ra)).atan2(rb.dot(ra));
+        (axis, unwrap_angle(self.angle, raw))
     }
 }
 
@@ -319,6 +337,13 @@ impl AngleLimit {
             range,
             rows: [AxisRow::new(kind); 2],
         }
+    }
+
+    /// The same limit measured about body2's copy of the axis (see
+    /// [`AngleGauge::on_body2`]).
+    pub fn about_body2(mut self) -> AngleLimit {
+        self.gauge.on_body2 = true;
+        self
     }
 
     /// From a twist limit.
