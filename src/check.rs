@@ -49,8 +49,12 @@ pub fn summary(file: &str, scene: &AfScene) -> String {
     };
     let _ = writeln!(
         out,
-        "settings: timestep {:.4} s, {} iterations, {} substeps, {ground}",
-        st.timestep, st.iterations, st.substeps
+        "settings: timestep {:.4} s, {} iterations, {} substeps{}, {ground}",
+        st.timestep,
+        st.iterations,
+        st.substeps,
+        st.multibody_substeps
+            .map_or(String::new(), |n| format!(" ({n} multibody)"))
     );
     let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
     for b in &d.bodies {

@@ -252,7 +252,9 @@ pub fn run(args: StatsArgs) -> Result<(), AppError> {
         s.iterations = it;
     }
     if let Some(n) = args.substeps {
+        // An override is for both methods, whatever the scene gave the multibody one.
         s.substeps = n;
+        s.multibody_substeps = None;
     }
     ragdoll_sim::scene::validate(&loaded.desc)?;
     let opts = StatsOptions {

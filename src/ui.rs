@@ -242,9 +242,15 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     changed |= ui
         .add(egui::Slider::new(&mut settings.iterations, 1..=50).text("iterations"))
         .changed();
-    changed |= ui
+    // The slider sets both methods' substeps; a scene's own multibody count
+    // (`multibodySubsteps`, shown in the solver labels) gives way to it once moved.
+    if ui
         .add(egui::Slider::new(&mut settings.substeps, 1..=32).text("substeps"))
-        .changed();
+        .changed()
+    {
+        settings.multibody_substeps = None;
+        changed = true;
+    }
     if changed {
         settings.timestep = timestep_ms * 1e-3;
         actions.push(Action::Settings(settings));

@@ -68,7 +68,7 @@ pub fn step(
         contacts.update(s, info, awake, dt);
     }
 
-    let substeps = settings.substeps.max(1);
+    let substeps = settings.multibody_substep_count().max(1);
     let h = dt / substeps as f32;
     // Box2D caps contact stiffness at a quarter of the substep rate: stiffer is not
     // resolved by the integrator and only adds energy.

@@ -201,7 +201,8 @@ impl Method for MultibodyWorld {
         let s = &self.scene.settings;
         format!(
             "soft step, {} substeps × {} iterations",
-            s.substeps, s.iterations
+            s.multibody_substep_count(),
+            s.iterations
         )
     }
 

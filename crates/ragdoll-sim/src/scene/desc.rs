@@ -574,6 +574,11 @@ pub struct Settings {
     pub iterations: u32,
     /// Substeps per step for the improved particle solver and the multibody solver.
     pub substeps: u32,
+    /// Substeps for the multibody solver alone, where a scene needs more of them than
+    /// the particle method does (`None`: [`Settings::substeps`]). Stiffer soft
+    /// constraints need more: the solver caps their frequency at a quarter of the
+    /// substep rate.
+    pub multibody_substeps: Option<u32>,
     /// Doom 3 `totalMass`: if > 0, every dynamic body's mass is scaled to make this total.
     pub total_mass: Option<f32>,
     /// When bodies may sleep.
@@ -592,6 +597,13 @@ pub struct Settings {
     pub restitution_threshold: f32,
 }
 
+impl Settings {
+    /// The multibody solver's substeps per step.
+    pub fn multibody_substep_count(&self) -> u32 {
+        self.multibody_substeps.unwrap_or(self.substeps)
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -600,6 +612,7 @@ impl Default for Settings {
             timestep: 1.0 / 60.0,
             iterations: 5,
             substeps: 4,
+            multibody_substeps: None,
             total_mass: None,
             sleep: SleepSettings::default(),
             camera: CameraDesc::default(),

@@ -188,6 +188,14 @@ pub fn validate(scene: &SceneDesc) -> Result<(), SceneError> {
             what: format!("{} is not in 1..=1000", s.substeps),
         });
     }
+    if let Some(n) = s.multibody_substeps
+        && (n == 0 || n > 1000)
+    {
+        return Err(SceneError::BadSetting {
+            setting: "multibodySubsteps",
+            what: format!("{n} is not in 1..=1000"),
+        });
+    }
     if !s.gravity.is_finite() {
         return Err(SceneError::BadSetting {
             setting: "gravity",
