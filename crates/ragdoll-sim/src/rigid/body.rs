@@ -48,6 +48,26 @@ impl BodyStates {
         self.inv_inertia.push(Mat3::ZERO);
     }
 
+    /// Appends a copy of body `i` of `from` (state, inverse mass and inertia).
+    pub fn push_copy(&mut self, from: &BodyStates, i: usize) {
+        self.com.push(from.com[i]);
+        self.rot.push(from.rot[i]);
+        self.lin_vel.push(from.lin_vel[i]);
+        self.ang_vel.push(from.ang_vel[i]);
+        self.inv_mass.push(from.inv_mass[i]);
+        self.inv_inertia.push(from.inv_inertia[i]);
+    }
+
+    /// Overwrites body `i` with body `j` of `from`.
+    pub fn copy_from(&mut self, i: usize, from: &BodyStates, j: usize) {
+        self.com[i] = from.com[j];
+        self.rot[i] = from.rot[j];
+        self.lin_vel[i] = from.lin_vel[j];
+        self.ang_vel[i] = from.ang_vel[j];
+        self.inv_mass[i] = from.inv_mass[j];
+        self.inv_inertia[i] = from.inv_inertia[j];
+    }
+
     /// Velocity of the material point at world offset `r` from body `i`'s centre of mass.
     #[inline]
     pub fn point_velocity(&self, i: usize, r: Vec3) -> Vec3 {
@@ -93,6 +113,37 @@ impl BodyStates {
     }
 }
 
+/// What the integrator reads of a body every substep, constant over its life: kept
+/// apart from the cold [`BodyInfo`] so an island can carry a compact copy of it to
+/// another thread (see [`super::parallel`]).
+#[derive(Clone, Copy, Debug)]
+pub struct BodyMotion {
+    /// Body-space inertia about the centre of mass.
+    pub inertia: Mat3,
+    /// Body-space inverse inertia (zero for fixed bodies).
+    pub inv_inertia_local: Mat3,
+    /// Doom 3 air friction on translation, fraction of velocity lost per second.
+    pub linear_damping: f32,
+    /// Doom 3 air friction on rotation, fraction lost per second.
+    pub angular_damping: f32,
+}
+
+impl BodyMotion {
+    /// Motion data of one body from its description and mass properties.
+    pub fn new(desc: &BodyDesc, mp: &MassProps) -> BodyMotion {
+        BodyMotion {
+            inertia: mp.inertia,
+            inv_inertia_local: if desc.is_fixed() {
+                Mat3::ZERO
+            } else {
+                mp.inverse_inertia()
+            },
+            linear_damping: desc.friction.linear,
+            angular_damping: desc.friction.angular,
+        }
+    }
+}
+
 /// Cold per-body data: what the scene said, and what the solver derives from it once.
 #[derive(Clone, Debug)]
 pub struct BodyInfo {
@@ -106,19 +157,11 @@ pub struct BodyInfo {
     pub local_com: Vec3,
     /// Mass (kg), also for fixed bodies (they are treated as infinite).
     pub mass: f32,
-    /// Body-space inertia about the centre of mass.
-    pub inertia: Mat3,
-    /// Body-space inverse inertia (zero for fixed bodies).
-    pub inv_inertia_local: Mat3,
     /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
     /// while the body sleeps and restored from here.
     pub inv_mass: f32,
     /// Fixed bodies never move.
     pub fixed: bool,
-    /// Doom 3 air friction on translation, fraction of velocity lost per second.
-    pub linear_damping: f32,
-    /// Doom 3 air friction on rotation, fraction lost per second.
-    pub angular_damping: f32,
     /// Coulomb coefficient.
     pub friction: f32,
     /// Restitution.
@@ -146,16 +189,8 @@ impl BodyInfo {
             collider,
             local_com: mp.local_com,
             mass: mp.mass,
-            inertia: mp.inertia,
-            inv_inertia_local: if fixed {
-                Mat3::ZERO
-            } else {
-                mp.inverse_inertia()
-            },
             inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
             fixed,
-            linear_damping: desc.friction.linear,
-            angular_damping: desc.friction.angular,
             friction: desc.friction.contact,
             restitution: desc.restitution,
             self_collision: desc.self_collision,

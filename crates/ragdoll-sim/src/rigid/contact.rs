@@ -24,6 +24,7 @@ use parry3d::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use parry3d::shape::SharedShape;
+use rayon::prelude::*;
 
 /// Distance within which contacts are created before touching (speculative margin, m).
 pub const SPECULATIVE_DISTANCE: f32 = 0.02;
@@ -251,15 +252,17 @@ impl Contacts {
         }
         self.spare.clear();
 
-        for pair in &mut self.pairs {
+        // Narrow phase: every pair on its own, so on all cores; each pair writes only its
+        // own slot, the result does not depend on the thread count.
+        let ground = &self.ground;
+        self.pairs.par_iter_mut().with_min_len(64).for_each(|pair| {
             let (a, b) = (pair.a as usize, pair.b as usize);
             if !awake[a] && !awake[b] {
-                continue;
+                return;
             }
             let pose_a = shape_pose(s, info, a);
             let (pose_b, shape_b) = if b == n {
-                let g = self
-                    .ground
+                let g = ground
                     .as_ref()
                     .expect("ground pairs exist only with a ground");
                 (g.pose, &g.shape)
@@ -284,188 +287,188 @@ impl Contacts {
                 pair.manifolds.clear();
             }
             prepare_pair(pair, s, &pose_a, &pose_b);
+        });
+    }
+}
+
+/// Pairs with points where at least one body is awake.
+fn active<'a>(
+    pairs: &'a mut [ContactPair],
+    awake: &'a [bool],
+) -> impl Iterator<Item = &'a mut ContactPair> {
+    pairs
+        .iter_mut()
+        .filter(move |p| p.touching() && (awake[p.a as usize] || awake[p.b as usize]))
+}
+
+/// Effective masses with the current inverse inertias (call after `update_inertia`).
+pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
+    for pair in active(pairs, awake) {
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        for p in &mut pair.points {
+            let k = |d: Vec3| {
+                let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
+                s.inv_mass[a]
+                    + s.inv_mass[b]
+                    + ja.dot(s.inv_inertia[a] * ja)
+                    + jb.dot(s.inv_inertia[b] * jb)
+            };
+            let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
+            p.normal_mass = inv(k(p.normal));
+            p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
+            p.max_normal_impulse = 0.0;
+            p.relative_velocity = p
+                .normal
+                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
         }
     }
+}
 
-    /// Pairs with points where at least one body is awake.
-    fn active<'a>(
-        pairs: &'a mut [ContactPair],
-        awake: &'a [bool],
-    ) -> impl Iterator<Item = &'a mut ContactPair> {
-        pairs
-            .iter_mut()
-            .filter(move |p| p.touching() && (awake[p.a as usize] || awake[p.b as usize]))
-    }
-
-    /// Effective masses with the current inverse inertias (call after `update_inertia`).
-    pub fn prepare_masses(&mut self, s: &BodyStates, awake: &[bool]) {
-        for pair in Self::active(&mut self.pairs, awake) {
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            for p in &mut pair.points {
-                let k = |d: Vec3| {
-                    let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
-                    s.inv_mass[a]
-                        + s.inv_mass[b]
-                        + ja.dot(s.inv_inertia[a] * ja)
-                        + jb.dot(s.inv_inertia[b] * jb)
-                };
-                let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
-                p.normal_mass = inv(k(p.normal));
-                p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
-                p.max_normal_impulse = 0.0;
-                p.relative_velocity = p
-                    .normal
-                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-            }
+/// Re-applies the impulses cached from the last step.
+pub fn warm_start(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
+    for pair in active(pairs, awake) {
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        for p in &pair.points {
+            let imp = p.normal * p.normal_impulse + p.tangent_impulse;
+            s.apply_impulse(a, p.ra, -imp);
+            s.apply_impulse(b, p.rb, imp);
         }
+        s.apply_angular_impulse(a, -pair.rolling_impulse);
+        s.apply_angular_impulse(b, pair.rolling_impulse);
     }
+}
 
-    /// Re-applies the impulses cached from the last step.
-    pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
-        for pair in Self::active(&mut self.pairs, awake) {
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            for p in &pair.points {
-                let imp = p.normal * p.normal_impulse + p.tangent_impulse;
-                s.apply_impulse(a, p.ra, -imp);
-                s.apply_impulse(b, p.rb, imp);
+/// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
+/// impulse just computed (Box2D v3's order; friction first would cap it with a
+/// normal impulse the relax pass is about to raise, and slide too easily).
+pub fn solve(
+    pairs: &mut [ContactPair],
+    s: &mut BodyStates,
+    awake: &[bool],
+    ctx: &StepContext,
+    use_bias: bool,
+) {
+    for pair in active(pairs, awake) {
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        let (qa, qb) = (s.rot[a], s.rot[b]);
+        let (ca, cb) = (s.com[a], s.com[b]);
+        for p in &mut pair.points {
+            // Non-penetration at the current separation.
+            let sep = current_separation(p, ca, qa, cb, qb);
+            let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
+                // Speculative: the gap may close this substep, no further.
+                (sep * ctx.inv_h, 1.0, 0.0)
+            } else if use_bias {
+                let c = (sep + LINEAR_SLOP).min(0.0);
+                (
+                    (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
+                    ctx.contact.mass_scale,
+                    ctx.contact.impulse_scale,
+                )
+            } else {
+                (0.0, 1.0, 0.0)
+            };
+            let vn = p
+                .normal
+                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+            let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+            let new = (p.normal_impulse + l).max(0.0);
+            let d = new - p.normal_impulse;
+            p.normal_impulse = new;
+            p.max_normal_impulse = p.max_normal_impulse.max(new);
+            s.apply_impulse(a, p.ra, -p.normal * d);
+            s.apply_impulse(b, p.rb, p.normal * d);
+
+            // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
+            let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
+            let old = p.tangent_impulse;
+            let mut new = old;
+            for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
+                new -= *t * (m * t.dot(dv));
             }
-            s.apply_angular_impulse(a, -pair.rolling_impulse);
-            s.apply_angular_impulse(b, pair.rolling_impulse);
+            let cap = pair.friction * p.normal_impulse;
+            if new.length_squared() > cap * cap {
+                new = new.normalize_or_zero() * cap;
+            }
+            p.tangent_impulse = new;
+            let d = new - old;
+            s.apply_impulse(a, p.ra, -d);
+            s.apply_impulse(b, p.rb, d);
         }
-    }
-
-    /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
-    /// impulse just computed (Box2D v3's order; friction first would cap it with a
-    /// normal impulse the relax pass is about to raise, and slide too easily).
-    pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
-        for pair in Self::active(&mut self.pairs, awake) {
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            let (qa, qb) = (s.rot[a], s.rot[b]);
-            let (ca, cb) = (s.com[a], s.com[b]);
-            for p in &mut pair.points {
-                // Non-penetration at the current separation.
-                let sep = current_separation(p, ca, qa, cb, qb);
-                let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
-                    // Speculative: the gap may close this substep, no further.
-                    (sep * ctx.inv_h, 1.0, 0.0)
-                } else if use_bias {
-                    let c = (sep + LINEAR_SLOP).min(0.0);
-                    (
-                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
-                        ctx.contact.mass_scale,
-                        ctx.contact.impulse_scale,
-                    )
-                } else {
-                    (0.0, 1.0, 0.0)
-                };
-                let vn = p
-                    .normal
-                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-                let l =
-                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
-                let new = (p.normal_impulse + l).max(0.0);
-                let d = new - p.normal_impulse;
-                p.normal_impulse = new;
-                p.max_normal_impulse = p.max_normal_impulse.max(new);
-                s.apply_impulse(a, p.ra, -p.normal * d);
-                s.apply_impulse(b, p.rb, p.normal * d);
-
-                // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
-                let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
-                let old = p.tangent_impulse;
-                let mut new = old;
-                for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
-                    new -= *t * (m * t.dot(dv));
-                }
-                let cap = pair.friction * p.normal_impulse;
-                if new.length_squared() > cap * cap {
-                    new = new.normalize_or_zero() * cap;
-                }
-                p.tangent_impulse = new;
-                let d = new - old;
-                s.apply_impulse(a, p.ra, -d);
-                s.apply_impulse(b, p.rb, d);
-            }
-            // Rolling resistance: drive the relative angular velocity to zero with at most
-            // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
-            if pair.rolling_arm > 0.0 {
-                let cap =
-                    pair.rolling_arm * pair.points.iter().map(|p| p.normal_impulse).sum::<f32>();
-                let k = s.inv_inertia[a] + s.inv_inertia[b];
-                if k.determinant().abs() > 1e-20 {
-                    let w = s.ang_vel[b] - s.ang_vel[a];
-                    let old = pair.rolling_impulse;
-                    let new = (old - k.inverse() * w).clamp_length_max(cap);
-                    pair.rolling_impulse = new;
-                    s.apply_angular_impulse(a, -(new - old));
-                    s.apply_angular_impulse(b, new - old);
-                }
-            }
-        }
-    }
-
-    /// Box2D's restitution pass, after the substeps: points that were approaching faster
-    /// than `threshold` and carried load get the normal velocity `−e · v_before`.
-    pub fn restitution(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
-        // Block-free Gauss–Seidel over a face's points: one pass under-shoots, so
-        // the pass is run a few times (the clamp keeps it from over-shooting).
-        for _ in 0..4 {
-            self.restitution_pass(s, awake, threshold);
-        }
-    }
-
-    fn restitution_pass(&mut self, s: &mut BodyStates, awake: &[bool], threshold: f32) {
-        for pair in Self::active(&mut self.pairs, awake) {
-            if pair.restitution == 0.0 {
-                continue;
-            }
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            for p in &mut pair.points {
-                if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
-                    continue;
-                }
-                let vn = p
-                    .normal
-                    .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-                let l = -p.normal_mass * (vn + pair.restitution * p.relative_velocity);
-                let new = (p.normal_impulse + l).max(0.0);
-                let d = new - p.normal_impulse;
-                p.normal_impulse = new;
-                s.apply_impulse(a, p.ra, -p.normal * d);
-                s.apply_impulse(b, p.rb, p.normal * d);
+        // Rolling resistance: drive the relative angular velocity to zero with at most
+        // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
+        if pair.rolling_arm > 0.0 {
+            let cap = pair.rolling_arm * pair.points.iter().map(|p| p.normal_impulse).sum::<f32>();
+            let k = s.inv_inertia[a] + s.inv_inertia[b];
+            if k.determinant().abs() > 1e-20 {
+                let w = s.ang_vel[b] - s.ang_vel[a];
+                let old = pair.rolling_impulse;
+                let new = (old - k.inverse() * w).clamp_length_max(cap);
+                pair.rolling_impulse = new;
+                s.apply_angular_impulse(a, -(new - old));
+                s.apply_angular_impulse(b, new - old);
             }
         }
     }
 }
 
-impl Contacts {
-    /// One position-projection pass (see [`super::project`]): each point deeper than
-    /// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
-    /// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
-    /// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`).
-    pub fn project(&mut self, s: &mut BodyStates, awake: &[bool]) {
-        for pair in Self::active(&mut self.pairs, awake) {
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            for p in &pair.points {
-                let sep = current_separation(p, s.com[a], s.rot[a], s.com[b], s.rot[b]);
-                let c =
-                    (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
-                if c == 0.0 {
-                    continue;
-                }
-                let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
-                let (ja, jb) = (ra.cross(p.normal), rb.cross(p.normal));
-                let k = s.inv_mass[a]
-                    + s.inv_mass[b]
-                    + ja.dot(s.inv_inertia[a] * ja)
-                    + jb.dot(s.inv_inertia[b] * jb);
-                if k <= 1e-20 {
-                    continue;
-                }
-                let impulse = p.normal * (-c / k);
-                s.apply_position_impulse(a, ra, -impulse);
-                s.apply_position_impulse(b, rb, impulse);
+/// Box2D's restitution pass, after the substeps: points that were approaching faster
+/// than `threshold` and carried load get the normal velocity `−e · v_before`.
+pub fn restitution(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool], threshold: f32) {
+    // Block-free Gauss–Seidel over a face's points: one pass under-shoots, so
+    // the pass is run a few times (the clamp keeps it from over-shooting).
+    for _ in 0..4 {
+        restitution_pass(pairs, s, awake, threshold);
+    }
+}
+
+fn restitution_pass(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool], threshold: f32) {
+    for pair in active(pairs, awake) {
+        if pair.restitution == 0.0 {
+            continue;
+        }
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        for p in &mut pair.points {
+            if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
+                continue;
             }
+            let vn = p
+                .normal
+                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+            let l = -p.normal_mass * (vn + pair.restitution * p.relative_velocity);
+            let new = (p.normal_impulse + l).max(0.0);
+            let d = new - p.normal_impulse;
+            p.normal_impulse = new;
+            s.apply_impulse(a, p.ra, -p.normal * d);
+            s.apply_impulse(b, p.rb, p.normal * d);
+        }
+    }
+}
+/// One position-projection pass (see [`super::project`]): each point deeper than
+/// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
+/// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
+/// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`).
+pub fn project(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
+    for pair in active(pairs, awake) {
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        for p in &pair.points {
+            let sep = current_separation(p, s.com[a], s.rot[a], s.com[b], s.rot[b]);
+            let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
+            if c == 0.0 {
+                continue;
+            }
+            let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
+            let (ja, jb) = (ra.cross(p.normal), rb.cross(p.normal));
+            let k = s.inv_mass[a]
+                + s.inv_mass[b]
+                + ja.dot(s.inv_inertia[a] * ja)
+                + jb.dot(s.inv_inertia[b] * jb);
+            if k <= 1e-20 {
+                continue;
+            }
+            let impulse = p.normal * (-c / k);
+            s.apply_position_impulse(a, ra, -impulse);
+            s.apply_position_impulse(b, rb, impulse);
         }
     }
 }

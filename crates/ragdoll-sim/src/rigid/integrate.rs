@@ -5,19 +5,19 @@
 //! is the integrator of Box2D v3's soft step and of Catto's GDC 2015 talk
 //! "Numerical methods".
 
-use super::body::{BodyInfo, BodyStates};
+use super::body::{BodyMotion, BodyStates};
 use glam::{Mat3, Quat, Vec3};
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
 /// constraints use it. Sleeping and fixed bodies keep zero.
-pub fn update_inertia(states: &mut BodyStates, info: &[BodyInfo], awake: &[bool]) {
-    for i in 0..info.len() {
-        if !awake[i] || info[i].fixed {
+pub fn update_inertia(states: &mut BodyStates, motion: &[BodyMotion], awake: &[bool]) {
+    for (i, m) in motion.iter().enumerate() {
+        if !awake[i] {
             states.inv_inertia[i] = Mat3::ZERO;
             continue;
         }
         let r = Mat3::from_quat(states.rot[i]);
-        states.inv_inertia[i] = r * info[i].inv_inertia_local * r.transpose();
+        states.inv_inertia[i] = r * m.inv_inertia_local * r.transpose();
     }
 }
 
@@ -51,13 +51,13 @@ pub fn skew(a: Vec3) -> Mat3 {
 /// lost per second, applied as exact exponential decay), the gyroscopic term.
 pub fn integrate_velocities(
     states: &mut BodyStates,
-    info: &[BodyInfo],
+    motion: &[BodyMotion],
     awake: &[bool],
     gravity: Vec3,
     h: f32,
 ) {
-    for (i, b) in info.iter().enumerate() {
-        if !awake[i] || b.fixed {
+    for (i, b) in motion.iter().enumerate() {
+        if !awake[i] {
             continue;
         }
         let mut v = states.lin_vel[i] + gravity * h;
@@ -74,9 +74,9 @@ pub fn integrate_velocities(
 }
 
 /// Position half of the substep: `x += h v`, `q += ½ h (ω, 0) q`, renormalised.
-pub fn integrate_positions(states: &mut BodyStates, info: &[BodyInfo], awake: &[bool], h: f32) {
-    for (i, b) in info.iter().enumerate() {
-        if !awake[i] || b.fixed {
+pub fn integrate_positions(states: &mut BodyStates, awake: &[bool], h: f32) {
+    for (i, &moving) in awake.iter().enumerate() {
+        if !moving {
             continue;
         }
         states.com[i] += states.lin_vel[i] * h;

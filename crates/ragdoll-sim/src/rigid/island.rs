@@ -70,6 +70,11 @@ impl Islands {
         i
     }
 
+    /// The representative of `i`'s island (valid until the next link).
+    pub fn root(&mut self, i: usize) -> usize {
+        self.find(i as u32) as usize
+    }
+
     /// Starts a new union–find round.
     pub fn reset_links(&mut self) {
         for (i, p) in self.parent.iter_mut().enumerate() {

@@ -9,7 +9,7 @@
 //!   joint type; [`joint_set`]: the arrays of them.
 //! - [`broadphase`], [`contact`]: collision detection and the contact solver.
 //! - [`island`]: islands and sleeping; [`solver`]: the step; [`project`]: the position
-//!   projection after it.
+//!   projection after it; [`parallel`]: islands solved on all cores.
 //! - [`world`]: [`MultibodyWorld`], the `Method`.
 
 pub mod ball;
@@ -23,6 +23,7 @@ pub mod island;
 pub mod joint;
 pub mod joint_set;
 pub mod limits;
+pub mod parallel;
 pub mod project;
 pub mod slider;
 pub mod soft;

@@ -23,7 +23,7 @@
 //! solve every step, and the island would creep and never sleep.
 
 use super::body::BodyStates;
-use super::contact::Contacts;
+use super::contact::{self, ContactPair};
 use super::joint_set::JointSet;
 use crate::scene::SleepSettings;
 use glam::Mat3;
@@ -51,13 +51,13 @@ pub const CONTACT_CORRECTION: f32 = 0.2;
 pub fn project_positions(
     s: &mut BodyStates,
     joints: &JointSet,
-    contacts: &mut Contacts,
+    pairs: &mut [ContactPair],
     awake: &[bool],
     sleep: &SleepSettings,
 ) {
     // Resting bodies: static for the pass (zero inverse mass), restored after it.
     let mut held: Vec<(usize, f32, Mat3)> = Vec::new();
-    for (i, &aw) in awake.iter().enumerate().take(s.len() - 1) {
+    for (i, &aw) in awake.iter().enumerate() {
         if aw
             && s.lin_vel[i].length() <= sleep.linear_velocity
             && s.ang_vel[i].length() <= sleep.angular_velocity
@@ -69,7 +69,7 @@ pub fn project_positions(
     }
     for _ in 0..POSITION_ITERATIONS {
         joints.project(s, awake);
-        contacts.project(s, awake);
+        contact::project(pairs, s, awake);
     }
     for (i, m, inv) in held {
         s.inv_mass[i] = m;

@@ -14,20 +14,41 @@
 //! After the substeps, the restitution pass, the position projection ([`super::project`]:
 //! what the soft constraints let give way is put back, positions only); then sleeping.
 
-use super::body::{BodyInfo, BodyStates};
-use super::contact::Contacts;
+use super::body::{BodyInfo, BodyMotion, BodyStates};
+use super::contact::{self, ContactPair, Contacts};
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::parallel;
 use super::project;
 use super::soft::{Softness, StepContext};
-use crate::scene::Settings;
+use crate::scene::{Settings, SleepSettings};
+use glam::Vec3;
+
+/// What every island's solve needs besides its bodies and constraints: the same for all
+/// islands of a step.
+#[derive(Clone, Copy, Debug)]
+pub struct SolveParams<'a> {
+    /// Substep length and softness.
+    pub ctx: StepContext,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Biased velocity iterations per substep.
+    pub iterations: u32,
+    /// Gravity (m/s²).
+    pub gravity: Vec3,
+    /// Approach speed below which contacts do not bounce (m/s).
+    pub restitution_threshold: f32,
+    /// Sleep speeds: bodies below them take no part in the position projection.
+    pub sleep: &'a SleepSettings,
+}
 
 /// Advances the world by `settings.timestep`.
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     s: &mut BodyStates,
     info: &[BodyInfo],
+    motion: &[BodyMotion],
     joints: &mut JointSet,
     contacts: &mut Contacts,
     islands: &mut Islands,
@@ -39,7 +60,7 @@ pub fn step(
     let n = info.len();
     let dt = settings.timestep;
     refresh_awake(s, info, islands, awake, dynamic);
-    update_inertia(s, info, awake);
+    update_inertia(s, motion, awake);
     contacts.update(s, info, awake, dt);
 
     // Islands from joints and touching contacts between dynamic bodies; a link from an
@@ -64,7 +85,7 @@ pub fn step(
     }
     if islands.apply_wakes() {
         refresh_awake(s, info, islands, awake, dynamic);
-        update_inertia(s, info, awake);
+        update_inertia(s, motion, awake);
         contacts.update(s, info, awake, dt);
     }
 
@@ -74,37 +95,71 @@ pub fn step(
     // resolved by the integrator and only adds energy.
     let contact_hz = settings.contact_hertz.min(0.25 / h);
     let joint_hz = settings.joint_hertz.min(0.25 / h);
-    let ctx = StepContext {
-        h,
-        inv_h: 1.0 / h,
-        joint: Softness::new(joint_hz, settings.damping_ratio, h),
-        contact: Softness::new(contact_hz, settings.damping_ratio, h),
-        max_push_out: settings.max_push_out_speed,
+    let params = SolveParams {
+        ctx: StepContext {
+            h,
+            inv_h: 1.0 / h,
+            joint: Softness::new(joint_hz, settings.damping_ratio, h),
+            contact: Softness::new(contact_hz, settings.damping_ratio, h),
+            max_push_out: settings.max_push_out_speed,
+        },
+        substeps,
+        iterations: settings.iterations.max(1),
+        gravity: settings.gravity,
+        restitution_threshold: settings.restitution_threshold,
+        sleep: &settings.sleep,
     };
-    contacts.prepare_masses(s, awake);
-    let iterations = settings.iterations.max(1);
-    for sub in 0..substeps {
-        if sub > 0 {
-            update_inertia(s, info, awake);
-        }
-        integrate_velocities(s, info, awake, settings.gravity, h);
-        joints.prepare(s, awake);
-        joints.warm_start(s, awake);
-        contacts.warm_start(s, awake);
-        for _ in 0..iterations {
-            joints.solve(s, awake, &ctx, true);
-            contacts.solve(s, awake, &ctx, true);
-        }
-        integrate_positions(s, info, awake, h);
-        joints.solve(s, awake, &ctx, false);
-        contacts.solve(s, awake, &ctx, false);
+    // Islands share no moving body, so they can be solved in any order, or at once; on
+    // one thread the whole world is solved in place, which gives the same bits.
+    if rayon::current_num_threads() > 1 {
+        parallel::solve_islands(
+            s,
+            motion,
+            joints,
+            &mut contacts.pairs,
+            islands,
+            awake,
+            &params,
+        );
+    } else {
+        solve(s, motion, joints, &mut contacts.pairs, awake, &params);
     }
-    contacts.restitution(s, awake, settings.restitution_threshold);
-    project::project_positions(s, joints, contacts, awake, &settings.sleep);
 
     if islands.update_sleep(s, dynamic, &settings.sleep, dt, time + dt) {
         refresh_awake(s, info, islands, awake, dynamic);
     }
+}
+
+/// The velocity solve of one step over the bodies, joints and contact pairs given (the
+/// whole world, or one island gathered by [`parallel`]): the substeps, the restitution
+/// pass and the position projection. Reads contacts prepared by [`Contacts::update`].
+pub fn solve(
+    s: &mut BodyStates,
+    motion: &[BodyMotion],
+    joints: &mut JointSet,
+    pairs: &mut [ContactPair],
+    awake: &[bool],
+    p: &SolveParams,
+) {
+    contact::prepare_masses(pairs, s, awake);
+    for sub in 0..p.substeps {
+        if sub > 0 {
+            update_inertia(s, motion, awake);
+        }
+        integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
+        joints.prepare(s, awake);
+        joints.warm_start(s, awake);
+        contact::warm_start(pairs, s, awake);
+        for _ in 0..p.iterations {
+            joints.solve(s, awake, &p.ctx, true);
+            contact::solve(pairs, s, awake, &p.ctx, true);
+        }
+        integrate_positions(s, awake, p.ctx.h);
+        joints.solve(s, awake, &p.ctx, false);
+        contact::solve(pairs, s, awake, &p.ctx, false);
+    }
+    contact::restitution(pairs, s, awake, p.restitution_threshold);
+    project::project_positions(s, joints, pairs, awake, p.sleep);
 }
 
 /// `awake` and the solver inverse masses from the sleep flags: sleeping bodies act as

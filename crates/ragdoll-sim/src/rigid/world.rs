@@ -1,7 +1,7 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{BodyInfo, BodyStates};
+use super::body::{BodyInfo, BodyMotion, BodyStates};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -23,6 +23,7 @@ pub struct MultibodyWorld {
     scene: SceneDesc,
     states: BodyStates,
     info: Vec<BodyInfo>,
+    motion: Vec<BodyMotion>,
     joints: JointSet,
     contacts: Contacts,
     islands: Islands,
@@ -55,11 +56,13 @@ impl MultibodyWorld {
         }
         let mut states = BodyStates::default();
         let mut info = Vec::with_capacity(n);
+        let mut motion = Vec::with_capacity(n);
         for (i, b) in scene.bodies.iter().enumerate() {
             let mp = mass_props(b)?;
             let shape = collider(b)?;
             let fig = root(&mut figure, i as u32);
             info.push(BodyInfo::new(b, &mp, shape, fig));
+            motion.push(BodyMotion::new(b, &mp));
             let com = b.pose.transform_point(mp.local_com);
             let (v, w) = if b.is_fixed() {
                 (Vec3::ZERO, Vec3::ZERO)
@@ -116,6 +119,7 @@ impl MultibodyWorld {
             scene: scene.clone(),
             states,
             info,
+            motion,
             joints,
             contacts,
             islands,
@@ -228,6 +232,7 @@ impl Method for MultibodyWorld {
         solver::step(
             &mut self.states,
             &self.info,
+            &self.motion,
             &mut self.joints,
             &mut self.contacts,
             &mut self.islands,
@@ -296,7 +301,7 @@ impl Method for MultibodyWorld {
             // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
             let wb = q.inverse() * w;
             kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
-                + 0.5 * wb.dot(b.inertia * wb) as f64;
+                + 0.5 * wb.dot(self.motion[i].inertia * wb) as f64;
             potential += potential_energy(&self.scene, b.mass, self.states.com[i]);
         }
         Sample {
@@ -367,6 +372,7 @@ impl Method for MultibodyWorld {
         let mut b = BodyInfo::new(desc, &mp, shape, u32::MAX - i as u32);
         b.projectile = true;
         self.info.push(b);
+        self.motion.push(BodyMotion::new(desc, &mp));
         // Insert before the static anchor, which stays last.
         let com = desc.pose.transform_point(mp.local_com);
         let s = &mut self.states;
