@@ -59,58 +59,61 @@ fn run(s: &SceneDesc, solver: ParticleSolver, seconds: f64) -> (MethodStats, f64
 }
 
 #[test]
-fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9() {
+fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9_every_variant() {
     let mut failures = Vec::new();
     for (k, name) in SCENES[..9].iter().enumerate() {
         let n = k + 1;
-        let (st, state_gain, _) = run(&scene(name, 1), ParticleSolver::Improved, 10.0);
-        println!(
-            "scene {n} {name}: energy_gain {:.4} (state {:.4}) final_kinetic {:.2e} penetration {:.4} m joint_gap {:.4} m limit {:.2}° stretch {:.1e} asleep_at {:?}",
-            st.energy_gain,
-            state_gain,
-            st.final_kinetic,
-            st.max_penetration_m,
-            st.max_joint_gap_m,
-            st.max_limit_violation_deg,
-            st.max_bone_stretch.unwrap_or(0.0),
-            st.asleep_at_s
-        );
-        let mut check = |ok: bool, what: String| {
-            if !ok {
-                failures.push(format!("scene {n} {name}: {what}"));
-            }
-        };
-        check(st.finite, "not finite".into());
-        check(
-            st.energy_gain <= 0.02,
-            format!("energy_gain {}", st.energy_gain),
-        );
-        check(
-            state_gain <= 0.02,
-            format!("state energy gain {state_gain}"),
-        );
-        check(
-            st.max_penetration_m <= 0.01,
-            format!("max_penetration_m {}", st.max_penetration_m),
-        );
-        check(
-            st.max_joint_gap_m <= 0.005,
-            format!("max_joint_gap_m {}", st.max_joint_gap_m),
-        );
-        check(
-            st.max_limit_violation_deg <= 3.0,
-            format!("max_limit_violation_deg {}", st.max_limit_violation_deg),
-        );
-        check(
-            st.max_bone_stretch.is_some_and(|s| s <= 0.01),
-            format!("max_bone_stretch {:?}", st.max_bone_stretch),
-        );
-        if n == 7 || n == 8 {
-            check(
-                st.final_kinetic <= 1e-3,
-                format!("final_kinetic {}", st.final_kinetic),
+        let variants = scene(name, 1).variants.len().max(1) as u32;
+        for v in 1..=variants {
+            let (st, state_gain, _) = run(&scene(name, v), ParticleSolver::Improved, 10.0);
+            println!(
+                "scene {n} {name} v{v}: energy_gain {:.4} (state {:.4}) final_kinetic {:.2e} penetration {:.4} m joint_gap {:.4} m limit {:.2}° stretch {:.1e} asleep_at {:?}",
+                st.energy_gain,
+                state_gain,
+                st.final_kinetic,
+                st.max_penetration_m,
+                st.max_joint_gap_m,
+                st.max_limit_violation_deg,
+                st.max_bone_stretch.unwrap_or(0.0),
+                st.asleep_at_s
             );
-            check(st.asleep_at_s.is_some(), "never asleep".into());
+            let mut check = |ok: bool, what: String| {
+                if !ok {
+                    failures.push(format!("scene {n} {name} v{v}: {what}"));
+                }
+            };
+            check(st.finite, "not finite".into());
+            check(
+                st.energy_gain <= 0.02,
+                format!("energy_gain {}", st.energy_gain),
+            );
+            check(
+                state_gain <= 0.02,
+                format!("state energy gain {state_gain}"),
+            );
+            check(
+                st.max_penetration_m <= 0.01,
+                format!("max_penetration_m {}", st.max_penetration_m),
+            );
+            check(
+                st.max_joint_gap_m <= 0.005,
+                format!("max_joint_gap_m {}", st.max_joint_gap_m),
+            );
+            check(
+                st.max_limit_violation_deg <= 3.0,
+                format!("max_limit_violation_deg {}", st.max_limit_violation_deg),
+            );
+            check(
+                st.max_bone_stretch.is_some_and(|s| s <= 0.01),
+                format!("max_bone_stretch {:?}", st.max_bone_stretch),
+            );
+            if n == 7 || n == 8 {
+                check(
+                    st.final_kinetic <= 1e-3,
+                    format!("final_kinetic {}", st.final_kinetic),
+                );
+                check(st.asleep_at_s.is_some(), "never asleep".into());
+            }
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");

@@ -1,5 +1,5 @@
-//! The multibody method over the scene table (scenes 1–9, 10 s each, every variant of
-//! scene 4): the thresholds of issue 4. One binary, one run per scene, so CI stays short.
+//! The multibody method over the scene table (scenes 1–9 with every variant, 10 s each):
+//! the thresholds of issue 4. One binary, one run per scene, so CI stays short.
 //!
 //! Scenes and metrics that do not yet meet a threshold are listed in `KNOWN_GAPS` with
 //! the figure measured when the list was written; the test checks everything else at the
@@ -13,10 +13,13 @@ use ragdoll_sim::scene::SceneDesc;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use std::path::PathBuf;
 
-const SCENES: [(&str, u32); 10] = [
+const SCENES: [(&str, u32); 13] = [
     ("collision", 1),
     ("ball-chain", 1),
+    ("ball-chain", 2),
     ("hinge-chain", 1),
+    ("hinge-chain", 2),
+    ("hinge-chain", 3),
     ("box-masses", 1),
     ("box-masses", 2),
     ("ball-limits", 1),
@@ -26,9 +29,15 @@ const SCENES: [(&str, u32); 10] = [
     ("capsule-human", 1),
 ];
 
-/// (scene, metric) pairs measured over their threshold, with the measured value.
+/// (scene, variant, metric) measured over their threshold, with the measured value.
 /// `asleep_at_s` entries mean "never slept in 10 s" (the value is unused).
-const KNOWN_GAPS: [(&str, &str, f64); 0] = [];
+///
+/// Scene 3 with 2 iterations: as the five raised links swing down, the whip's tension
+/// at the bottom of the swing opens a hinge by 2.06 mm for a few frames (5 and 20
+/// iterations: 1.94 and 1.75 mm). Six position-projection passes instead of four close it
+/// (1.6 mm) but keep the human (scene 8) from sleeping in 10 s; a separate Box2D-style
+/// joint damping ratio of 2 opens the chains further (2.9 mm).
+const KNOWN_GAPS: [(&str, u32, &str, f64); 1] = [("hinge-chain", 2, "max_joint_gap_m", 0.00206)];
 
 fn scene(name: &str, variant: u32) -> SceneDesc {
     let path =
@@ -96,8 +105,10 @@ fn metrics(st: &MethodStats) -> [(&'static str, f64, f64); 4] {
     ]
 }
 
-fn known(name: &str, metric: &str) -> bool {
-    KNOWN_GAPS.iter().any(|&(s, m, _)| s == name && m == metric)
+fn known(name: &str, variant: u32, metric: &str) -> bool {
+    KNOWN_GAPS
+        .iter()
+        .any(|&(s, v, m, _)| s == name && v == variant && m == metric)
 }
 
 #[test]
@@ -108,14 +119,14 @@ fn scene_table_meets_the_thresholds() {
         let st = run(name, variant);
         assert!(st.finite, "{name}: not finite");
         for (metric, value, limit) in metrics(&st) {
-            if known(name, metric) && metric != "asleep_at_s" {
-                gaps.push((name, metric, value, limit));
+            if known(name, variant, metric) && metric != "asleep_at_s" {
+                gaps.push((name, variant, metric, value, limit));
             } else if value > limit {
                 failures.push(format!("{name} v{variant}: {metric} = {value} > {limit}"));
             }
         }
         if ["spider", "human", "capsule-human"].contains(&name) {
-            match (st.asleep_at_s, known(name, "asleep_at_s")) {
+            match (st.asleep_at_s, known(name, variant, "asleep_at_s")) {
                 (None, false) => failures.push(format!("{name}: never slept")),
                 (Some(t), true) => {
                     failures.push(format!("{name}: slept at {t} s; remove it from KNOWN_GAPS"))
@@ -124,11 +135,11 @@ fn scene_table_meets_the_thresholds() {
             }
         }
     }
-    for (name, metric, value, limit) in &gaps {
+    for (name, variant, metric, value, limit) in &gaps {
         // Still open: must be over the threshold, or the entry is stale.
         if value <= limit {
             failures.push(format!(
-                "{name}: {metric} = {value} now meets {limit}; remove it from KNOWN_GAPS"
+                "{name} v{variant}: {metric} = {value} now meets {limit}; remove it from KNOWN_GAPS"
             ));
         }
     }
