@@ -6,6 +6,13 @@ use ragdoll_sim::scene::CameraDesc;
 /// Vertical field of view (radians).
 const FOV_Y: f32 = 45.0 * std::f32::consts::PI / 180.0;
 
+/// Lowest pitch a drag can reach (radians, about 1°): the eye stays above its target,
+/// which scenes place above the ground, so orbiting never takes the view under the
+/// floor (where the ground would hide the bodies).
+const MIN_PITCH: f32 = 0.02;
+/// Highest pitch: just short of straight down, where the view's up vector degenerates.
+const MAX_PITCH: f32 = 1.45;
+
 /// Below this aspect ratio the vertical field of view widens (see `view_proj`).
 const MIN_ASPECT: f32 = 4.0 / 3.0;
 
@@ -61,7 +68,7 @@ impl OrbitCamera {
     /// Rotates by a mouse drag of `delta` pixels.
     pub fn orbit(&mut self, delta: Vec2) {
         self.yaw -= delta.x * 0.008;
-        self.pitch = (self.pitch + delta.y * 0.008).clamp(-1.45, 1.45);
+        self.pitch = (self.pitch + delta.y * 0.008).clamp(MIN_PITCH.min(self.pitch), MAX_PITCH);
     }
 
     /// Moves the target in the view plane by a drag of `delta` pixels in a viewport
@@ -100,6 +107,19 @@ mod tests {
         };
         let cam = OrbitCamera::from_desc(&desc);
         assert!((cam.eye() - desc.eye).length() < 1e-5);
+    }
+
+    #[test]
+    fn orbiting_never_takes_the_eye_under_its_target() {
+        let mut cam = OrbitCamera::from_desc(&CameraDesc::default());
+        for _ in 0..100 {
+            cam.orbit(Vec2::new(3.0, -40.0));
+        }
+        assert!(cam.eye().y > cam.target.y, "eye {} under target", cam.eye());
+        for _ in 0..100 {
+            cam.orbit(Vec2::new(0.0, 40.0));
+        }
+        assert!(cam.pitch <= MAX_PITCH);
     }
 
     #[test]
