@@ -31,13 +31,7 @@ const SCENES: [(&str, u32); 13] = [
 
 /// (scene, variant, metric) measured over their threshold, with the measured value.
 /// `asleep_at_s` entries mean "never slept in 10 s" (the value is unused).
-///
-/// Scene 3 with 2 iterations: as the five raised links swing down, the whip's tension
-/// at the bottom of the swing opens a hinge by 2.06 mm for a few frames (5 and 20
-/// iterations: 1.94 and 1.75 mm). Six position-projection passes instead of four close it
-/// (1.6 mm) but keep the human (scene 8) from sleeping in 10 s; a separate Box2D-style
-/// joint damping ratio of 2 opens the chains further (2.9 mm).
-const KNOWN_GAPS: [(&str, u32, &str, f64); 1] = [("hinge-chain", 2, "max_joint_gap_m", 0.00206)];
+const KNOWN_GAPS: [(&str, u32, &str, f64); 0] = [];
 
 fn scene(name: &str, variant: u32) -> SceneDesc {
     let path =

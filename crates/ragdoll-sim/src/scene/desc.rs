@@ -585,7 +585,10 @@ pub struct Settings {
     pub sleep: SleepSettings,
     /// Initial camera.
     pub camera: CameraDesc,
-    /// Contact softness of the multibody solver: contact stiffness as a frequency (Hz).
+    /// Contact softness of the multibody solver: contact stiffness as a frequency (Hz),
+    /// capped at a quarter of the substep rate. Default 60 Hz, the cap at the default
+    /// 4 substeps of 1/60 s: a resting contact gives way by load / (m ω²), so at Box2D's
+    /// 30 Hz a stack of ten boxes sags 2 cm; at 60 Hz each box stays within 1 cm.
     pub contact_hertz: f32,
     /// Joint stiffness of the multibody solver as a frequency (Hz).
     pub joint_hertz: f32,
@@ -616,7 +619,7 @@ impl Default for Settings {
             total_mass: None,
             sleep: SleepSettings::default(),
             camera: CameraDesc::default(),
-            contact_hertz: 30.0,
+            contact_hertz: 60.0,
             joint_hertz: 60.0,
             damping_ratio: 10.0,
             max_push_out_speed: 3.0,
