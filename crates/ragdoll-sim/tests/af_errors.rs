@@ -424,3 +424,28 @@ fn the_doom_figure_uses_everything_and_reports_ignored_keys() {
             .all(|w| (w[0].line, w[0].col) <= (w[1].line, w[1].col))
     );
 }
+
+#[test]
+fn the_seeds_comma_less_suspend_speed_reads_as_the_comma_form() {
+    // The seed documents `suspendSpeed <lv> <av> <la> <aa>` with blanks; id's files write
+    // commas. Both mean the same; a value that is not a number still ends the entry.
+    let with = |line: &str| {
+        let text = GOOD.replacen("\tup \"y\"\n", &format!("\tup \"y\"\n\t{line}\n"), 1);
+        parse(&text, Path::new("t.af"), &AfOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .desc
+            .settings
+            .sleep
+    };
+    let blanks = with("suspendSpeed 20 30 40 60");
+    assert_eq!(blanks, with("suspendSpeed 20, 30, 40, 60"));
+    assert!((blanks.linear_velocity - 20.0).abs() < 1e-6);
+    assert!((blanks.angular_acceleration - 60f32.to_radians()).abs() < 1e-6);
+    check(
+        "\tup \"y\"\n",
+        "\tup \"y\"\n\tsuspendSpeed 20 30 \"x\" 60\n",
+        4,
+        21,
+        "key",
+    );
+}

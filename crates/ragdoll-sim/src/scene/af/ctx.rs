@@ -173,7 +173,7 @@ impl Ctx<'_> {
             };
             let skel = md5mesh::load(&path).map_err(|e| {
                 if e.message.starts_with("cannot read") {
-                    self.err(pos, format!("{what} needs the mesh {}, which {}; pass --mesh FILE.md5mesh to use another", path.display(), e.message.trim_start_matches("cannot read the mesh: ")))
+                    self.err(pos, format!("{what} needs the mesh {}, which cannot be read ({}); pass --mesh FILE.md5mesh to use another", path.display(), e.message.trim_start_matches("cannot read the mesh: ")))
                 } else {
                     e
                 }

@@ -235,13 +235,21 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// A key's values: separated by commas, as id's files write them, or numbers by
+    /// blanks alone, as the seed writes `suspendSpeed 20 30 40 60` (a key is never a
+    /// number, so a number cannot start the next entry).
     fn values(&mut self, key: &str, depth: usize) -> Result<Vec<Value>, AfError> {
         let mut values = vec![self.value(key, depth)?];
-        while self.c.peek().tok == Tok::Comma {
-            self.c.next();
+        loop {
+            match self.c.peek().tok {
+                Tok::Comma => {
+                    self.c.next();
+                }
+                Tok::Num(_) => {}
+                _ => return Ok(values),
+            }
             values.push(self.value(key, depth)?);
         }
-        Ok(values)
     }
 
     fn value(&mut self, key: &str, depth: usize) -> Result<Value, AfError> {
