@@ -5,7 +5,7 @@
 //! energy scale, so both methods are measured by the same code.
 
 use crate::method::Sample;
-use crate::scene::{SceneDesc, SceneError, scene_mass_props};
+use crate::scene::{SceneDesc, SceneError, Settings, scene_mass_props};
 use glam::Vec3;
 
 /// Potential energy that is there to lose (J):
@@ -37,11 +37,11 @@ pub fn height_above_ground(scene: &SceneDesc, p: Vec3) -> f32 {
 }
 
 /// Gravitational potential of mass `m` at point `p` (J), zero on the ground plane.
-pub fn potential_energy(scene: &SceneDesc, m: f32, p: Vec3) -> f64 {
-    let g = scene.settings.gravity;
+pub fn potential_energy(settings: &Settings, m: f32, p: Vec3) -> f64 {
+    let g = settings.gravity;
     // m g h with h along -g: for gravity (0, -9.81, 0) and a flat ground this is m·9.81·y.
     let up = -g.normalize_or_zero();
-    let base = match &scene.settings.ground {
+    let base = match &settings.ground {
         Some(gr) => Vec3::new(0.0, gr.height, 0.0),
         None => Vec3::ZERO,
     };

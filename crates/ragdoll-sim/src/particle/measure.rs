@@ -29,7 +29,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         }
         let v = (p.x[i] - p.frame_start[i]) / dt;
         kinetic += 0.5 * m as f64 * v.length_squared() as f64;
-        potential += potential_energy(&w.scene, m, p.x[i]);
+        potential += potential_energy(&w.scene.settings, m, p.x[i]);
     }
     let mut pen = 0.0f32;
     let zero = vec![0.0; w.bones.len()];
@@ -95,7 +95,7 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
             ParticleSolver::Improved => p.v[i],
             ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
         };
-        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.scene, m, p.x[i]);
+        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.scene.settings, m, p.x[i]);
     }
     e
 }

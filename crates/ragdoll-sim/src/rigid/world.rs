@@ -20,7 +20,7 @@ use parry3d::shape::SharedShape;
 
 /// The impulse-based multibody world (right, red).
 pub struct MultibodyWorld {
-    scene: SceneDesc,
+    settings: Settings,
     states: BodyStates,
     info: Vec<BodyInfo>,
     motion: Vec<BodyMotion>,
@@ -116,7 +116,7 @@ impl MultibodyWorld {
         let mut awake = vec![false; n + 1];
         solver::refresh_awake(&mut states, &info, &islands, &mut awake, &dynamic);
         Ok(MultibodyWorld {
-            scene: scene.clone(),
+            settings: scene.settings.clone(),
             states,
             info,
             motion,
@@ -202,7 +202,7 @@ impl Method for MultibodyWorld {
     }
 
     fn solver_label(&self) -> String {
-        let s = &self.scene.settings;
+        let s = &self.settings;
         format!(
             "soft step, {} substeps × {} iterations",
             s.multibody_substep_count(),
@@ -223,7 +223,7 @@ impl Method for MultibodyWorld {
                 let q = self.states.rot[i];
                 let r = q * (g.local_point - self.info[i].local_com);
                 let p = self.states.com[i] + r;
-                let dt = self.scene.settings.timestep;
+                let dt = self.settings.timestep;
                 let v = self.states.point_velocity(i, r);
                 let dv = (g.target - p) * (0.5 / dt) - v;
                 self.states.lin_vel[i] += dv * 0.5;
@@ -238,18 +238,18 @@ impl Method for MultibodyWorld {
             &mut self.islands,
             &mut self.awake,
             &self.dynamic,
-            &self.scene.settings,
+            &self.settings,
             self.time as f32,
         );
-        self.time += self.scene.settings.timestep as f64;
+        self.time += self.settings.timestep as f64;
     }
 
     fn set_settings(&mut self, settings: &Settings) {
-        self.scene.settings = settings.clone();
+        self.settings = settings.clone();
     }
 
     fn settings(&self) -> &Settings {
-        &self.scene.settings
+        &self.settings
     }
 
     fn snapshot(&self, out: &mut RenderSnapshot) {
@@ -302,7 +302,7 @@ impl Method for MultibodyWorld {
             let wb = q.inverse() * w;
             kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
                 + 0.5 * wb.dot(self.motion[i].inertia * wb) as f64;
-            potential += potential_energy(&self.scene, b.mass, self.states.com[i]);
+            potential += potential_energy(&self.settings, b.mass, self.states.com[i]);
         }
         Sample {
             energy: kinetic + potential,
