@@ -139,13 +139,20 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
                 if let Some(p) = vp.project(&state.camera, b.pose.position) {
                     let p = Pos2::new(p.x / ppp, p.y / ppp);
                     if area.contains(p) {
-                        painter.text(
-                            p,
-                            Align2::CENTER_CENTER,
-                            name,
+                        // White on a dark plate: readable over light and dark bodies,
+                        // and over the sky, where black text vanished on dark limbs.
+                        let galley = painter.layout_no_wrap(
+                            name.to_string(),
                             FontId::proportional(11.0),
-                            Color32::BLACK,
+                            Color32::WHITE,
                         );
+                        let at = Align2::CENTER_CENTER.anchor_size(p, galley.size()).min;
+                        painter.rect_filled(
+                            Rect::from_min_size(at, galley.size()).expand(2.0),
+                            3.0,
+                            Color32::from_black_alpha(170),
+                        );
+                        painter.galley(at, galley, Color32::WHITE);
                     }
                 }
             }

@@ -95,7 +95,8 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
             ParticleSolver::Improved => p.v[i],
             ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
         };
-        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.scene.settings, m, p.x[i]);
+        e += 0.5 * m as f64 * v.length_squared() as f64
+            + potential_energy(&w.scene.settings, m, p.x[i]);
     }
     e
 }
