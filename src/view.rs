@@ -214,6 +214,19 @@ impl App {
         let result = match kind {
             Rebuild::Restart => {
                 let mut loaded = self.session.loaded.clone();
+                let (wanted, have) = (self.state.variant, loaded.desc.variants.len() as u32);
+                if wanted > have.max(1) {
+                    // Keys 2 and 3 on a scene without that variant: say so in the
+                    // scene's terms, not as a file error, and keep running.
+                    let name = &loaded.desc.name;
+                    let what = match have {
+                        0 => format!("{name} has no variants (1 resets it)"),
+                        n => format!("{name} has variants 1 to {n} only"),
+                    };
+                    self.state.variant = loaded.desc.variant;
+                    self.state.notice = Some((what, std::time::Instant::now()));
+                    return;
+                }
                 // A variant change needs the file's variant overrides: load it again.
                 if loaded.desc.variant != self.state.variant {
                     match self.load(false) {
