@@ -7,6 +7,9 @@
 //! ```text
 //! cargo test --release -p ragdoll-sim --test particle_threads -- --ignored --nocapture
 //! ```
+//!
+//! The machine must be otherwise idle: on two cores any other process halves the
+//! second thread.
 
 use ragdoll_sim::SceneDesc;
 use ragdoll_sim::glam::Vec3;
@@ -111,7 +114,11 @@ fn a_grabbed_human_is_bit_identical_on_any_number_of_threads() {
 fn pile_of_100_humans_timing() {
     let scene = pile(100);
     let frames = 600;
-    for threads in [1, 2] {
+    // PILE_THREADS=t times only t threads (one run per process, to compare by `time`).
+    let only: Option<usize> = std::env::var("PILE_THREADS")
+        .ok()
+        .and_then(|v| v.parse().ok());
+    for threads in [1, 2].into_iter().filter(|t| only.is_none_or(|o| o == *t)) {
         let mut w = ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
