@@ -15,10 +15,13 @@
 //! Energy: every step is a projection or a dissipative velocity change; the only source
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
+use super::bone::Bone;
 use super::contacts::{Contact, broad_phase, ground_pair, shape_pair};
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
-use super::{ParticleWorld, sleeping};
-use crate::scene::Ground;
+use super::joints::JointSet;
+use super::{ParticleWorld, islands, sleeping};
+use crate::method::Grab;
+use crate::scene::{Ground, Settings};
 use glam::Vec3;
 
 /// Collision detection for the frame, with each bone's margin from its speed.
@@ -94,7 +97,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
 
 /// Contacts, manifold by manifold (consecutive contacts of one group): each point's
 /// normal correction, then its friction against the manifold's Coulomb cone so far.
-fn contact_pass(bones: &mut [super::bone::Bone], contacts: &mut [Contact]) {
+fn contact_pass(bones: &mut [Bone], contacts: &mut [Contact]) {
     let mut start = 0;
     while start < contacts.len() {
         let g = contacts[start].group;
@@ -113,11 +116,10 @@ fn contact_pass(bones: &mut [super::bone::Bone], contacts: &mut [Contact]) {
     }
 }
 
-/// Derives each bone's velocity from its particles: `v = Σ m v_i / M` and
-/// `ω = I⁻¹ Σ m r_i × v_i` (angular momentum over inertia).
-fn bone_velocities(w: &mut ParticleWorld) {
-    let v = &w.particles.v;
-    for b in w.bones.iter_mut() {
+/// Derives each bone's velocity from its particles' velocities `v`: `v = Σ m v_i / M`
+/// and `ω = I⁻¹ Σ m r_i × v_i` (angular momentum over inertia).
+fn bone_velocities(bones: &mut [Bone], v: &[Vec3]) {
+    for b in bones.iter_mut() {
         if b.is_static() {
             b.lin_vel = Vec3::ZERO;
             b.ang_vel = Vec3::ZERO;
@@ -157,21 +159,28 @@ pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
     (s.substeps.max(1) * s.iterations.max(1)).min(1000)
 }
 
-/// One frame of the improved solver.
-pub(crate) fn step(w: &mut ParticleWorld) {
-    let s = w.scene.settings.clone();
-    let dt = s.timestep;
-    let n_sub = substeps(&s);
-    let h = dt / n_sub as f32;
-    w.particles.frame_start.clone_from(&w.particles.x);
-    let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
-    for sub in 0..n_sub {
-        if sub % every == 0 {
-            detect(w, dt * (n_sub - sub) as f32 / n_sub as f32);
-        }
+/// What the substeps between two collision detections read and write: the world's
+/// own arrays, or a batch of islands gathered into arrays of its own (`islands`). Every
+/// index — a contact's bones, a bone's particles, a joint's sides — is into these.
+pub(super) struct Part<'a> {
+    pub bones: &'a mut [Bone],
+    /// Particle positions, previous positions and velocities.
+    pub x: &'a mut [Vec3],
+    pub x_prev: &'a mut [Vec3],
+    pub v: &'a mut [Vec3],
+    /// Contacts, manifold by manifold as detected.
+    pub contacts: &'a mut [Contact],
+    pub joints: JointSet<'a>,
+    /// The mouse grab; it acts only where its bone is (see `grab_improved`).
+    pub grab: Option<Grab>,
+}
+
+/// Runs `count` substeps of length `h` on a part.
+pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
+    for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame.
-        for b in w.bones.iter_mut() {
+        for b in p.bones.iter_mut() {
             b.prev_com = b.com;
             b.prev_rot = b.rot;
             b.dcom = Vec3::ZERO;
@@ -180,67 +189,106 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             }
             let mut u = [Vec3::ZERO; 4];
             for (k, uk) in u.iter_mut().enumerate() {
-                let p = b.particles[k] as usize;
-                w.particles.v[p] += s.gravity * h;
-                *uk = b.rot * b.rest[k] + w.particles.v[p] * h;
+                let i = b.particles[k] as usize;
+                p.v[i] += s.gravity * h;
+                *uk = b.rot * b.rest[k] + p.v[i] * h;
             }
             b.shape_match(&u);
         }
         // relative normal velocity before the solve, for restitution
-        for c in w.contacts.iter_mut() {
+        for c in p.contacts.iter_mut() {
             c.lambda_n = 0.0;
             c.lambda_t = 0.0;
-            let pa = w.bones[c.a].world(c.ra);
-            let pb = super::bone::side_world(&w.bones, c.b, c.rb);
-            c.vn_before = (point_velocity(&w.bones, Some(c.a), pa)
-                - point_velocity(&w.bones, c.b, pb))
+            let pa = p.bones[c.a].world(c.ra);
+            let pb = super::bone::side_world(p.bones, c.b, c.rb);
+            c.vn_before = (point_velocity(p.bones, Some(c.a), pa)
+                - point_velocity(p.bones, c.b, pb))
             .dot(c.n);
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
-            contact_pass(&mut w.bones, &mut w.contacts);
-            for j in &w.joints {
-                j.solve(&mut w.bones, h);
-            }
-            if let Some(g) = w.grab {
-                super::grab_improved(&mut w.bones, g, h);
+            contact_pass(p.bones, p.contacts);
+            p.joints.solve(p.bones, h);
+            if let Some(g) = p.grab {
+                super::grab_improved(p.bones, g, h);
             }
         }
         // 4. velocities from the particles' displacements, particles from the frames
-        for b in w.bones.iter_mut() {
+        for b in p.bones.iter_mut() {
             if b.is_static() {
                 continue;
             }
             for k in 0..4 {
-                let p = b.particles[k] as usize;
-                w.particles.v[p] = b.displacement(b.rest[k]) / h;
+                let i = b.particles[k] as usize;
+                p.v[i] = b.displacement(b.rest[k]) / h;
             }
             b.com += b.dcom;
             b.dcom = Vec3::ZERO;
             for k in 0..4 {
-                let p = b.particles[k] as usize;
-                w.particles.x_prev[p] = b.prev_com + b.prev_rot * b.rest[k];
+                let i = b.particles[k] as usize;
+                p.x_prev[i] = b.prev_com + b.prev_rot * b.rest[k];
             }
-            b.write_particles(&mut w.particles.x);
+            b.write_particles(p.x);
         }
-        bone_velocities(w);
+        bone_velocities(p.bones, p.v);
         // 5. velocity pass (contact points are relative to the updated frames)
         for _ in 0..VELOCITY_PASSES {
-            for c in &w.contacts {
-                solve_velocity(&mut w.bones, c, h, s.restitution_threshold);
+            for c in p.contacts.iter() {
+                solve_velocity(p.bones, c, h, s.restitution_threshold);
             }
         }
-        for b in w.bones.iter_mut() {
+        for b in p.bones.iter_mut() {
             if b.is_static() {
                 continue;
             }
             b.lin_vel *= (1.0 - b.air.0 * h).max(0.0);
             b.ang_vel *= (1.0 - b.air.1 * h).max(0.0);
             for k in 0..4 {
-                let p = b.particles[k] as usize;
-                w.particles.v[p] = b.lin_vel + b.ang_vel.cross(b.rot * b.rest[k]);
+                let i = b.particles[k] as usize;
+                p.v[i] = b.lin_vel + b.ang_vel.cross(b.rot * b.rest[k]);
             }
         }
+    }
+}
+
+/// One frame of the improved solver.
+///
+/// Between two detections the contact set is fixed, so islands — bones linked by joints
+/// and contacts, static bones only read — cannot touch each other and their substeps
+/// run on all of rayon's threads (`islands`). A single thread steps the world in place.
+pub(crate) fn step(w: &mut ParticleWorld) {
+    let s = w.scene.settings.clone();
+    let dt = s.timestep;
+    let n_sub = substeps(&s);
+    let h = dt / n_sub as f32;
+    w.particles.frame_start.clone_from(&w.particles.x);
+    let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
+    let threads = rayon::current_num_threads();
+    let mut sub = 0;
+    while sub < n_sub {
+        detect(w, dt * (n_sub - sub) as f32 / n_sub as f32);
+        let count = every.min(n_sub - sub);
+        let plan = if threads > 1 {
+            islands::Plan::new(w, threads)
+        } else {
+            None
+        };
+        match plan {
+            Some(plan) => islands::run_substeps(w, &plan, count, h, &s),
+            None => {
+                let mut part = Part {
+                    bones: &mut w.bones,
+                    x: &mut w.particles.x,
+                    x_prev: &mut w.particles.x_prev,
+                    v: &mut w.particles.v,
+                    contacts: &mut w.contacts,
+                    joints: JointSet::All(&w.joints),
+                    grab: w.grab,
+                };
+                run_substeps(&mut part, count, h, &s);
+            }
+        }
+        sub += count;
     }
     let mut newly = Vec::new();
     let held = w

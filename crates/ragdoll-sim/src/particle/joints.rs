@@ -276,11 +276,11 @@ impl Joint {
         v
     }
 
-    /// The relative-orientation error of body1 against its rest orientation relative
-    /// to body2, as a rotation vector to apply to body1.
-    fn orientation_error(&self, bones: &[Bone]) -> Vec3 {
-        let qa = side_rot(bones, self.a);
-        let target = side_rot(bones, self.b) * self.rest_rel;
+    /// The relative-orientation error of body1 (side `a`) against its rest orientation
+    /// relative to body2 (side `b`), as a rotation vector to apply to body1.
+    fn orientation_error(&self, bones: &[Bone], a: Side, b: Side) -> Vec3 {
+        let qa = side_rot(bones, a);
+        let target = side_rot(bones, b) * self.rest_rel;
         let mut e = target * qa.inverse();
         if e.w < 0.0 {
             e = -e;
@@ -290,7 +290,12 @@ impl Joint {
 
     /// One XPBD pass over the joint: anchor, axes, then limits. `h` is the substep.
     pub fn solve(&self, bones: &mut [Bone], h: f32) {
-        let (a, b) = (self.a, self.b);
+        self.solve_between(bones, self.a, self.b, h);
+    }
+
+    /// [`Joint::solve`] with body1 and body2 at `a` and `b` of `bones`: a batch of
+    /// islands stepped on its own thread holds its bones under its own indices.
+    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
         let inv_h2 = 1.0 / (h * h);
         match self.kind {
             JointType::Hinge { axis_a, axis_b } => {
@@ -319,12 +324,15 @@ impl Joint {
                 }
             }
             JointType::Fixed | JointType::Slider { .. } => {
-                let e = self.orientation_error(bones);
+                let e = self.orientation_error(bones, a, b);
                 angular(bones, a, b, e, 0.0);
             }
             JointType::Ball | JointType::Spring { .. } => {}
         }
-        let (pa, pb) = self.anchors(bones);
+        let (pa, pb) = (
+            side_world(bones, a, self.anchor_a),
+            side_world(bones, b, self.anchor_b),
+        );
         match self.kind {
             JointType::Spring {
                 stretch,
@@ -365,6 +373,34 @@ impl Joint {
         }
         for l in &self.angle_limits {
             l.solve(bones, a, b, alpha);
+        }
+    }
+}
+
+/// The joints one run of substeps solves, always in the world's order.
+#[derive(Clone, Copy)]
+pub(crate) enum JointSet<'a> {
+    /// All of the world's joints, on the world's bones.
+    All(&'a [Joint]),
+    /// Some of the world's joints on a batch's bones: each joint's index in the world and
+    /// its two sides renumbered into the batch.
+    Batch(&'a [Joint], &'a [(u32, Side, Side)]),
+}
+
+impl JointSet<'_> {
+    /// One pass over every joint of the set, in order.
+    pub fn solve(&self, bones: &mut [Bone], h: f32) {
+        match *self {
+            JointSet::All(joints) => {
+                for j in joints {
+                    j.solve(bones, h);
+                }
+            }
+            JointSet::Batch(joints, local) => {
+                for &(k, a, b) in local {
+                    joints[k as usize].solve_between(bones, a, b, h);
+                }
+            }
         }
     }
 }

@@ -10,12 +10,14 @@
 //! Files, one concept each: `particles` (storage, Verlet), `bone` (tetrahedron, frame,
 //! rigid corrections), `placement` (particulation), `joints`, `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
-//! `improved` and `paper` (the two solver loops), `measure` (the metrics).
+//! `improved` and `paper` (the two solver loops), `islands` (the improved loop on all
+//! cores), `measure` (the metrics).
 
 mod bone;
 mod contacts;
 mod friction;
 mod improved;
+mod islands;
 mod joints;
 mod limits;
 mod measure;

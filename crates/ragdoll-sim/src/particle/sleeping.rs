@@ -12,25 +12,9 @@
 
 use super::bone::Bone;
 use super::contacts::Contact;
+use super::islands::{find, union};
 use super::joints::Joint;
 use crate::scene::SleepSettings;
-
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let p = parent[parent[i as usize] as usize];
-        parent[i as usize] = p;
-        i = p;
-    }
-    i
-}
-
-fn union(parent: &mut [u32], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a as u32), find(parent, b as u32));
-    if ra != rb {
-        let (lo, hi) = (ra.min(rb), ra.max(rb));
-        parent[hi as usize] = lo;
-    }
-}
 
 /// Updates sleep timers and puts islands to sleep or wakes them. Returns the bones that
 /// just fell asleep so the caller can zero their particles' velocities. A `held` bone

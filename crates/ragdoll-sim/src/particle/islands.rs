@@ -1,0 +1,334 @@
+//! Islands, and the improved solver's substeps on all cores, deterministically.
+//!
+//! Between two collision detections the contacts are fixed. Bones linked by a joint or
+//! a contact, both moving, form an island; static bones (fixed or asleep) take no
+//! correction, so two islands that touch the same static bone still never interact. An
+//! island's substeps are therefore the same operations on the same numbers whether the
+//! other islands run before it, after it or beside it — provided every Gauss–Seidel
+//! loop meets its contacts and joints in the same relative order. So each batch of
+//! islands is gathered into dense arrays of its own (bones renumbered, contacts and
+//! joints kept in world order, a manifold's points still consecutive), stepped by the
+//! very code that steps the whole world (`improved::run_substeps`), and scattered back:
+//! the serial result bit for bit, on any number of threads.
+//!
+//! The union-find here is also sleeping's.
+
+use super::ParticleWorld;
+use super::bone::{Bone, Side};
+use super::contacts::Contact;
+use super::improved::{self, Part};
+use super::joints::JointSet;
+use crate::scene::Settings;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// The root of `i`'s set, halving the path on the way.
+pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let p = parent[parent[i as usize] as usize];
+        parent[i as usize] = p;
+        i = p;
+    }
+    i
+}
+
+/// Joins the sets of `a` and `b`; the lower index stays the root.
+pub(super) fn union(parent: &mut [u32], a: usize, b: usize) {
+    let (ra, rb) = (find(parent, a as u32), find(parent, b as u32));
+    if ra != rb {
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        parent[hi as usize] = lo;
+    }
+}
+
+/// Batches per thread: a few, so that rayon's work stealing evens out islands of
+/// unequal cost, but not so many that gathering dominates small islands.
+const BATCHES_PER_THREAD: usize = 4;
+
+/// Below this much work (bones + contact points + joints) a frame's chunk is stepped in
+/// place: gathering and waking threads would cost more than they save.
+const MIN_PARALLEL_WORK: u64 = 256;
+
+/// A chunk is gathered even without parallel work when at most 1 / this of its bones
+/// move.
+const COMPACT_FRACTION: usize = 4;
+
+/// "No index": a static bone's island, an unused local index.
+const NONE: u32 = u32::MAX;
+
+/// What one batch holds, by world index, each list ascending.
+#[derive(Default)]
+struct Members {
+    bones: Vec<u32>,
+    contacts: Vec<u32>,
+    joints: Vec<u32>,
+}
+
+/// The islands of one detection chunk, grouped into batches of similar work.
+pub(super) struct Plan {
+    batches: Vec<Members>,
+    /// Each moving bone's index in its batch (`NONE` for static bones).
+    local: Vec<u32>,
+}
+
+impl Plan {
+    /// Islands from the world's joints and current contacts, cut into batches for
+    /// `threads` threads; `None` when stepping the world in place is cheaper (one
+    /// island or too little work, with most bones moving).
+    pub fn new(w: &ParticleWorld, threads: usize) -> Option<Plan> {
+        let bones = &w.bones;
+        let n = bones.len();
+        let moving = |s: Side| s.filter(|&i| !bones[i].is_static());
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let links = w.joints.iter().map(|j| (j.a, j.b));
+        for (a, b) in links.chain(w.contacts.iter().map(|c| (Some(c.a), c.b))) {
+            if let (Some(a), Some(b)) = (moving(a), moving(b)) {
+                union(&mut parent, a, b);
+            }
+        }
+        // Each moving bone's island, named by its root; a constraint's is that of its
+        // moving side (it has at most one island: both moving sides were joined).
+        let root: Vec<u32> = (0..n)
+            .map(|i| {
+                if bones[i].is_static() {
+                    NONE
+                } else {
+                    find(&mut parent, i as u32)
+                }
+            })
+            .collect();
+        let side_root = |s: Side| s.map_or(NONE, |i| root[i]);
+        let pair_root = |a: Side, b: Side| match side_root(a) {
+            NONE => side_root(b),
+            r => r,
+        };
+        let contact_root: Vec<u32> = w
+            .contacts
+            .iter()
+            .map(|c| pair_root(Some(c.a), c.b))
+            .collect();
+        let joint_root: Vec<u32> = w.joints.iter().map(|j| pair_root(j.a, j.b)).collect();
+
+        // Work per island, at its root: per substep a bone, a contact point and a joint
+        // cost about the same.
+        let mut work = vec![0u64; n];
+        for &r in root.iter().chain(&contact_root).chain(&joint_root) {
+            if r != NONE {
+                work[r as usize] += 1;
+            }
+        }
+        let total: u64 = work.iter().sum();
+        // Gathering also pays on its own when most bones are static (a pile mostly or
+        // wholly asleep): a batch's substeps never visit the static bones, which the
+        // in-place loops reset and skip on every substep — 3 ms a frame for a pile of
+        // 100 humans asleep, with nothing to move.
+        let moving = root.iter().filter(|&&r| r != NONE).count();
+        let compacts = moving * COMPACT_FRACTION <= n;
+        // Islands in the order of their roots, cut into runs of about total / wanted.
+        let wanted = (threads * BATCHES_PER_THREAD) as u64;
+        let mut batch_of = vec![NONE; n];
+        let (mut count, mut done, mut last_cut) = (0u32, 0u64, None);
+        for (r, &cost) in work.iter().enumerate() {
+            if cost == 0 {
+                continue; // not a root
+            }
+            let cut = done * wanted / total;
+            if last_cut != Some(cut) {
+                last_cut = Some(cut);
+                count += 1;
+            }
+            batch_of[r] = count - 1;
+            done += cost;
+        }
+        let parallel = count >= 2 && total >= MIN_PARALLEL_WORK;
+        if !parallel && !compacts {
+            return None;
+        }
+
+        let mut batches: Vec<Members> = (0..count).map(|_| Members::default()).collect();
+        let mut local = vec![NONE; n];
+        for (i, &r) in root.iter().enumerate() {
+            if r != NONE {
+                let m = &mut batches[batch_of[r as usize] as usize];
+                local[i] = m.bones.len() as u32;
+                m.bones.push(i as u32);
+            }
+        }
+        for (k, &r) in contact_root.iter().enumerate() {
+            if r != NONE {
+                batches[batch_of[r as usize] as usize]
+                    .contacts
+                    .push(k as u32);
+            }
+        }
+        for (k, &r) in joint_root.iter().enumerate() {
+            if r != NONE {
+                batches[batch_of[r as usize] as usize].joints.push(k as u32);
+            }
+        }
+        Some(Plan { batches, local })
+    }
+}
+
+/// A batch of islands in dense arrays of its own: its moving bones first, then copies
+/// of the static bones its constraints read; bone `k`'s particles at `4k..4k + 4`; its
+/// contacts and joints in world order, their bones renumbered.
+struct Batch {
+    /// World index of each bone.
+    world_bones: Vec<u32>,
+    /// How many of the bones move (and are written back).
+    moving: usize,
+    bones: Vec<Bone>,
+    x: Vec<Vec3>,
+    x_prev: Vec<Vec3>,
+    v: Vec<Vec3>,
+    contacts: Vec<Contact>,
+    /// Each joint's world index and its two sides in the batch.
+    joints: Vec<(u32, Side, Side)>,
+}
+
+impl Batch {
+    /// Copies a batch's share of the world.
+    fn gather(m: &Members, local: &[u32], w: &ParticleWorld) -> Batch {
+        let is_static = |i: usize| w.bones[i].is_static();
+        let contact_sides = m.contacts.iter().flat_map(|&k| {
+            let c = &w.contacts[k as usize];
+            [Some(c.a), c.b]
+        });
+        let joint_sides = m.joints.iter().flat_map(|&k| {
+            let j = &w.joints[k as usize];
+            [j.a, j.b]
+        });
+        let mut statics: Vec<u32> = contact_sides
+            .chain(joint_sides)
+            .flatten()
+            .filter(|&i| is_static(i))
+            .map(|i| i as u32)
+            .collect();
+        statics.sort_unstable();
+        statics.dedup();
+        let moving = m.bones.len();
+        let local_of = |i: usize| {
+            if is_static(i) {
+                let k = statics.binary_search(&(i as u32));
+                moving + k.expect("every static bone read was gathered")
+            } else {
+                local[i] as usize
+            }
+        };
+        let renumber = |s: Side| s.map(local_of);
+
+        let world_bones: Vec<u32> = m.bones.iter().chain(&statics).copied().collect();
+        let nb = world_bones.len();
+        let mut bones = Vec::with_capacity(nb);
+        let (mut x, mut x_prev, mut v) = (
+            Vec::with_capacity(4 * nb),
+            Vec::with_capacity(4 * nb),
+            Vec::with_capacity(4 * nb),
+        );
+        for (k, &i) in world_bones.iter().enumerate() {
+            let mut b = w.bones[i as usize].clone();
+            for (c, p) in b.particles.iter_mut().enumerate() {
+                let q = *p as usize;
+                x.push(w.particles.x[q]);
+                x_prev.push(w.particles.x_prev[q]);
+                v.push(w.particles.v[q]);
+                *p = (4 * k + c) as u32;
+            }
+            bones.push(b);
+        }
+        let contacts = m
+            .contacts
+            .iter()
+            .map(|&k| {
+                let c = w.contacts[k as usize];
+                Contact {
+                    a: local_of(c.a),
+                    b: renumber(c.b),
+                    ..c
+                }
+            })
+            .collect();
+        let joints = m
+            .joints
+            .iter()
+            .map(|&k| {
+                let j = &w.joints[k as usize];
+                (k, renumber(j.a), renumber(j.b))
+            })
+            .collect();
+        Batch {
+            world_bones,
+            moving,
+            bones,
+            x,
+            x_prev,
+            v,
+            contacts,
+            joints,
+        }
+    }
+
+    /// Writes the moving bones, their particles and the contacts' multipliers back.
+    fn scatter(self, m: &Members, w: &mut ParticleWorld) {
+        let moving = self
+            .bones
+            .into_iter()
+            .zip(&self.world_bones)
+            .take(self.moving);
+        for (k, (bone, &i)) in moving.enumerate() {
+            let particles = w.bones[i as usize].particles;
+            for (c, &p) in particles.iter().enumerate() {
+                let p = p as usize;
+                w.particles.x[p] = self.x[4 * k + c];
+                w.particles.x_prev[p] = self.x_prev[4 * k + c];
+                w.particles.v[p] = self.v[4 * k + c];
+            }
+            w.bones[i as usize] = Bone { particles, ..bone };
+        }
+        for (c, &k) in self.contacts.iter().zip(&m.contacts) {
+            let world = &mut w.contacts[k as usize];
+            *world = Contact {
+                a: world.a,
+                b: world.b,
+                ..*c
+            };
+        }
+    }
+}
+
+/// Runs `count` substeps of length `h`, each of the plan's batches on its own rayon task.
+pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f32, s: &Settings) {
+    // What the substeps do to a static bone, once: its frame holds still and its
+    // velocity is zero. The copies in the batches get the same; this covers the static
+    // bones no constraint reads.
+    for b in w.bones.iter_mut().filter(|b| b.is_static()) {
+        b.prev_com = b.com;
+        b.prev_rot = b.rot;
+        b.dcom = Vec3::ZERO;
+        b.lin_vel = Vec3::ZERO;
+        b.ang_vel = Vec3::ZERO;
+    }
+    let world = &*w;
+    let stepped: Vec<Batch> = plan
+        .batches
+        .par_iter()
+        .map(|m| {
+            let mut batch = Batch::gather(m, &plan.local, world);
+            let mut part = Part {
+                bones: &mut batch.bones,
+                x: &mut batch.x,
+                x_prev: &mut batch.x_prev,
+                v: &mut batch.v,
+                contacts: &mut batch.contacts,
+                joints: JointSet::Batch(&world.joints, &batch.joints),
+                grab: world.grab,
+            };
+            improved::run_substeps(&mut part, count, h, s);
+            batch
+        })
+        .collect();
+    for (batch, m) in stepped.into_iter().zip(&plan.batches) {
+        batch.scatter(m, w);
+    }
+}
