@@ -268,12 +268,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     while sub < n_sub {
         detect(w, dt * (n_sub - sub) as f32 / n_sub as f32);
         let count = every.min(n_sub - sub);
-        let plan = if threads > 1 {
-            islands::Plan::new(w, threads)
-        } else {
-            None
-        };
-        match plan {
+        match islands::Plan::new(w, threads) {
             Some(plan) => islands::run_substeps(w, &plan, count, h, &s),
             None => {
                 let mut part = Part {

@@ -125,7 +125,11 @@ impl Plan {
         let moving = root.iter().filter(|&&r| r != NONE).count();
         let compacts = moving * COMPACT_FRACTION <= n;
         // Islands in the order of their roots, cut into runs of about total / wanted.
-        let wanted = (threads * BATCHES_PER_THREAD) as u64;
+        let wanted = if threads > 1 {
+            (threads * BATCHES_PER_THREAD) as u64
+        } else {
+            1
+        };
         let mut batch_of = vec![NONE; n];
         let (mut count, mut done, mut last_cut) = (0u32, 0u64, None);
         for (r, &cost) in work.iter().enumerate() {
@@ -140,7 +144,7 @@ impl Plan {
             batch_of[r] = count - 1;
             done += cost;
         }
-        let parallel = count >= 2 && total >= MIN_PARALLEL_WORK;
+        let parallel = threads > 1 && count >= 2 && total >= MIN_PARALLEL_WORK;
         if !parallel && !compacts {
             return None;
         }
