@@ -10,9 +10,11 @@
 //! - [`method`]: the trait both methods implement for the app.
 //! - [`snapshot`]: what a method shows, the same way for both.
 //! - [`metrics`]: energy gain, joint gap, limit violation, penetration.
+//! - [`broadphase`]: the overlapping-box pairs both methods collide.
 
 #![warn(missing_docs)]
 
+pub mod broadphase;
 pub mod method;
 pub mod metrics;
 pub mod particle;

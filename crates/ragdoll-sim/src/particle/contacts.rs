@@ -1,4 +1,4 @@
-//! Collision detection: which pairs may collide, a sort-and-sweep broad phase over parry
+//! Collision detection: which pairs may collide, a broad phase (`crate::broadphase`) over parry
 //! AABBs, and parry3d contact manifolds between the shapes posed by the bone frames and
 //! against the ground half-space.
 //!
@@ -72,7 +72,8 @@ impl Filter {
     }
 }
 
-/// Candidate pairs from a sort-and-sweep along X over AABBs loosened by `margin[i]`.
+/// Candidate pairs, sorted: bones whose AABBs loosened by `margin[i]` overlap
+/// ([`crate::broadphase`]), not both static, and allowed to collide by `filter`.
 pub(crate) fn broad_phase(
     bones: &[Bone],
     margin: &[f32],
@@ -85,22 +86,16 @@ pub(crate) fn broad_phase(
         .zip(margin)
         .map(|(b, m)| b.shape.compute_aabb(&b.parry_pose()).loosened(*m))
         .collect();
-    let mut order: Vec<usize> = (0..bones.len()).collect();
-    order.sort_by(|&i, &j| aabbs[i].mins.x.total_cmp(&aabbs[j].mins.x).then(i.cmp(&j)));
-    for (k, &i) in order.iter().enumerate() {
-        for &j in &order[k + 1..] {
-            if aabbs[j].mins.x > aabbs[i].maxs.x {
-                break;
-            }
-            if bones[i].is_static() && bones[j].is_static() {
-                continue;
-            }
-            if aabbs[i].intersects(&aabbs[j]) && filter.collides(bones, i, j) {
-                out.push((i.min(j), i.max(j)));
-            }
-        }
-    }
-    out.sort_unstable();
+    let mut pairs = Vec::new();
+    crate::broadphase::overlapping_pairs(&aabbs, &mut pairs);
+    out.extend(
+        pairs
+            .into_iter()
+            .map(|(i, j)| (i as usize, j as usize))
+            .filter(|&(i, j)| {
+                !(bones[i].is_static() && bones[j].is_static()) && filter.collides(bones, i, j)
+            }),
+    );
 }
 
 /// Contacts between two bones with `prediction` (m) of speculative distance. Calls

@@ -13,7 +13,6 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use super::broadphase::BroadPhase;
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use crate::scene::Shape;
@@ -131,7 +130,6 @@ pub struct Contacts {
     spare: Vec<ContactPair>,
     candidates: Vec<(u32, u32)>,
     aabbs: Vec<Aabb>,
-    broad: BroadPhase,
     /// Pairs that never collide (jointed, overlapping at rest, self-collision off), sorted.
     pub excluded: Vec<(u32, u32)>,
     /// The ground, if any.
@@ -176,7 +174,7 @@ impl Contacts {
                 .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
         }
         self.candidates.clear();
-        self.broad.pairs(&self.aabbs, &mut self.candidates);
+        crate::broadphase::overlapping_pairs(&self.aabbs, &mut self.candidates);
         let excluded = &self.excluded;
         self.candidates.retain(|&(a, b)| {
             (awake[a as usize] || awake[b as usize])

@@ -7,14 +7,14 @@
 //! - [`joint`]: building blocks every joint is made of; [`limits`]: swing, twist, ranges.
 //! - [`ball`], [`hinge`], [`universal`], [`fixed`], [`slider`], [`spring`]: one file per
 //!   joint type; [`joint_set`]: the arrays of them.
-//! - [`broadphase`], [`contact`]: collision detection and the contact solver.
+//! - [`contact`]: collision detection (with [`crate::broadphase`]) and the contact
+//!   solver.
 //! - [`island`]: islands and sleeping; [`solver`]: the step; [`project`]: the position
 //!   projection after it; [`parallel`]: islands solved on all cores.
 //! - [`world`]: [`MultibodyWorld`], the `Method`.
 
 pub mod ball;
 pub mod body;
-pub mod broadphase;
 pub mod contact;
 pub mod fixed;
 pub mod hinge;
