@@ -25,6 +25,11 @@ use rayon::prelude::*;
 /// No island / no local index.
 const NONE: u32 = u32::MAX;
 
+/// Below this much work in a step (moving bodies + joints + touching pairs) the world is
+/// solved in place: a figure or two has little to share out, and gathering and waking
+/// threads would cost about what they save.
+const MIN_PARALLEL_WORK: usize = 256;
+
 /// For each joint type, the world index of every joint of an island's local set.
 #[derive(Default)]
 struct JointSlots {
@@ -105,8 +110,11 @@ pub fn solve_islands(
         local_of_moving[i] = task.bodies.len() as u32;
         task.bodies.push(i);
     }
-    if tasks.len() < 2 {
-        // Nothing to share out: solve in place.
+    let work = local_of_moving.iter().filter(|&&l| l != NONE).count()
+        + joints.len()
+        + pairs.iter().filter(|p| p.touching()).count();
+    if tasks.len() < 2 || work < MIN_PARALLEL_WORK {
+        // Nothing worth sharing out: solve in place.
         solver::solve(s, motion, joints, pairs, awake, p);
         return;
     }
