@@ -170,10 +170,27 @@ impl RunTiming {
     }
 }
 
-/// Builds `flavor` for `scene` and times `steps` steps of `scene.settings.timestep`.
+/// Runs `f` on a rayon pool of `threads` threads: both methods share their islands out
+/// over the pool they are stepped in.
+pub fn on_threads<T: Send>(
+    threads: usize,
+    f: impl FnOnce() -> Result<T, AppError> + Send,
+) -> Result<T, AppError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| AppError::Other(format!("cannot start {threads} threads: {e}")))?
+        .install(f)
+}
+
+/// Builds `flavor` for `scene` and times `steps` steps of `scene.settings.timestep`, on
+/// one thread as the paper measured (t_real is the stepping thread's CPU time, which
+/// would not see work done on other threads).
 pub fn time_steps(flavor: Flavor, scene: &SceneDesc, steps: usize) -> Result<RunTiming, AppError> {
-    let mut method = flavor.build(scene)?;
-    Ok(time_method(method.as_mut(), steps))
+    on_threads(1, || {
+        let mut method = flavor.build(scene)?;
+        Ok(time_method(method.as_mut(), steps))
+    })
 }
 
 /// Times `steps` steps of an already built method, each one measured on its own.

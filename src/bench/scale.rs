@@ -9,7 +9,7 @@
 //! single-threaded one.
 
 use super::table::Table;
-use super::{Flavor, Report, RowFilter, Size, progress, time_method};
+use super::{Flavor, Report, RowFilter, Size, on_threads, progress, time_method};
 use crate::cli::SceneArgs;
 use crate::{AppError, scenes};
 use serde_json::json;
@@ -80,11 +80,7 @@ pub fn measure_on(
     scene: &ragdoll_sim::SceneDesc,
     frames: usize,
 ) -> Result<FrameCost, AppError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| AppError::Other(format!("cannot start {threads} threads: {e}")))?;
-    let mut cost = pool.install(|| measure(flavor, scene, frames))?;
+    let mut cost = on_threads(threads, || measure(flavor, scene, frames))?;
     if threads > 1 {
         cost.mean_ms = cost.wall_ms;
     }

@@ -92,7 +92,9 @@ fn main() {
         };
         let bones = scene.dynamic_body_count();
         let (rapier, approx) = rapier_cost(&scene, frames);
-        let ours = |f: Flavor| scale::measure(f, &scene, frames).map_err(|e| e.to_string());
+        // On a one-thread pool: our methods share islands out over the pool they run in,
+        // and Rapier here runs without its `parallel` feature.
+        let ours = |f: Flavor| scale::measure_on(1, f, &scene, frames).map_err(|e| e.to_string());
         let cell = |c: &FrameCost| {
             let s = format!("{:.3} / {:.3}", c.mean_ms, c.median_ms);
             if c.finite { s } else { format!("{s}!") }
