@@ -335,7 +335,14 @@ impl Method for ParticleWorld {
         let s = &self.scene.settings;
         match self.solver {
             ParticleSolver::Paper => format!("paper, {} iterations", s.iterations),
-            ParticleSolver::Improved => format!("improved, {} substeps", improved::substeps(s)),
+            // The panel's sliders are substeps and iterations; say how they make the
+            // substeps the solver runs (one constraint pass each).
+            ParticleSolver::Improved => format!(
+                "improved, {} substeps ({} × {} iterations)",
+                improved::substeps(s),
+                s.substeps.max(1),
+                s.iterations.max(1)
+            ),
         }
     }
 
