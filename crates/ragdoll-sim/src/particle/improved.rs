@@ -264,7 +264,14 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     w.particles.frame_start.clone_from(&w.particles.x);
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
-    let mut sub = 0;
+    // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is
+    // set) has nothing to detect or solve: its substeps would leave every bone where
+    // it is, so only the sleep timers below advance.
+    let mut sub = if w.bones.iter().all(|b| b.is_static()) {
+        n_sub
+    } else {
+        0
+    };
     while sub < n_sub {
         detect(w, dt * (n_sub - sub) as f32 / n_sub as f32);
         let count = every.min(n_sub - sub);

@@ -61,7 +61,11 @@ pub fn step(
     let dt = settings.timestep;
     refresh_awake(s, info, islands, awake, dynamic);
     update_inertia(s, motion, awake);
-    contacts.update(s, info, awake, dt);
+    // With nothing awake nothing can touch anything new, and the cached pairs of
+    // sleeping bodies are kept as they are: a world at rest costs no collision work.
+    if awake.contains(&true) {
+        contacts.update(s, info, awake, dt);
+    }
 
     // Islands from joints and touching contacts between dynamic bodies; a link from an
     // awake body to a sleeping one wakes the sleeping island.
