@@ -361,3 +361,36 @@ fn undescribable_scenes_are_clear_errors() {
         .expect("self joint");
     assert!(err.to_string().contains("self"), "{err}");
 }
+
+#[test]
+fn projectile_wakes_a_resting_box() {
+    // A box at rest on the ground falls asleep; a world where every bone sleeps skips
+    // its collision work, so the shot must still be seen and wake it.
+    let s = scene(
+        vec![boxed(
+            "box",
+            Vec3::splat(0.25),
+            Vec3::new(0.0, 0.25, 0.0),
+            2.0,
+        )],
+        vec![],
+        Some(Ground::default()),
+    );
+    let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+    for _ in 0..180 {
+        w.step();
+    }
+    assert!(w.sample().all_asleep, "the box should sleep within 3 s");
+    let mut shot = boxed("shot", Vec3::splat(0.1), Vec3::new(-2.0, 0.3, 0.0), 5.0);
+    shot.linear_velocity = Vec3::new(12.0, 0.0, 0.0);
+    w.add_body(&shot);
+    let mut woke = false;
+    let mut states = Vec::new();
+    for _ in 0..60 {
+        w.step();
+        w.body_states(&mut states);
+        woke |= states[0].linear_velocity.length() > 0.1;
+    }
+    assert!(woke, "the resting box was never woken by the hit");
+    assert!(states.iter().all(|b| b.com.is_finite()));
+}
