@@ -13,6 +13,10 @@
 //!
 //! After the substeps, the restitution pass, the position projection ([`super::project`]:
 //! what the soft constraints let give way is put back, positions only); then sleeping.
+//!
+//! The substeps, restitution and projection ([`solve`]) touch only an island's own
+//! bodies, so on a rayon pool of several threads each island is solved on its own
+//! ([`super::parallel`]), with the same bits as on one.
 
 use super::body::{BodyInfo, BodyMotion, BodyStates};
 use super::contact::{self, ContactPair, Contacts};
