@@ -267,11 +267,17 @@ impl Contacts {
             } else {
                 (shape_pose(s, info, b), &info[b].collider)
             };
-            // Every point of a moves at most |v| + |ω| r: contacts that may close this
-            // step are created now, so the speculative branch stops them on time even
-            // for a limb swinging fast about its joint.
-            let speed_b = if b == n { 0.0 } else { point_speed(s, info, b) };
-            let prediction = SPECULATIVE_DISTANCE + (point_speed(s, info, a) + speed_b) * dt;
+            // A point of a approaches a point of b at most |v_a − v_b| + |ω_a| r_a +
+            // |ω_b| r_b: contacts that may close this step are created now, so the
+            // speculative branch stops them on time even for a limb swinging fast about
+            // its joint, and bodies falling side by side make none.
+            let spin = |i: usize| s.ang_vel[i].length() * info[i].bound_radius;
+            let approach = if b == n {
+                point_speed(s, info, a)
+            } else {
+                (s.lin_vel[a] - s.lin_vel[b]).length() + spin(a) + spin(b)
+            };
+            let prediction = SPECULATIVE_DISTANCE + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
             let ok = DefaultQueryDispatcher.contact_manifolds(
                 &pos12,
