@@ -78,6 +78,11 @@ impl Plan {
     pub fn new(w: &ParticleWorld, threads: usize) -> Option<Plan> {
         let bones = &w.bones;
         let n = bones.len();
+        // On one thread only compaction can pay: with most bones moving, the island
+        // search below would be done for nothing, once per detection.
+        if threads == 1 && bones.iter().filter(|b| !b.is_static()).count() * COMPACT_FRACTION > n {
+            return None;
+        }
         let moving = |s: Side| s.filter(|&i| !bones[i].is_static());
         let mut parent: Vec<u32> = (0..n as u32).collect();
         let links = w.joints.iter().map(|j| (j.a, j.b));

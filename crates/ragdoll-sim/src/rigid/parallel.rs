@@ -89,8 +89,16 @@ pub fn solve_islands(
     awake: &[bool],
     p: &SolveParams,
 ) {
-    // Islands in the order of their lowest body, each with its moving bodies ascending.
     let n = motion.len();
+    let work = awake[..n].iter().filter(|&&a| a).count()
+        + joints.len()
+        + pairs.iter().filter(|p| p.touching()).count();
+    if work < MIN_PARALLEL_WORK {
+        // Too little to share out: solve in place.
+        solver::solve(s, motion, joints, pairs, awake, p);
+        return;
+    }
+    // Islands in the order of their lowest body, each with its moving bodies ascending.
     let mut task_of_root = vec![NONE; n];
     let mut task_of = vec![NONE; s.len()];
     let mut local_of_moving = vec![NONE; s.len()];
@@ -110,11 +118,8 @@ pub fn solve_islands(
         local_of_moving[i] = task.bodies.len() as u32;
         task.bodies.push(i);
     }
-    let work = local_of_moving.iter().filter(|&&l| l != NONE).count()
-        + joints.len()
-        + pairs.iter().filter(|p| p.touching()).count();
-    if tasks.len() < 2 || work < MIN_PARALLEL_WORK {
-        // Nothing worth sharing out: solve in place.
+    if tasks.len() < 2 {
+        // One island: nothing to share out, solve in place.
         solver::solve(s, motion, joints, pairs, awake, p);
         return;
     }
