@@ -14,32 +14,110 @@ use parry3d::bounding_volume::BoundingVolume;
 use parry3d::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
 use parry3d::shape::HalfSpace;
 
-/// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
+/// A contact manifold: where two sides touch, and what its points share. The points
+/// are `points[start..end]` of the same [`ContactSet`].
+///
+/// Split from the points (Box2D's manifold/point split) because a box face brings
+/// four points with one normal and one pair of materials: kept once per manifold the
+/// set is less than half the bytes, and the passes over the points stream less.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Contact {
+pub(crate) struct Manifold {
     /// The first bone.
     pub a: usize,
     /// The second bone, or the ground.
     pub b: Side,
-    /// Contact point on `a`, bone frame.
-    pub ra: Vec3,
-    /// Contact point on `b`, bone frame (world for the ground).
-    pub rb: Vec3,
     /// Unit normal from `a` towards `b` (world), fixed for the frame.
     pub n: Vec3,
     /// Combined Coulomb coefficient.
     pub mu: f32,
     /// Combined restitution.
     pub e: f32,
+    /// First point.
+    pub start: u32,
+    /// One past the last point.
+    pub end: u32,
+}
+
+impl Manifold {
+    /// Its points' range in the set.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.start as usize..self.end as usize
+    }
+}
+
+/// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ContactPoint {
+    /// Contact point on `a`, bone frame.
+    pub ra: Vec3,
+    /// Contact point on `b`, bone frame (world for the ground).
+    pub rb: Vec3,
     /// Normal multiplier of the current substep (0 when not touching).
     pub lambda_n: f32,
-    /// Index of the manifold (pair) this point belongs to; points of a manifold are
-    /// consecutive.
-    pub group: u32,
     /// Tangential (friction) multiplier spent in the current substep.
     pub lambda_t: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
     pub vn_before: f32,
+}
+
+impl ContactPoint {
+    /// A point at `ra` on `a` and `rb` on `b`, not yet solved.
+    pub fn new(ra: Vec3, rb: Vec3) -> ContactPoint {
+        ContactPoint {
+            ra,
+            rb,
+            lambda_n: 0.0,
+            lambda_t: 0.0,
+            vn_before: 0.0,
+        }
+    }
+}
+
+/// The contacts of one collision detection: manifolds and their points.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ContactSet {
+    /// Manifolds in detection order.
+    pub manifolds: Vec<Manifold>,
+    /// Every manifold's points, manifold by manifold.
+    pub points: Vec<ContactPoint>,
+}
+
+impl ContactSet {
+    /// Empties the set, keeping its storage.
+    pub fn clear(&mut self) {
+        self.manifolds.clear();
+        self.points.clear();
+    }
+
+    /// Adds a point between sides `(a, b)` with normal `n` and materials `(μ, e)`: to the
+    /// last manifold if it was opened for this pair (index `first` or later) with the
+    /// same normal, else to a new one. Parry reports a pair's points manifold by
+    /// manifold, so a pair of convex shapes makes one manifold and a pair with no
+    /// points makes none.
+    pub fn push(
+        &mut self,
+        first: usize,
+        (a, b): (usize, Side),
+        n: Vec3,
+        (mu, e): (f32, f32),
+        point: ContactPoint,
+    ) {
+        let end = self.points.len() as u32;
+        let open = self.manifolds.len() > first;
+        match self.manifolds.last_mut() {
+            Some(m) if open && m.n == n => m.end = end + 1,
+            _ => self.manifolds.push(Manifold {
+                a,
+                b,
+                n,
+                mu,
+                e,
+                start: end,
+                end: end + 1,
+            }),
+        }
+        self.points.push(point);
+    }
 }
 
 /// Pairs that never collide, precomputed from the scene.

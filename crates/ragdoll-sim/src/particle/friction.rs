@@ -15,7 +15,7 @@
 //! add energy.
 
 use super::bone::{Bone, Side, point_inv_mass, positional, rot_inv_mass, side_world};
-use super::contacts::Contact;
+use super::contacts::{ContactPoint, Manifold};
 use glam::Vec3;
 
 fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
@@ -37,12 +37,12 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
 }
 
 /// Normal position pass for one contact: push the shapes apart. Accumulates `lambda_n`.
-pub(crate) fn solve_normal(bones: &mut [Bone], c: &mut Contact) {
-    let pa = bones[c.a].world(c.ra);
-    let pb = side_world(bones, c.b, c.rb);
-    let depth = (pa - pb).dot(c.n);
+pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoint) {
+    let pa = bones[m.a].world(c.ra);
+    let pb = side_world(bones, m.b, c.rb);
+    let depth = (pa - pb).dot(m.n);
     if depth > 0.0 {
-        c.lambda_n += positional(bones, Some(c.a), c.b, pa, pb, -c.n * depth, 0.0);
+        c.lambda_n += positional(bones, Some(m.a), m.b, pa, pb, -m.n * depth, 0.0);
     }
 }
 
@@ -58,27 +58,28 @@ pub(crate) fn solve_normal(bones: &mut [Bone], c: &mut Contact) {
 /// 7 % further than Coulomb allows with per-point cones).
 pub(crate) fn solve_friction(
     bones: &mut [Bone],
-    c: &mut Contact,
+    m: &Manifold,
+    c: &mut ContactPoint,
     group_n: f32,
     group_t: f32,
 ) -> f32 {
-    let a = Some(c.a);
-    let pa = bones[c.a].world(c.ra);
-    let pb = side_world(bones, c.b, c.rb);
-    let slip = bones[c.a].displacement(c.ra) - side_displacement(bones, c.b, c.rb);
-    let slip_t = slip - c.n * slip.dot(c.n);
+    let a = Some(m.a);
+    let pa = bones[m.a].world(c.ra);
+    let pb = side_world(bones, m.b, c.rb);
+    let slip = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
+    let slip_t = slip - m.n * slip.dot(m.n);
     let len = slip_t.length();
     if len < 1e-9 {
         return 0.0;
     }
     let t = slip_t / len;
-    let w = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, c.b, pb, t);
-    let allowed = c.mu * group_n - group_t;
+    let w = point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, m.b, pb, t);
+    let allowed = m.mu * group_n - group_t;
     if w <= 0.0 || allowed <= 0.0 {
         return 0.0;
     }
     let frac = (allowed / (len / w)).min(1.0);
-    let lt = positional(bones, a, c.b, pa, pb, -slip_t * frac, 0.0);
+    let lt = positional(bones, a, m.b, pa, pb, -slip_t * frac, 0.0);
     c.lambda_t += lt;
     lt
 }
@@ -102,41 +103,47 @@ fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
 const PATCH_RADIUS: f32 = 0.01;
 
 /// Velocity pass for one contact that was active this substep.
-pub(crate) fn solve_velocity(bones: &mut [Bone], c: &Contact, h: f32, restitution_threshold: f32) {
+pub(crate) fn solve_velocity(
+    bones: &mut [Bone],
+    m: &Manifold,
+    c: &ContactPoint,
+    h: f32,
+    restitution_threshold: f32,
+) {
     if c.lambda_n <= 0.0 {
         return;
     }
-    let a = Some(c.a);
-    let pa = bones[c.a].world(c.ra);
-    let pb = side_world(bones, c.b, c.rb);
-    let v = point_velocity(bones, a, pa) - point_velocity(bones, c.b, pb);
-    let vn = v.dot(c.n);
+    let a = Some(m.a);
+    let pa = bones[m.a].world(c.ra);
+    let pb = side_world(bones, m.b, c.rb);
+    let v = point_velocity(bones, a, pa) - point_velocity(bones, m.b, pb);
+    let vn = v.dot(m.n);
     // Normal: restitution on the approach speed before the solve, never more.
     let target = if c.vn_before > restitution_threshold {
-        -c.e * c.vn_before
+        -m.e * c.vn_before
     } else {
         0.0
     };
-    let wn = point_inv_mass(bones, a, pa, c.n) + point_inv_mass(bones, c.b, pb, c.n);
+    let wn = point_inv_mass(bones, a, pa, m.n) + point_inv_mass(bones, m.b, pb, m.n);
     if wn > 0.0 {
-        let p = c.n * ((target - vn) / wn);
+        let p = m.n * ((target - vn) / wn);
         apply_velocity_impulse(bones, a, pa, p);
-        apply_velocity_impulse(bones, c.b, pb, -p);
+        apply_velocity_impulse(bones, m.b, pb, -p);
     }
     // Torsional friction: twist about the normal, capped by μ r λ_n / h.
     let twist = |bones: &[Bone], s: Side| match s {
-        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(c.n),
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
         _ => 0.0,
     };
-    let spin = twist(bones, a) - twist(bones, c.b);
-    let wr = rot_inv_mass(bones, a, c.n) + rot_inv_mass(bones, c.b, c.n);
+    let spin = twist(bones, a) - twist(bones, m.b);
+    let wr = rot_inv_mass(bones, a, m.n) + rot_inv_mass(bones, m.b, m.n);
     if wr > 0.0 && spin != 0.0 {
-        let l = spin.signum() * (spin.abs() / wr).min(c.mu * PATCH_RADIUS * c.lambda_n / h);
-        for (s, sign) in [(a, -1.0f32), (c.b, 1.0)] {
+        let l = spin.signum() * (spin.abs() / wr).min(m.mu * PATCH_RADIUS * c.lambda_n / h);
+        for (s, sign) in [(a, -1.0f32), (m.b, 1.0)] {
             if let Some(i) = s {
                 let b = &mut bones[i];
                 if !b.is_static() {
-                    b.ang_vel += b.inv_inertia_mul(c.n * (sign * l));
+                    b.ang_vel += b.inv_inertia_mul(m.n * (sign * l));
                 }
             }
         }

@@ -16,7 +16,7 @@
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
-use super::contacts::{Contact, broad_phase, ground_pair, shape_pair};
+use super::contacts::{ContactPoint, Manifold, broad_phase, ground_pair, shape_pair};
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
@@ -26,7 +26,7 @@ use glam::Vec3;
 
 /// Collision detection for the frame, with each bone's margin from its speed.
 fn detect(w: &mut ParticleWorld, dt: f32) {
-    let g = w.scene.settings.gravity.length();
+    let g = w.settings.gravity.length();
     let margins: Vec<f32> = w
         .bones
         .iter()
@@ -40,31 +40,20 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
-    let mut group_count = 0u32;
-    let mu_of = |i: usize| bones[i].friction;
     for &(i, j) in &pairs {
         let prediction = margins[i] + margins[j];
-        let mu = (mu_of(i) * mu_of(j)).sqrt();
+        let mu = (bones[i].friction * bones[j].friction).sqrt();
         let e = bones[i].restitution.max(bones[j].restitution);
-        let group = group_count;
-        group_count += 1;
+        let first = contacts.manifolds.len();
         shape_pair(bones, i, j, prediction, &mut w.manifolds, |pa, pb, n, _| {
-            contacts.push(Contact {
-                a: i,
-                b: Some(j),
-                ra: bones[i].rot.inverse() * (pa - bones[i].center()),
-                rb: bones[j].rot.inverse() * (pb - bones[j].center()),
-                n,
-                mu,
-                e,
-                lambda_n: 0.0,
-                group,
-                lambda_t: 0.0,
-                vn_before: 0.0,
-            });
+            let point = ContactPoint::new(
+                bones[i].rot.inverse() * (pa - bones[i].center()),
+                bones[j].rot.inverse() * (pb - bones[j].center()),
+            );
+            contacts.push(first, (i, Some(j)), n, (mu, e), point);
         });
     }
-    if let Some(ground) = w.scene.settings.ground {
+    if let Some(ground) = w.settings.ground {
         for (i, b) in bones.iter().enumerate() {
             if b.is_static() {
                 continue;
@@ -72,22 +61,10 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
             let mu = (b.friction * ground.friction).sqrt();
             let e = b.restitution.max(ground.restitution);
             let g: &Ground = &ground;
-            let group = group_count;
-            group_count += 1;
+            let first = contacts.manifolds.len();
             ground_pair(bones, i, g, margins[i], &mut w.manifolds, |pa, pb, n, _| {
-                contacts.push(Contact {
-                    a: i,
-                    b: None,
-                    ra: b.rot.inverse() * (pa - b.center()),
-                    rb: pb,
-                    n,
-                    mu,
-                    e,
-                    lambda_n: 0.0,
-                    group,
-                    lambda_t: 0.0,
-                    vn_before: 0.0,
-                });
+                let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
+                contacts.push(first, (i, None), n, (mu, e), point);
             });
         }
     }
@@ -95,24 +72,17 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     w.pairs = pairs;
 }
 
-/// Contacts, manifold by manifold (consecutive contacts of one group): each point's
-/// normal correction, then its friction against the manifold's Coulomb cone so far.
-fn contact_pass(bones: &mut [Bone], contacts: &mut [Contact]) {
-    let mut start = 0;
-    while start < contacts.len() {
-        let g = contacts[start].group;
-        let end = contacts[start..]
-            .iter()
-            .position(|c| c.group != g)
-            .map_or(contacts.len(), |k| start + k);
-        let group = &mut contacts[start..end];
+/// Contacts, manifold by manifold: each point's normal correction, then its friction
+/// against the manifold's Coulomb cone so far.
+fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
+    for m in manifolds {
+        let group = &mut points[m.range()];
         let mut spent: f32 = group.iter().map(|c| c.lambda_t).sum();
         for k in 0..group.len() {
-            solve_normal(bones, &mut group[k]);
+            solve_normal(bones, m, &mut group[k]);
             let normal: f32 = group.iter().map(|c| c.lambda_n).sum();
-            spent += solve_friction(bones, &mut group[k], normal, spent);
+            spent += solve_friction(bones, m, &mut group[k], normal, spent);
         }
-        start = end;
     }
 }
 
@@ -168,8 +138,9 @@ pub(super) struct Part<'a> {
     pub x: &'a mut [Vec3],
     pub x_prev: &'a mut [Vec3],
     pub v: &'a mut [Vec3],
-    /// Contacts, manifold by manifold as detected.
-    pub contacts: &'a mut [Contact],
+    /// Contact manifolds as detected, and their points (`Manifold::range`).
+    pub manifolds: &'a [Manifold],
+    pub points: &'a mut [ContactPoint],
     pub joints: JointSet<'a>,
     /// The mouse grab; it acts only where its bone is (see `grab_improved`).
     pub grab: Option<Grab>,
@@ -196,18 +167,20 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             b.shape_match(&u);
         }
         // relative normal velocity before the solve, for restitution
-        for c in p.contacts.iter_mut() {
-            c.lambda_n = 0.0;
-            c.lambda_t = 0.0;
-            let pa = p.bones[c.a].world(c.ra);
-            let pb = super::bone::side_world(p.bones, c.b, c.rb);
-            c.vn_before = (point_velocity(p.bones, Some(c.a), pa)
-                - point_velocity(p.bones, c.b, pb))
-            .dot(c.n);
+        for m in p.manifolds {
+            for c in &mut p.points[m.range()] {
+                c.lambda_n = 0.0;
+                c.lambda_t = 0.0;
+                let pa = p.bones[m.a].world(c.ra);
+                let pb = super::bone::side_world(p.bones, m.b, c.rb);
+                c.vn_before = (point_velocity(p.bones, Some(m.a), pa)
+                    - point_velocity(p.bones, m.b, pb))
+                .dot(m.n);
+            }
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
-            contact_pass(p.bones, p.contacts);
+            contact_pass(p.bones, p.manifolds, p.points);
             p.joints.solve(p.bones, h);
             if let Some(g) = p.grab {
                 super::grab_improved(p.bones, g, h);
@@ -233,8 +206,10 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         bone_velocities(p.bones, p.v);
         // 5. velocity pass (contact points are relative to the updated frames)
         for _ in 0..VELOCITY_PASSES {
-            for c in p.contacts.iter() {
-                solve_velocity(p.bones, c, h, s.restitution_threshold);
+            for m in p.manifolds {
+                for c in &p.points[m.range()] {
+                    solve_velocity(p.bones, m, c, h, s.restitution_threshold);
+                }
             }
         }
         for b in p.bones.iter_mut() {
@@ -257,7 +232,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 /// and contacts, static bones only read — cannot touch each other and their substeps
 /// run on all of rayon's threads (`islands`). A single thread steps the world in place.
 pub(crate) fn step(w: &mut ParticleWorld) {
-    let s = w.scene.settings.clone();
+    let s = w.settings.clone();
     let dt = s.timestep;
     let n_sub = substeps(&s);
     let h = dt / n_sub as f32;
@@ -283,7 +258,8 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                     x: &mut w.particles.x,
                     x_prev: &mut w.particles.x_prev,
                     v: &mut w.particles.v,
-                    contacts: &mut w.contacts,
+                    manifolds: &w.contacts.manifolds,
+                    points: &mut w.contacts.points,
                     joints: JointSet::All(&w.joints),
                     grab: w.grab,
                 };
@@ -300,7 +276,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         &mut w.bones,
         held,
         &w.joints,
-        &w.contacts,
+        &w.contacts.manifolds,
         &s.sleep,
         dt,
         w.time + dt as f64,

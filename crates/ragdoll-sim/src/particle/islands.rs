@@ -15,7 +15,7 @@
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
-use super::contacts::Contact;
+use super::contacts::{ContactPoint, Manifold};
 use super::improved::{self, Part};
 use super::joints::JointSet;
 use crate::scene::Settings;
@@ -60,7 +60,7 @@ const NONE: u32 = u32::MAX;
 #[derive(Default)]
 struct Members {
     bones: Vec<u32>,
-    contacts: Vec<u32>,
+    manifolds: Vec<u32>,
     joints: Vec<u32>,
 }
 
@@ -86,7 +86,8 @@ impl Plan {
         let moving = |s: Side| s.filter(|&i| !bones[i].is_static());
         let mut parent: Vec<u32> = (0..n as u32).collect();
         let links = w.joints.iter().map(|j| (j.a, j.b));
-        for (a, b) in links.chain(w.contacts.iter().map(|c| (Some(c.a), c.b))) {
+        let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a), m.b));
+        for (a, b) in links.chain(touching) {
             if let (Some(a), Some(b)) = (moving(a), moving(b)) {
                 union(&mut parent, a, b);
             }
@@ -107,19 +108,25 @@ impl Plan {
             NONE => side_root(b),
             r => r,
         };
-        let contact_root: Vec<u32> = w
+        let manifold_root: Vec<u32> = w
             .contacts
+            .manifolds
             .iter()
-            .map(|c| pair_root(Some(c.a), c.b))
+            .map(|m| pair_root(Some(m.a), m.b))
             .collect();
         let joint_root: Vec<u32> = w.joints.iter().map(|j| pair_root(j.a, j.b)).collect();
 
         // Work per island, at its root: per substep a bone, a contact point and a joint
         // cost about the same.
         let mut work = vec![0u64; n];
-        for &r in root.iter().chain(&contact_root).chain(&joint_root) {
+        for &r in root.iter().chain(&joint_root) {
             if r != NONE {
                 work[r as usize] += 1;
+            }
+        }
+        for (m, &r) in w.contacts.manifolds.iter().zip(&manifold_root) {
+            if r != NONE {
+                work[r as usize] += u64::from(m.end - m.start);
             }
         }
         let total: u64 = work.iter().sum();
@@ -163,10 +170,10 @@ impl Plan {
                 m.bones.push(i as u32);
             }
         }
-        for (k, &r) in contact_root.iter().enumerate() {
+        for (k, &r) in manifold_root.iter().enumerate() {
             if r != NONE {
                 batches[batch_of[r as usize] as usize]
-                    .contacts
+                    .manifolds
                     .push(k as u32);
             }
         }
@@ -191,7 +198,9 @@ struct Batch {
     x: Vec<Vec3>,
     x_prev: Vec<Vec3>,
     v: Vec<Vec3>,
-    contacts: Vec<Contact>,
+    /// Its manifolds, their points rebased onto `points`.
+    manifolds: Vec<Manifold>,
+    points: Vec<ContactPoint>,
     /// Each joint's world index and its two sides in the batch.
     joints: Vec<(u32, Side, Side)>,
 }
@@ -200,8 +209,8 @@ impl Batch {
     /// Copies a batch's share of the world.
     fn gather(m: &Members, local: &[u32], w: &ParticleWorld) -> Batch {
         let is_static = |i: usize| w.bones[i].is_static();
-        let contact_sides = m.contacts.iter().flat_map(|&k| {
-            let c = &w.contacts[k as usize];
+        let contact_sides = m.manifolds.iter().flat_map(|&k| {
+            let c = &w.contacts.manifolds[k as usize];
             [Some(c.a), c.b]
         });
         let joint_sides = m.joints.iter().flat_map(|&k| {
@@ -246,18 +255,20 @@ impl Batch {
             }
             bones.push(b);
         }
-        let contacts = m
-            .contacts
-            .iter()
-            .map(|&k| {
-                let c = w.contacts[k as usize];
-                Contact {
-                    a: local_of(c.a),
-                    b: renumber(c.b),
-                    ..c
-                }
-            })
-            .collect();
+        let mut manifolds = Vec::with_capacity(m.manifolds.len());
+        let mut points = Vec::new();
+        for &k in &m.manifolds {
+            let c = w.contacts.manifolds[k as usize];
+            let start = points.len() as u32;
+            points.extend_from_slice(&w.contacts.points[c.range()]);
+            manifolds.push(Manifold {
+                a: local_of(c.a),
+                b: renumber(c.b),
+                start,
+                end: points.len() as u32,
+                ..c
+            });
+        }
         let joints = m
             .joints
             .iter()
@@ -273,7 +284,8 @@ impl Batch {
             x,
             x_prev,
             v,
-            contacts,
+            manifolds,
+            points,
             joints,
         }
     }
@@ -295,13 +307,9 @@ impl Batch {
             }
             w.bones[i as usize] = Bone { particles, ..bone };
         }
-        for (c, &k) in self.contacts.iter().zip(&m.contacts) {
-            let world = &mut w.contacts[k as usize];
-            *world = Contact {
-                a: world.a,
-                b: world.b,
-                ..*c
-            };
+        for (local, &k) in self.manifolds.iter().zip(&m.manifolds) {
+            let world = w.contacts.manifolds[k as usize].range();
+            w.contacts.points[world].copy_from_slice(&self.points[local.range()]);
         }
     }
 }
@@ -329,7 +337,8 @@ pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f3
                 x: &mut batch.x,
                 x_prev: &mut batch.x_prev,
                 v: &mut batch.v,
-                contacts: &mut batch.contacts,
+                manifolds: &batch.manifolds,
+                points: &mut batch.points,
                 joints: JointSet::Batch(&world.joints, &batch.joints),
                 grab: world.grab,
             };

@@ -18,7 +18,7 @@ use glam::Vec3;
 
 /// The sample for the current state.
 pub(crate) fn sample(w: &ParticleWorld) -> Sample {
-    let dt = w.scene.settings.timestep;
+    let dt = w.settings.timestep;
     let p = &w.particles;
     let mut kinetic = 0.0f64;
     let mut potential = 0.0f64;
@@ -29,7 +29,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         }
         let v = (p.x[i] - p.frame_start[i]) / dt;
         kinetic += 0.5 * m as f64 * v.length_squared() as f64;
-        potential += potential_energy(&w.scene.settings, m, p.x[i]);
+        potential += potential_energy(&w.settings, m, p.x[i]);
     }
     let mut pen = 0.0f32;
     let zero = vec![0.0; w.bones.len()];
@@ -46,7 +46,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
             pen = pen.max(-d)
         });
     }
-    if let Some(ground) = w.scene.settings.ground {
+    if let Some(ground) = w.settings.ground {
         for (i, b) in bones.iter().enumerate() {
             if !b.fixed {
                 ground_pair(&bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| {
@@ -84,7 +84,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
 /// Verlet's `(x − x_old)/Δt`; improved mode: the velocities after the last substep).
 pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
     let p = &w.particles;
-    let dt = w.scene.settings.timestep;
+    let dt = w.settings.timestep;
     let mut e = 0.0f64;
     for i in 0..p.len() {
         let m = p.mass[i];
@@ -95,8 +95,7 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
             ParticleSolver::Improved => p.v[i],
             ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
         };
-        e += 0.5 * m as f64 * v.length_squared() as f64
-            + potential_energy(&w.scene.settings, m, p.x[i]);
+        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.settings, m, p.x[i]);
     }
     e
 }
@@ -104,7 +103,7 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
 /// Kinematic state of every bone, as its frame implies.
 pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
     out.clear();
-    let dt = w.scene.settings.timestep;
+    let dt = w.settings.timestep;
     for b in &w.bones {
         let pose = b.shape_pose();
         let com = pose.transform_point(b.shape_com);

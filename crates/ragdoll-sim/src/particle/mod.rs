@@ -28,14 +28,14 @@ mod sleeping;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
-    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, collider, mass_props, validate,
+    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider, mass_props, validate,
 };
 use crate::snapshot::{
     BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
     ParticleRole, RenderSnapshot, StickInstance, StickRole,
 };
 use bone::{Bone, EDGES};
-use contacts::{Contact, Filter};
+use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3};
 use joints::{Joint, RestFrames};
 use parry3d::query::{ContactManifold, Ray};
@@ -64,18 +64,22 @@ impl ParticleSolver {
 
 /// The particle ragdoll world, built from a [`SceneDesc`].
 pub struct ParticleWorld {
-    scene: SceneDesc,
+    /// The live settings (the scene itself is not kept: a world is built from it).
+    settings: Settings,
+    /// Each body's shape as described, for drawing (cold; parry's copy is in the bone).
+    shapes: Vec<Shape>,
+    /// Bodies of the scene; later ones are projectiles (`add_body`).
+    scene_bodies: usize,
     solver: ParticleSolver,
     particles: Particles,
     bones: Vec<Bone>,
     joints: Vec<Joint>,
     filter: Filter,
-    contacts: Vec<Contact>,
+    contacts: ContactSet,
     pairs: Vec<(usize, usize)>,
     manifolds: Vec<ContactManifold<(), ()>>,
     paper: Option<paper::PaperState>,
     grab: Option<Grab>,
-    projectiles: usize,
     time: f64,
 }
 
@@ -85,18 +89,19 @@ impl ParticleWorld {
     pub fn new(scene: &SceneDesc, solver: ParticleSolver) -> Result<ParticleWorld, SceneError> {
         validate(scene)?;
         let mut w = ParticleWorld {
-            scene: scene.clone(),
+            settings: scene.settings.clone(),
+            shapes: scene.bodies.iter().map(|b| b.shape.clone()).collect(),
+            scene_bodies: scene.bodies.len(),
             solver,
             particles: Particles::default(),
             bones: Vec::new(),
             joints: Vec::new(),
             filter: Filter::default(),
-            contacts: Vec::new(),
+            contacts: ContactSet::default(),
             pairs: Vec::new(),
             manifolds: Vec::new(),
             paper: None,
             grab: None,
-            projectiles: 0,
             time: 0.0,
         };
         let mut masses = Vec::with_capacity(scene.bodies.len());
@@ -119,7 +124,7 @@ impl ParticleWorld {
                 w.paper = Some(st);
             }
         }
-        w.assign_figures();
+        w.assign_figures(scene);
         let frames: Vec<(Vec3, Quat)> = w.bones.iter().map(|b| (b.com, b.rot)).collect();
         let rf = RestFrames { frames: &frames };
         for c in &scene.constraints {
@@ -185,7 +190,7 @@ impl ParticleWorld {
         bone.inv_inertia_local = p
             .principal_inertia
             .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
-        let s = &self.scene.settings;
+        let s = &self.settings;
         let (dt, g) = (s.timestep, s.gravity);
         let h = if self.solver == ParticleSolver::Improved {
             dt / improved::substeps(s) as f32
@@ -210,13 +215,13 @@ impl ParticleWorld {
     }
 
     /// Figures: connected components of the joint graph.
-    fn assign_figures(&mut self) {
+    fn assign_figures(&mut self, scene: &SceneDesc) {
         let n = self.bones.len();
         let mut fig: Vec<u32> = (0..n as u32).collect();
         // Few constraints: relax labels to the minimum until stable.
         loop {
             let mut changed = false;
-            for c in &self.scene.constraints {
+            for c in &scene.constraints {
                 if let Some(b) = c.body2.body() {
                     let (i, j) = (c.body1.index(), b.index());
                     let m = fig[i].min(fig[j]);
@@ -258,15 +263,6 @@ impl ParticleWorld {
         self.solver
     }
 
-    /// Switches solver, rebuilding from the scene (the state restarts).
-    pub fn set_solver(&mut self, solver: ParticleSolver) -> Result<(), SceneError> {
-        if solver != self.solver {
-            let scene = self.scene.clone();
-            *self = ParticleWorld::new(&scene, solver)?;
-        }
-        Ok(())
-    }
-
     /// Total energy with the integrator's own particle velocities (J): the state's
     /// energy, `Σ ½ m_p |v_p|² + m_p g h_p` with `v_p` the velocity the next step starts
     /// from. [`Method::sample`] follows DESIGN.md and differences positions over the
@@ -274,11 +270,6 @@ impl ParticleWorld {
     /// (an impact), so its `energy_gain` can show a rise the state never had.
     pub fn state_energy(&self) -> f64 {
         measure::state_energy(self)
-    }
-
-    /// The scene this world was built from (with live settings applied).
-    pub fn scene(&self) -> &SceneDesc {
-        &self.scene
     }
 }
 
@@ -332,7 +323,7 @@ impl Method for ParticleWorld {
     }
 
     fn solver_label(&self) -> String {
-        let s = &self.scene.settings;
+        let s = &self.settings;
         match self.solver {
             ParticleSolver::Paper => format!("paper, {} iterations", s.iterations),
             // The panel's sliders are substeps and iterations; say how they make the
@@ -360,22 +351,22 @@ impl Method for ParticleWorld {
                 }
             }
         }
-        self.time += self.scene.settings.timestep as f64;
+        self.time += self.settings.timestep as f64;
     }
 
     fn set_settings(&mut self, settings: &Settings) {
-        let old = self.scene.settings.timestep;
+        let old = self.settings.timestep;
         if self.solver == ParticleSolver::Paper
             && old != settings.timestep
             && settings.timestep > 0.0
         {
             self.particles.rescale_verlet(old, settings.timestep);
         }
-        self.scene.settings = settings.clone();
+        self.settings = settings.clone();
     }
 
     fn settings(&self) -> &Settings {
-        &self.scene.settings
+        &self.settings
     }
 
     fn snapshot(&self, out: &mut RenderSnapshot) {
@@ -385,7 +376,7 @@ impl Method for ParticleWorld {
                 BodyRole::Fixed
             } else if self.grab.is_some_and(|g| g.body.index() == b.body) {
                 BodyRole::Grabbed
-            } else if b.body >= self.scene.bodies.len() - self.projectiles {
+            } else if b.body >= self.scene_bodies {
                 BodyRole::Projectile
             } else if b.asleep {
                 BodyRole::Asleep
@@ -394,7 +385,7 @@ impl Method for ParticleWorld {
             };
             out.bodies.push(BodyInstance {
                 body: BodyId(b.body as u32),
-                shape: self.scene.bodies[b.body].shape.clone(),
+                shape: self.shapes[b.body].clone(),
                 pose: b.shape_pose(),
                 role,
             });
@@ -419,14 +410,16 @@ impl Method for ParticleWorld {
                 },
             });
         }
-        for c in &self.contacts {
-            let pa = self.bones[c.a].world(c.ra);
-            let pb = bone::side_world(&self.bones, c.b, c.rb);
-            out.contacts.push(ContactInstance {
-                point: pa,
-                normal: c.n,
-                depth: (pa - pb).dot(c.n),
-            });
+        for m in &self.contacts.manifolds {
+            for c in &self.contacts.points[m.range()] {
+                let pa = self.bones[m.a].world(c.ra);
+                let pb = bone::side_world(&self.bones, m.b, c.rb);
+                out.contacts.push(ContactInstance {
+                    point: pa,
+                    normal: m.n,
+                    depth: (pa - pb).dot(m.n),
+                });
+            }
         }
         for j in &self.joints {
             if !j.has_anchor {
@@ -524,13 +517,9 @@ impl Method for ParticleWorld {
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
-        let id = self.scene.bodies.len();
-        let mut desc = desc.clone();
-        if self.scene.body_id(&desc.name).is_some() {
-            desc.name = format!("{}#{}", desc.name, id);
-        }
-        self.scene.bodies.push(desc.clone());
-        if let Ok(mut bone) = self.particulated_bone(id, &desc) {
+        let id = self.shapes.len();
+        self.shapes.push(desc.shape.clone());
+        if let Ok(mut bone) = self.particulated_bone(id, desc) {
             bone.figure = id as u32;
             if self.solver == ParticleSolver::Paper {
                 // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it.
@@ -559,7 +548,6 @@ impl Method for ParticleWorld {
                 }
             }
             self.bones.push(bone);
-            self.projectiles += 1;
         }
         BodyId(id as u32)
     }

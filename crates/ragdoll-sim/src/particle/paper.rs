@@ -557,7 +557,7 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
             w.bones[j].paper_frame(&w.particles.x);
         }
     }
-    if let Some(ground) = w.scene.settings.ground {
+    if let Some(ground) = w.settings.ground {
         for i in 0..w.bones.len() {
             if w.bones[i].fixed {
                 continue;
@@ -615,7 +615,7 @@ fn solve_limits(w: &mut ParticleWorld, st: &PaperState) {
 
 /// One step of the paper's method.
 pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
-    let s = &w.scene.settings;
+    let s = &w.settings;
     let (g, dt, n) = (s.gravity, s.timestep, s.iterations.max(1));
     w.particles.frame_start.clone_from(&w.particles.x);
     w.particles.verlet(g, dt);

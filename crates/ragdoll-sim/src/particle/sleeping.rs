@@ -11,7 +11,7 @@
 //! settles under the threshold.
 
 use super::bone::Bone;
-use super::contacts::Contact;
+use super::contacts::Manifold;
 use super::islands::{find, union};
 use super::joints::Joint;
 use crate::scene::SleepSettings;
@@ -25,7 +25,7 @@ pub(crate) fn update(
     bones: &mut [Bone],
     held: Option<usize>,
     joints: &[Joint],
-    contacts: &[Contact],
+    manifolds: &[Manifold],
     s: &SleepSettings,
     dt: f32,
     time: f64,
@@ -66,7 +66,7 @@ pub(crate) fn update(
             union(&mut parent, a, b);
         }
     }
-    for c in contacts {
+    for c in manifolds {
         if let Some(b) = c.b
             && dynamic(bones, c.a)
             && dynamic(bones, b)
