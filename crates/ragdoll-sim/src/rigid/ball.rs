@@ -28,6 +28,7 @@ impl JointSolve for BallJoint {
     }
 
     fn prepare(&mut self, s: &BodyStates) {
+        self.point.prepare(&self.frame, s);
         if let Some(sw) = &mut self.swing {
             sw.update(&self.frame, s);
         }

@@ -21,7 +21,9 @@ impl JointSolve for FixedJoint {
         &self.frame
     }
 
-    fn prepare(&mut self, _: &BodyStates) {}
+    fn prepare(&mut self, s: &BodyStates) {
+        self.point.prepare(&self.frame, s);
+    }
 
     fn warm_start(&self, s: &mut BodyStates) {
         self.lock.warm_start(&self.frame, s);

@@ -31,6 +31,8 @@ impl JointSolve for HingeJoint {
     }
 
     fn prepare(&mut self, s: &BodyStates) {
+        self.point.prepare(&self.frame, s);
+        self.align.prepare(&self.frame, s);
         if let Some(l) = &mut self.limit {
             l.update(&self.frame, s);
         }

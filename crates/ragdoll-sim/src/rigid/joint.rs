@@ -97,29 +97,52 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
 
 /// The ball-and-socket point constraint `p_b − p_a = 0`, three rows solved as a block:
 /// `K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b`.
+///
+/// `K⁻¹` depends only on the positions and inertias, which hold still from
+/// [`PointPart::prepare`] (after the substep's velocity integration) until the positions
+/// are integrated: the substep's biased iterations share one inverse, as Box2D and Jolt
+/// share a joint's effective mass between velocity iterations. The relax pass comes after
+/// the positions moved and recomputes it.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointPart {
     /// Accumulated impulse on b (world).
     pub impulse: Vec3,
+    /// World offsets of the anchor from each centre of mass, at `prepare`.
+    ra: Vec3,
+    rb: Vec3,
+    /// `p_b − p_a` at `prepare`.
+    c: Vec3,
+    /// `K⁻¹` at `prepare`, `None` when `K` is singular (both bodies static).
+    k_inv: Option<Mat3>,
 }
 
 impl PointPart {
-    /// Re-applies last substep's impulse.
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+    /// Evaluates the offsets, the error and `K⁻¹` on the current positions.
+    pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (ra, rb) = f.offsets(s);
-        s.apply_impulse(f.a, ra, -self.impulse);
-        s.apply_impulse(f.b, rb, self.impulse);
+        self.ra = ra;
+        self.rb = rb;
+        self.c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
+        self.k_inv = invert(point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb));
     }
 
-    /// One soft Gauss–Seidel update.
+    /// Re-applies last substep's impulse (after [`PointPart::prepare`]).
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        s.apply_impulse(f.a, self.ra, -self.impulse);
+        s.apply_impulse(f.b, self.rb, self.impulse);
+    }
+
+    /// One soft Gauss–Seidel update; the relax pass (`use_bias` false) first prepares
+    /// again, since the positions have moved.
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        let (ra, rb) = f.offsets(s);
-        let c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
+        if !use_bias {
+            self.prepare(f, s);
+        }
+        let (ra, rb) = (self.ra, self.rb);
         let cdot = s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra);
         let soft = bilateral(ctx, use_bias);
-        let k = point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb);
-        let Some(k_inv) = invert(k) else { return };
-        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * c))
+        let Some(k_inv) = self.k_inv else { return };
+        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * self.c))
             - soft.impulse_scale * self.impulse;
         self.impulse += p;
         s.apply_impulse(f.a, ra, -p);
@@ -232,6 +255,9 @@ impl AngularLock3 {
 /// Keeps a direction fixed in a aligned with one fixed in b: two rows about the
 /// directions perpendicular to it (the hinge's rotational part; a 0° cone).
 /// `C = P (d_b × d_a)`, `Ċ ≈ P (ω_a − ω_b)` with P the projection off `d_a`.
+///
+/// Like [`PointPart`], the rows and their 2×2 effective mass are evaluated once per
+/// substep in [`AlignPart::prepare`] and shared by the biased iterations.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AlignPart {
     /// Direction in a's space.
@@ -240,6 +266,14 @@ pub struct AlignPart {
     pub local_b: Vec3,
     /// Accumulated impulse (two components along the current perpendiculars).
     pub impulse: [f32; 2],
+    /// The rows at `prepare`: two world directions perpendicular to `d_a`.
+    u: Vec3,
+    v: Vec3,
+    /// The error `d_b × d_a` along `u` and `v`.
+    error: [f32; 2],
+    /// The effective mass `K = [u v]ᵀ (I_a⁻¹ + I_b⁻¹) [u v]`: `k11`, `k12`, `k22`, and its
+    /// determinant.
+    k: [f32; 4],
 }
 
 impl AlignPart {
@@ -248,7 +282,7 @@ impl AlignPart {
         AlignPart {
             local_a: f.dir_in_a(s, d),
             local_b: f.dir_in_b(s, d),
-            impulse: [0.0; 2],
+            ..AlignPart::default()
         }
     }
 
@@ -259,27 +293,39 @@ impl AlignPart {
         (da, db, u, v)
     }
 
-    /// Re-applies the accumulated impulse along the current perpendiculars.
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        let (_, _, u, v) = self.basis(f, s);
-        f.apply_angular(s, u * self.impulse[0] + v * self.impulse[1]);
-    }
-
-    /// One soft 2×2 block update.
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    /// Evaluates the rows, the error and the effective mass on the current positions.
+    pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (da, db, u, v) = self.basis(f, s);
         let e = db.cross(da);
-        let w = f.rel_ang_vel(s);
         let m = f.inv_inertia_sum(s);
         let (k11, k12, k22) = (u.dot(m * u), u.dot(m * v), v.dot(m * v));
-        let det = k11 * k22 - k12 * k12;
+        self.u = u;
+        self.v = v;
+        self.error = [u.dot(e), v.dot(e)];
+        self.k = [k11, k12, k22, k11 * k22 - k12 * k12];
+    }
+
+    /// Re-applies the accumulated impulse along the rows (after [`AlignPart::prepare`]).
+    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+        f.apply_angular(s, self.u * self.impulse[0] + self.v * self.impulse[1]);
+    }
+
+    /// One soft 2×2 block update; the relax pass (`use_bias` false) first prepares
+    /// again, since the positions have moved.
+    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        if !use_bias {
+            self.prepare(f, s);
+        }
+        let (u, v) = (self.u, self.v);
+        let [k11, k12, k22, det] = self.k;
+        let w = f.rel_ang_vel(s);
         if !(det.abs() > 1e-20) {
             return;
         }
         let soft = bilateral(ctx, use_bias);
         let r = [
-            u.dot(w) + soft.bias_rate * u.dot(e),
-            v.dot(w) + soft.bias_rate * v.dot(e),
+            u.dot(w) + soft.bias_rate * self.error[0],
+            v.dot(w) + soft.bias_rate * self.error[1],
         ];
         let sol = [
             (k22 * r[0] - k12 * r[1]) / det,

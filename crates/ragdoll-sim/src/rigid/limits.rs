@@ -139,7 +139,7 @@ impl Swing {
                 };
                 row.set(-n, *half_angle - phi, MARGIN);
             }
-            Swing::Tight(_) => {}
+            Swing::Tight(p) => p.prepare(f, s),
             Swing::Pyramid {
                 axis_b,
                 side1_b,

@@ -51,6 +51,7 @@ impl JointSolve for UniversalJoint {
 
     fn prepare(&mut self, s: &BodyStates) {
         let f = &self.frame;
+        self.point.prepare(f, s);
         self.cross_row = self.cross_row_now(s);
         if let Some(sw) = &mut self.swing {
             sw.update(f, s);
