@@ -20,9 +20,9 @@ use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
 use parry3d::query::{
-    ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+    ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher, TrackedContact,
 };
-use parry3d::shape::SharedShape;
+use parry3d::shape::{Shape as ParryShape, SharedShape};
 use rayon::prelude::*;
 
 /// Distance within which contacts are created before touching (speculative margin, m).
@@ -94,14 +94,60 @@ pub struct ContactPair {
     pub rolling_impulse: Vec3,
     /// Points of the last narrow phase.
     pub points: Vec<ContactPoint>,
-    manifolds: Vec<ContactManifold<(), ()>>,
-    workspace: Option<ContactManifoldsWorkspace>,
+    /// parry's persistent manifold of the pair, kept between steps because parry reads
+    /// it back (it keeps the points while the relative pose barely changed, and starts
+    /// GJK from the last normal). Every shape is convex, so a pair has exactly one
+    /// manifold; only the parts parry's convex–convex generators read and write are
+    /// stored (see [`ContactPair::collide`]), not a `Vec` of whole manifolds and a
+    /// composite-shape workspace, which cost ~290 bytes per pair, touching or not.
+    manifold_points: Vec<TrackedContact<()>>,
+    /// The manifold's normal in a's shape frame.
+    manifold_n1: Vec3,
+    /// The manifold's normal in b's shape frame.
+    manifold_n2: Vec3,
 }
 
 impl ContactPair {
     /// Whether any point is within the speculative margin.
     pub fn touching(&self) -> bool {
         !self.points.is_empty()
+    }
+
+    /// Runs parry's narrow phase on the pair's manifold. The manifold is put together
+    /// from the stored parts for the call (moving the point vector, no allocation):
+    /// parry's convex–convex generators never set the sub-shape fields, so they are
+    /// always the `ContactManifold::new()` values, as they were when a `Vec` of
+    /// manifolds was kept. This is the branch `contact_manifolds` takes for two
+    /// non-composite shapes, called directly.
+    fn collide(
+        &mut self,
+        pos12: &PPose,
+        shape_a: &dyn ParryShape,
+        shape_b: &dyn ParryShape,
+        prediction: f32,
+    ) {
+        let mut manifold = ContactManifold::<(), ()>::new();
+        manifold.points = std::mem::take(&mut self.manifold_points);
+        manifold.local_n1 = self.manifold_n1;
+        manifold.local_n2 = self.manifold_n2;
+        let ok = DefaultQueryDispatcher.contact_manifold_convex_convex(
+            pos12,
+            shape_a,
+            shape_b,
+            None,
+            None,
+            prediction,
+            &mut manifold,
+        );
+        if ok.is_err() {
+            // What dropping the manifold did: the next call starts from a fresh one.
+            manifold.points.clear();
+            manifold.local_n1 = Vec3::ZERO;
+            manifold.local_n2 = Vec3::ZERO;
+        }
+        self.manifold_points = manifold.points;
+        self.manifold_n1 = manifold.local_n1;
+        self.manifold_n2 = manifold.local_n2;
     }
 }
 
@@ -279,17 +325,7 @@ impl Contacts {
             };
             let prediction = SPECULATIVE_DISTANCE + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
-            let ok = DefaultQueryDispatcher.contact_manifolds(
-                &pos12,
-                &*info[a].collider,
-                &**shape_b,
-                prediction,
-                &mut pair.manifolds,
-                &mut pair.workspace,
-            );
-            if ok.is_err() {
-                pair.manifolds.clear();
-            }
+            pair.collide(&pos12, &*info[a].collider, &**shape_b, prediction);
             prepare_pair(pair, s, &pose_a, &pose_b);
         });
     }
@@ -495,13 +531,14 @@ fn prepare_pair(pair: &mut ContactPair, s: &BodyStates, pose_a: &PPose, pose_b: 
         *slot = (p.id, p.normal_impulse, p.tangent_impulse);
     }
     pair.points.clear();
-    for m in &pair.manifolds {
-        let normal = (pose_a.rotation * m.local_n1).normalize_or_zero();
+    // An empty manifold makes no points whatever its normal.
+    if !pair.manifold_points.is_empty() {
+        let normal = (pose_a.rotation * pair.manifold_n1).normalize_or_zero();
         if normal == Vec3::ZERO {
-            continue;
+            return;
         }
         let (t0, t1) = normal.any_orthonormal_pair();
-        for c in &m.points {
+        for c in &pair.manifold_points {
             let pa = pose_a.transform_point(c.local_p1);
             let pb = pose_b.transform_point(c.local_p2);
             let id = ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64;
