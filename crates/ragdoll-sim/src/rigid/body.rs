@@ -28,6 +28,19 @@ pub struct BodyStates {
 }
 
 impl BodyStates {
+    /// Empty arrays with room for `n` entries: the world knows its body count when it is
+    /// built, and pushing one by one would leave up to twice the room it needs.
+    pub fn with_capacity(n: usize) -> BodyStates {
+        BodyStates {
+            com: Vec::with_capacity(n),
+            rot: Vec::with_capacity(n),
+            lin_vel: Vec::with_capacity(n),
+            ang_vel: Vec::with_capacity(n),
+            inv_mass: Vec::with_capacity(n),
+            inv_inertia: Vec::with_capacity(n),
+        }
+    }
+
     /// Number of entries including the static anchor.
     pub fn len(&self) -> usize {
         self.com.len()

@@ -54,7 +54,8 @@ impl MultibodyWorld {
                 figure[ra.max(rb) as usize] = ra.min(rb);
             }
         }
-        let mut states = BodyStates::default();
+        // The bodies and the static anchor.
+        let mut states = BodyStates::with_capacity(n + 1);
         let mut info = Vec::with_capacity(n);
         let mut motion = Vec::with_capacity(n);
         for (i, b) in scene.bodies.iter().enumerate() {
