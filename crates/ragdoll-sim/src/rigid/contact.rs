@@ -12,7 +12,7 @@
 // Several per-body arrays are walked together by index.
 #![allow(clippy::needless_range_loop)]
 
-use super::body::{BodyInfo, BodyStates};
+use super::body::{BodyInfo, BodyStates, Collider};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use crate::scene::Shape;
@@ -214,7 +214,10 @@ impl Contacts {
         self.aabbs.clear();
         for i in 0..n {
             let motion = point_speed(s, info, i) * dt;
-            let aabb = info[i].collider.compute_aabb(&shape_pose(s, info, i));
+            let aabb = info[i]
+                .collider()
+                .shape()
+                .compute_aabb(&shape_pose(s, info, i));
             self.aabbs
                 .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
         }
@@ -323,13 +326,14 @@ impl Contacts {
                 return;
             }
             let pose_a = shape_pose(s, info, a);
-            let (pose_b, shape_b) = if b == n {
+            let collider_a = info[a].collider();
+            let (pose_b, collider_b) = if b == n {
                 let g = ground
                     .as_ref()
                     .expect("ground pairs exist only with a ground");
-                (g.pose, &g.shape)
+                (g.pose, Collider::Shared(&g.shape))
             } else {
-                (shape_pose(s, info, b), &info[b].collider)
+                (shape_pose(s, info, b), info[b].collider())
             };
             // A point of a approaches a point of b at most |v_a − v_b| + |ω_a| r_a +
             // |ω_b| r_b: contacts that may close this step are created now, so the
@@ -343,7 +347,7 @@ impl Contacts {
             };
             let prediction = SPECULATIVE_DISTANCE + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
-            pair.collide(&pos12, &*info[a].collider, &**shape_b, prediction);
+            pair.collide(&pos12, collider_a.shape(), collider_b.shape(), prediction);
             prepare_pair(pair, s, &pose_a, &pose_b);
         });
     }
