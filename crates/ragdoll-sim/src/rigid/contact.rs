@@ -40,15 +40,13 @@ pub const LINEAR_SLOP: f32 = 0.0005;
 /// differently enough that a hard limit is pushed past 2°.
 pub const ROLLING_RESISTANCE: f32 = 0.005;
 
-/// One contact point with its solver state.
+/// One contact point with its solver state. Its persistent id (parry's feature ids) is
+/// not repeated here: point `k` of a touching pair was made from point `k` of the pair's
+/// manifold (see [`ContactPair::old_impulses`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ContactPoint {
-    /// Persistent id: parry's feature ids of both shapes.
-    pub id: u64,
-    /// Normal from a to b (world).
+    /// Normal from a to b (world), the same for every point of a pair.
     pub normal: Vec3,
-    /// Tangent basis.
-    pub tangents: [Vec3; 2],
     /// Anchor on a relative to its centre of mass (world, fixed for the step).
     pub ra: Vec3,
     /// Anchor on b.
@@ -111,6 +109,33 @@ impl ContactPair {
     /// Whether any point is within the speculative margin.
     pub fn touching(&self) -> bool {
         !self.points.is_empty()
+    }
+
+    /// The tangent basis of the pair's points. It is a function of the normal, which all
+    /// points share, so it is computed where it is used rather than stored per point
+    /// (the same two vectors, bit for bit, as when they were stored).
+    #[inline]
+    fn tangents(&self) -> [Vec3; 2] {
+        let (t0, t1) = self
+            .points
+            .first()
+            .map_or(Vec3::ZERO, |p| p.normal)
+            .any_orthonormal_pair();
+        [t0, t1]
+    }
+
+    /// The impulses of the points now, by persistent id, for warm starting once the
+    /// manifold is refreshed: read before [`ContactPair::collide`] overwrites the
+    /// manifold, whose point `k` has the id of solver point `k` (`prepare_pair` makes
+    /// one solver point per manifold point, in order, or none at all). A manifold holds
+    /// a handful of points; the first 8 are kept, as many as are looked up.
+    fn old_impulses(&self) -> ([(u64, f32, Vec3); 8], usize) {
+        let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
+        let n_old = self.points.len().min(8);
+        for ((slot, p), c) in old.iter_mut().zip(&self.points).zip(&self.manifold_points) {
+            *slot = (point_id(c), p.normal_impulse, p.tangent_impulse);
+        }
+        (old, n_old)
     }
 
     /// Runs parry's narrow phase on the pair's manifold. The manifold is put together
@@ -347,8 +372,9 @@ impl Contacts {
             };
             let prediction = SPECULATIVE_DISTANCE + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
+            let (old, n_old) = pair.old_impulses();
             pair.collide(&pos12, collider_a.shape(), collider_b.shape(), prediction);
-            prepare_pair(pair, s, &pose_a, &pose_b);
+            prepare_pair(pair, s, &pose_a, &pose_b, &old[..n_old]);
         });
     }
 }
@@ -367,6 +393,7 @@ fn active<'a>(
 pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
     for pair in active(pairs, awake) {
         let (a, b) = (pair.a as usize, pair.b as usize);
+        let tangents = pair.tangents();
         for p in &mut pair.points {
             let k = |d: Vec3| {
                 let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
@@ -377,7 +404,7 @@ pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool])
             };
             let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
             p.normal_mass = inv(k(p.normal));
-            p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
+            p.tangent_mass = [inv(k(tangents[0])), inv(k(tangents[1]))];
             p.max_normal_impulse = 0.0;
             p.relative_velocity = p
                 .normal
@@ -414,6 +441,7 @@ pub fn solve(
         let (a, b) = (pair.a as usize, pair.b as usize);
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
+        let tangents = pair.tangents();
         for p in &mut pair.points {
             // Non-penetration at the current separation.
             let sep = current_separation(p, ca, qa, cb, qb);
@@ -445,7 +473,7 @@ pub fn solve(
             let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
             let old = p.tangent_impulse;
             let mut new = old;
-            for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
+            for (t, m) in tangents.iter().zip(p.tangent_mass) {
                 new -= *t * (m * t.dot(dv));
             }
             let cap = pair.friction * p.normal_impulse;
@@ -543,15 +571,22 @@ fn current_separation(p: &ContactPoint, ca: Vec3, qa: Quat, cb: Vec3, qb: Quat) 
     p.base_separation + p.normal.dot(db - da)
 }
 
-/// Turns parry's manifolds into solver points, carrying impulses over by feature id.
-fn prepare_pair(pair: &mut ContactPair, s: &BodyStates, pose_a: &PPose, pose_b: &PPose) {
+/// Persistent id of a manifold point: parry's feature ids of both shapes.
+#[inline]
+fn point_id(c: &TrackedContact<()>) -> u64 {
+    ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64
+}
+
+/// Turns parry's manifold into solver points, carrying impulses over by feature id from
+/// `old` ([`ContactPair::old_impulses`]); a linear search is cheapest for a handful.
+fn prepare_pair(
+    pair: &mut ContactPair,
+    s: &BodyStates,
+    pose_a: &PPose,
+    pose_b: &PPose,
+    old: &[(u64, f32, Vec3)],
+) {
     let (a, b) = (pair.a as usize, pair.b as usize);
-    // Old impulses by id; manifolds hold a handful of points, a linear search is cheapest.
-    let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
-    let n_old = pair.points.len().min(8);
-    for (slot, p) in old.iter_mut().zip(&pair.points) {
-        *slot = (p.id, p.normal_impulse, p.tangent_impulse);
-    }
     pair.points.clear();
     // An empty manifold makes no points whatever its normal.
     if !pair.manifold_points.is_empty() {
@@ -559,21 +594,18 @@ fn prepare_pair(pair: &mut ContactPair, s: &BodyStates, pose_a: &PPose, pose_b: 
         if normal == Vec3::ZERO {
             return;
         }
-        let (t0, t1) = normal.any_orthonormal_pair();
         for c in &pair.manifold_points {
             let pa = pose_a.transform_point(c.local_p1);
             let pb = pose_b.transform_point(c.local_p2);
-            let id = ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64;
-            let (ni, ti) = old[..n_old]
+            let id = point_id(c);
+            let (ni, ti) = old
                 .iter()
                 .find(|o| o.0 == id)
                 .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
             let ra = pa - s.com[a];
             let rb = pb - s.com[b];
             pair.points.push(ContactPoint {
-                id,
                 normal,
-                tangents: [t0, t1],
                 ra,
                 rb,
                 local_a: s.rot[a].inverse() * ra,
