@@ -8,7 +8,7 @@
 
 use crate::scene::{BodyDesc, MassProps, Shape};
 use glam::{Mat3, Quat, Vec3};
-use parry3d::shape::SharedShape;
+use parry3d::shape::{Capsule, Cone, Cuboid, Cylinder, Shape as ParryShape, SharedShape};
 
 /// Hot per-body state, one entry per body plus the trailing static anchor.
 #[derive(Clone, Debug, Default)]
@@ -28,6 +28,19 @@ pub struct BodyStates {
 }
 
 impl BodyStates {
+    /// Empty arrays with room for `n` entries: the world knows its body count when it is
+    /// built, and pushing one by one would leave up to twice the room it needs.
+    pub fn with_capacity(n: usize) -> BodyStates {
+        BodyStates {
+            com: Vec::with_capacity(n),
+            rot: Vec::with_capacity(n),
+            lin_vel: Vec::with_capacity(n),
+            ang_vel: Vec::with_capacity(n),
+            inv_mass: Vec::with_capacity(n),
+            inv_inertia: Vec::with_capacity(n),
+        }
+    }
+
     /// Number of entries including the static anchor.
     pub fn len(&self) -> usize {
         self.com.len()
@@ -147,12 +160,13 @@ impl BodyMotion {
 /// Cold per-body data: what the scene said, and what the solver derives from it once.
 #[derive(Clone, Debug)]
 pub struct BodyInfo {
-    /// Scene name.
-    pub name: String,
-    /// The scene shape (for snapshots).
+    /// The scene shape: drawn in snapshots, and the collision shape itself for the
+    /// primitives (see [`BodyInfo::collider`]).
     pub shape: Shape,
-    /// The collision shape, in the shape frame.
-    pub collider: SharedShape,
+    /// parry's collider of a convex hull, built once (its faces and adjacency are worth
+    /// keeping); `None` for the primitives, whose parry shapes are a few floats made on
+    /// the spot instead of a shared allocation per body.
+    hull: Option<SharedShape>,
     /// Centre of mass in the shape frame.
     pub local_com: Vec3,
     /// Mass (kg), also for fixed bodies (they are treated as infinite).
@@ -180,13 +194,13 @@ pub struct BodyInfo {
 }
 
 impl BodyInfo {
-    /// Cold data of one body from its description and mass properties.
+    /// Cold data of one body from its description, mass properties and parry collider
+    /// (`crate::scene::collider`, kept only for a convex hull).
     pub fn new(desc: &BodyDesc, mp: &MassProps, collider: SharedShape, figure: u32) -> BodyInfo {
         let fixed = desc.is_fixed();
         BodyInfo {
-            name: desc.name.clone(),
             shape: desc.shape.clone(),
-            collider,
+            hull: matches!(desc.shape, Shape::ConvexHull { .. }).then_some(collider),
             local_com: mp.local_com,
             mass: mp.mass,
             inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
@@ -199,5 +213,106 @@ impl BodyInfo {
             bound_radius: (desc.shape.local_half_extents() + mp.local_com.abs()).length(),
             projectile: false,
         }
+    }
+}
+
+impl BodyInfo {
+    /// The collision shape, in the shape frame: for a primitive, the same parry shape
+    /// `crate::scene::collider` builds (same constructor, same floats), made on the
+    /// spot; for a convex hull, the one built with the body.
+    pub fn collider(&self) -> Collider<'_> {
+        match (&self.shape, &self.hull) {
+            (_, Some(hull)) => Collider::Shared(hull),
+            (Shape::Box { half_extents }, None) => Collider::Cuboid(Cuboid::new(*half_extents)),
+            (
+                Shape::Capsule {
+                    half_height,
+                    radius,
+                },
+                None,
+            ) => {
+                let p = Vec3::Y * *half_height;
+                Collider::Capsule(Capsule::new(-p, p, *radius))
+            }
+            (
+                Shape::Cylinder {
+                    half_height,
+                    radius,
+                    ..
+                },
+                None,
+            ) => Collider::Cylinder(Cylinder::new(*half_height, *radius)),
+            (
+                Shape::Cone {
+                    half_height,
+                    radius,
+                    ..
+                },
+                None,
+            ) => Collider::Cone(Cone::new(*half_height, *radius)),
+            (Shape::ConvexHull { .. }, None) => {
+                unreachable!("BodyInfo::new keeps the collider of every convex hull")
+            }
+        }
+    }
+}
+
+/// A body's parry collider (see [`BodyInfo::collider`]): a primitive by value or a
+/// shape built once (a hull); [`Collider::shape`] is what parry's queries take.
+pub enum Collider<'a> {
+    /// A box.
+    Cuboid(Cuboid),
+    /// A Y-aligned capsule.
+    Capsule(Capsule),
+    /// A Y-aligned cylinder.
+    Cylinder(Cylinder),
+    /// A Y-aligned cone.
+    Cone(Cone),
+    /// A shape built once and shared: a convex hull, the ground's half-space.
+    Shared(&'a SharedShape),
+}
+
+impl Collider<'_> {
+    /// The shape for parry's queries.
+    pub fn shape(&self) -> &dyn ParryShape {
+        match self {
+            Collider::Cuboid(c) => c,
+            Collider::Capsule(c) => c,
+            Collider::Cylinder(c) => c,
+            Collider::Cone(c) => c,
+            Collider::Shared(h) => &***h,
+        }
+    }
+}
+
+/// Every body's scene name in one string (what a `String` per body would hold, without
+/// its 24-byte header and separate allocation): names are read only for diagnostics.
+#[derive(Clone, Debug, Default)]
+pub struct BodyNames {
+    text: String,
+    /// End of each body's name in `text`; a name starts where the previous one ends.
+    ends: Vec<u32>,
+}
+
+impl BodyNames {
+    /// Room for `n` names of `bytes` bytes in all.
+    pub fn with_capacity(n: usize, bytes: usize) -> BodyNames {
+        BodyNames {
+            text: String::with_capacity(bytes),
+            ends: Vec::with_capacity(n),
+        }
+    }
+
+    /// Appends the next body's name.
+    pub fn push(&mut self, name: &str) {
+        self.text.push_str(name);
+        self.ends.push(self.text.len() as u32);
+    }
+
+    /// Body `i`'s name, `None` past the last body.
+    pub fn get(&self, i: usize) -> Option<&str> {
+        let end = *self.ends.get(i)? as usize;
+        let start = if i == 0 { 0 } else { self.ends[i - 1] as usize };
+        self.text.get(start..end)
     }
 }

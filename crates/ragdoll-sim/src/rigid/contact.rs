@@ -12,7 +12,7 @@
 // Several per-body arrays are walked together by index.
 #![allow(clippy::needless_range_loop)]
 
-use super::body::{BodyInfo, BodyStates};
+use super::body::{BodyInfo, BodyStates, Collider};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use crate::scene::Shape;
@@ -20,9 +20,9 @@ use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
 use parry3d::query::{
-    ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+    ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher, TrackedContact,
 };
-use parry3d::shape::SharedShape;
+use parry3d::shape::{Shape as ParryShape, SharedShape};
 use rayon::prelude::*;
 
 /// Distance within which contacts are created before touching (speculative margin, m).
@@ -40,15 +40,13 @@ pub const LINEAR_SLOP: f32 = 0.0005;
 /// differently enough that a hard limit is pushed past 2°.
 pub const ROLLING_RESISTANCE: f32 = 0.005;
 
-/// One contact point with its solver state.
+/// One contact point with its solver state. Its persistent id (parry's feature ids) is
+/// not repeated here: point `k` of a touching pair was made from point `k` of the pair's
+/// manifold (see [`ContactPair::old_impulses`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ContactPoint {
-    /// Persistent id: parry's feature ids of both shapes.
-    pub id: u64,
-    /// Normal from a to b (world).
+    /// Normal from a to b (world), the same for every point of a pair.
     pub normal: Vec3,
-    /// Tangent basis.
-    pub tangents: [Vec3; 2],
     /// Anchor on a relative to its centre of mass (world, fixed for the step).
     pub ra: Vec3,
     /// Anchor on b.
@@ -94,14 +92,87 @@ pub struct ContactPair {
     pub rolling_impulse: Vec3,
     /// Points of the last narrow phase.
     pub points: Vec<ContactPoint>,
-    manifolds: Vec<ContactManifold<(), ()>>,
-    workspace: Option<ContactManifoldsWorkspace>,
+    /// parry's persistent manifold of the pair, kept between steps because parry reads
+    /// it back (it keeps the points while the relative pose barely changed, and starts
+    /// GJK from the last normal). Every shape is convex, so a pair has exactly one
+    /// manifold; only the parts parry's convex–convex generators read and write are
+    /// stored (see [`ContactPair::collide`]), not a `Vec` of whole manifolds and a
+    /// composite-shape workspace, which cost ~290 bytes per pair, touching or not.
+    manifold_points: Vec<TrackedContact<()>>,
+    /// The manifold's normal in a's shape frame.
+    manifold_n1: Vec3,
+    /// The manifold's normal in b's shape frame.
+    manifold_n2: Vec3,
 }
 
 impl ContactPair {
     /// Whether any point is within the speculative margin.
     pub fn touching(&self) -> bool {
         !self.points.is_empty()
+    }
+
+    /// The tangent basis of the pair's points. It is a function of the normal, which all
+    /// points share, so it is computed where it is used rather than stored per point
+    /// (the same two vectors, bit for bit, as when they were stored).
+    #[inline]
+    fn tangents(&self) -> [Vec3; 2] {
+        let (t0, t1) = self
+            .points
+            .first()
+            .map_or(Vec3::ZERO, |p| p.normal)
+            .any_orthonormal_pair();
+        [t0, t1]
+    }
+
+    /// The impulses of the points now, by persistent id, for warm starting once the
+    /// manifold is refreshed: read before [`ContactPair::collide`] overwrites the
+    /// manifold, whose point `k` has the id of solver point `k` (`prepare_pair` makes
+    /// one solver point per manifold point, in order, or none at all). A manifold holds
+    /// a handful of points; the first 8 are kept, as many as are looked up.
+    fn old_impulses(&self) -> ([(u64, f32, Vec3); 8], usize) {
+        let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
+        let n_old = self.points.len().min(8);
+        for ((slot, p), c) in old.iter_mut().zip(&self.points).zip(&self.manifold_points) {
+            *slot = (point_id(c), p.normal_impulse, p.tangent_impulse);
+        }
+        (old, n_old)
+    }
+
+    /// Runs parry's narrow phase on the pair's manifold. The manifold is put together
+    /// from the stored parts for the call (moving the point vector, no allocation):
+    /// parry's convex–convex generators never set the sub-shape fields, so they are
+    /// always the `ContactManifold::new()` values, as they were when a `Vec` of
+    /// manifolds was kept. This is the branch `contact_manifolds` takes for two
+    /// non-composite shapes, called directly.
+    fn collide(
+        &mut self,
+        pos12: &PPose,
+        shape_a: &dyn ParryShape,
+        shape_b: &dyn ParryShape,
+        prediction: f32,
+    ) {
+        let mut manifold = ContactManifold::<(), ()>::new();
+        manifold.points = std::mem::take(&mut self.manifold_points);
+        manifold.local_n1 = self.manifold_n1;
+        manifold.local_n2 = self.manifold_n2;
+        let ok = DefaultQueryDispatcher.contact_manifold_convex_convex(
+            pos12,
+            shape_a,
+            shape_b,
+            None,
+            None,
+            prediction,
+            &mut manifold,
+        );
+        if ok.is_err() {
+            // What dropping the manifold did: the next call starts from a fresh one.
+            manifold.points.clear();
+            manifold.local_n1 = Vec3::ZERO;
+            manifold.local_n2 = Vec3::ZERO;
+        }
+        self.manifold_points = manifold.points;
+        self.manifold_n1 = manifold.local_n1;
+        self.manifold_n2 = manifold.local_n2;
     }
 }
 
@@ -127,7 +198,6 @@ pub struct GroundCollider {
 pub struct Contacts {
     /// Active pairs, sorted by `(a, b)`.
     pub pairs: Vec<ContactPair>,
-    spare: Vec<ContactPair>,
     candidates: Vec<(u32, u32)>,
     aabbs: Vec<Aabb>,
     /// Pairs that never collide (jointed, overlapping at rest, self-collision off), sorted.
@@ -169,7 +239,10 @@ impl Contacts {
         self.aabbs.clear();
         for i in 0..n {
             let motion = point_speed(s, info, i) * dt;
-            let aabb = info[i].collider.compute_aabb(&shape_pose(s, info, i));
+            let aabb = info[i]
+                .collider()
+                .shape()
+                .compute_aabb(&shape_pose(s, info, i));
             self.aabbs
                 .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
         }
@@ -206,49 +279,68 @@ impl Contacts {
         self.candidates.sort_unstable();
         self.candidates.dedup();
 
-        // Merge the sorted candidate list with the sorted cache: surviving pairs move over
-        // with their parry workspace and impulses, new ones start empty.
-        std::mem::swap(&mut self.pairs, &mut self.spare);
-        self.pairs.clear();
-        let mut k = 0;
-        for &(a, b) in &self.candidates {
-            while k < self.spare.len() && (self.spare[k].a, self.spare[k].b) < (a, b) {
-                k += 1;
+        // Merge the sorted candidate list into the sorted cache in place (no second pair
+        // array kept for the swap): surviving pairs keep their manifold and impulses, new
+        // ones start empty. First the pairs that are no longer candidates are dropped,
+        // keeping the order, so the cache is a subsequence of the candidates ...
+        let candidates = &self.candidates;
+        let mut c = 0;
+        self.pairs.retain(|p| {
+            while c < candidates.len() && candidates[c] < (p.a, p.b) {
+                c += 1;
             }
-            let pair = if k < self.spare.len() && (self.spare[k].a, self.spare[k].b) == (a, b) {
-                k += 1;
-                std::mem::take(&mut self.spare[k - 1])
-            } else {
-                let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
-                let (fb, rb) = match (&self.ground, b == anchor) {
-                    (Some(g), true) => (g.friction, g.restitution),
-                    _ => (info[b as usize].friction, info[b as usize].restitution),
-                };
-                // Only round bodies roll; a box's rotation is already resisted by its
-                // contact points' friction.
-                let rolling = |i: usize| match info[i].shape {
-                    Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
-                        info[i].min_half_extent
-                    }
-                    _ => 0.0,
-                };
-                let radius = if b == anchor {
-                    rolling(a as usize)
-                } else {
-                    rolling(a as usize).max(rolling(b as usize))
-                };
-                ContactPair {
-                    a,
-                    b,
-                    rolling_arm: ROLLING_RESISTANCE * radius,
-                    friction: (fa * fb).sqrt(),
-                    restitution: ra.max(rb),
-                    ..Default::default()
-                }
+            c < candidates.len() && candidates[c] == (p.a, p.b)
+        });
+        // ... then the array grows to the candidates' length and is filled from the back:
+        // the `kept` cached pairs not yet placed stay at `0..kept`, and since each of
+        // them matches a distinct candidate at or before slot `i`, `kept <= i + 1`, so
+        // moving one up to `i` or writing a new pair at `i` never overwrites one.
+        let new_pair = |a: u32, b: u32| {
+            let (fa, ra) = (info[a as usize].friction, info[a as usize].restitution);
+            let (fb, rb) = match (&self.ground, b == anchor) {
+                (Some(g), true) => (g.friction, g.restitution),
+                _ => (info[b as usize].friction, info[b as usize].restitution),
             };
-            self.pairs.push(pair);
+            // Only round bodies roll; a box's rotation is already resisted by its
+            // contact points' friction.
+            let rolling = |i: usize| match info[i].shape {
+                Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
+                    info[i].min_half_extent
+                }
+                _ => 0.0,
+            };
+            let radius = if b == anchor {
+                rolling(a as usize)
+            } else {
+                rolling(a as usize).max(rolling(b as usize))
+            };
+            ContactPair {
+                a,
+                b,
+                rolling_arm: ROLLING_RESISTANCE * radius,
+                friction: (fa * fb).sqrt(),
+                restitution: ra.max(rb),
+                ..Default::default()
+            }
+        };
+        let mut kept = self.pairs.len();
+        // Grown to the size needed, not doubled: the array is kept for reuse at its
+        // largest size, so doubling would hold up to twice the pairs for good (measured
+        // 7680 slots for 4096 pairs in the memory bench), and a new largest size, which
+        // costs one copy of the array, comes rarely once a scene has settled.
+        self.pairs
+            .reserve_exact(self.candidates.len().saturating_sub(kept));
+        self.pairs
+            .resize_with(self.candidates.len(), ContactPair::default);
+        for i in (0..self.candidates.len()).rev() {
+            let (a, b) = self.candidates[i];
+            if kept > 0 && (self.pairs[kept - 1].a, self.pairs[kept - 1].b) == (a, b) {
+                kept -= 1;
+                self.pairs.swap(kept, i);
+            } else {
+                self.pairs[i] = new_pair(a, b);
+            }
         }
-        self.spare.clear();
 
         // Narrow phase: every pair on its own, so on all cores; each pair writes only its
         // own slot, the result does not depend on the thread count.
@@ -259,13 +351,14 @@ impl Contacts {
                 return;
             }
             let pose_a = shape_pose(s, info, a);
-            let (pose_b, shape_b) = if b == n {
+            let collider_a = info[a].collider();
+            let (pose_b, collider_b) = if b == n {
                 let g = ground
                     .as_ref()
                     .expect("ground pairs exist only with a ground");
-                (g.pose, &g.shape)
+                (g.pose, Collider::Shared(&g.shape))
             } else {
-                (shape_pose(s, info, b), &info[b].collider)
+                (shape_pose(s, info, b), info[b].collider())
             };
             // A point of a approaches a point of b at most |v_a − v_b| + |ω_a| r_a +
             // |ω_b| r_b: contacts that may close this step are created now, so the
@@ -279,18 +372,9 @@ impl Contacts {
             };
             let prediction = SPECULATIVE_DISTANCE + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
-            let ok = DefaultQueryDispatcher.contact_manifolds(
-                &pos12,
-                &*info[a].collider,
-                &**shape_b,
-                prediction,
-                &mut pair.manifolds,
-                &mut pair.workspace,
-            );
-            if ok.is_err() {
-                pair.manifolds.clear();
-            }
-            prepare_pair(pair, s, &pose_a, &pose_b);
+            let (old, n_old) = pair.old_impulses();
+            pair.collide(&pos12, collider_a.shape(), collider_b.shape(), prediction);
+            prepare_pair(pair, s, &pose_a, &pose_b, &old[..n_old]);
         });
     }
 }
@@ -309,6 +393,7 @@ fn active<'a>(
 pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
     for pair in active(pairs, awake) {
         let (a, b) = (pair.a as usize, pair.b as usize);
+        let tangents = pair.tangents();
         for p in &mut pair.points {
             let k = |d: Vec3| {
                 let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
@@ -319,7 +404,7 @@ pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool])
             };
             let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
             p.normal_mass = inv(k(p.normal));
-            p.tangent_mass = [inv(k(p.tangents[0])), inv(k(p.tangents[1]))];
+            p.tangent_mass = [inv(k(tangents[0])), inv(k(tangents[1]))];
             p.max_normal_impulse = 0.0;
             p.relative_velocity = p
                 .normal
@@ -356,6 +441,7 @@ pub fn solve(
         let (a, b) = (pair.a as usize, pair.b as usize);
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
+        let tangents = pair.tangents();
         for p in &mut pair.points {
             // Non-penetration at the current separation.
             let sep = current_separation(p, ca, qa, cb, qb);
@@ -387,7 +473,7 @@ pub fn solve(
             let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
             let old = p.tangent_impulse;
             let mut new = old;
-            for (t, m) in p.tangents.iter().zip(p.tangent_mass) {
+            for (t, m) in tangents.iter().zip(p.tangent_mass) {
                 new -= *t * (m * t.dot(dv));
             }
             let cap = pair.friction * p.normal_impulse;
@@ -485,36 +571,41 @@ fn current_separation(p: &ContactPoint, ca: Vec3, qa: Quat, cb: Vec3, qb: Quat) 
     p.base_separation + p.normal.dot(db - da)
 }
 
-/// Turns parry's manifolds into solver points, carrying impulses over by feature id.
-fn prepare_pair(pair: &mut ContactPair, s: &BodyStates, pose_a: &PPose, pose_b: &PPose) {
+/// Persistent id of a manifold point: parry's feature ids of both shapes.
+#[inline]
+fn point_id(c: &TrackedContact<()>) -> u64 {
+    ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64
+}
+
+/// Turns parry's manifold into solver points, carrying impulses over by feature id from
+/// `old` ([`ContactPair::old_impulses`]); a linear search is cheapest for a handful.
+fn prepare_pair(
+    pair: &mut ContactPair,
+    s: &BodyStates,
+    pose_a: &PPose,
+    pose_b: &PPose,
+    old: &[(u64, f32, Vec3)],
+) {
     let (a, b) = (pair.a as usize, pair.b as usize);
-    // Old impulses by id; manifolds hold a handful of points, a linear search is cheapest.
-    let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
-    let n_old = pair.points.len().min(8);
-    for (slot, p) in old.iter_mut().zip(&pair.points) {
-        *slot = (p.id, p.normal_impulse, p.tangent_impulse);
-    }
     pair.points.clear();
-    for m in &pair.manifolds {
-        let normal = (pose_a.rotation * m.local_n1).normalize_or_zero();
+    // An empty manifold makes no points whatever its normal.
+    if !pair.manifold_points.is_empty() {
+        let normal = (pose_a.rotation * pair.manifold_n1).normalize_or_zero();
         if normal == Vec3::ZERO {
-            continue;
+            return;
         }
-        let (t0, t1) = normal.any_orthonormal_pair();
-        for c in &m.points {
+        for c in &pair.manifold_points {
             let pa = pose_a.transform_point(c.local_p1);
             let pb = pose_b.transform_point(c.local_p2);
-            let id = ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64;
-            let (ni, ti) = old[..n_old]
+            let id = point_id(c);
+            let (ni, ti) = old
                 .iter()
                 .find(|o| o.0 == id)
                 .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
             let ra = pa - s.com[a];
             let rb = pb - s.com[b];
             pair.points.push(ContactPoint {
-                id,
                 normal,
-                tangents: [t0, t1],
                 ra,
                 rb,
                 local_a: s.rot[a].inverse() * ra,

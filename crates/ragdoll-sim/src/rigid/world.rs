@@ -1,7 +1,7 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{BodyInfo, BodyMotion, BodyStates};
+use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -23,6 +23,7 @@ pub struct MultibodyWorld {
     settings: Settings,
     states: BodyStates,
     info: Vec<BodyInfo>,
+    names: BodyNames,
     motion: Vec<BodyMotion>,
     joints: JointSet,
     contacts: Contacts,
@@ -54,14 +55,18 @@ impl MultibodyWorld {
                 figure[ra.max(rb) as usize] = ra.min(rb);
             }
         }
-        let mut states = BodyStates::default();
+        // The bodies and the static anchor.
+        let mut states = BodyStates::with_capacity(n + 1);
         let mut info = Vec::with_capacity(n);
         let mut motion = Vec::with_capacity(n);
+        let mut names =
+            BodyNames::with_capacity(n, scene.bodies.iter().map(|b| b.name.len()).sum());
         for (i, b) in scene.bodies.iter().enumerate() {
             let mp = mass_props(b)?;
             let shape = collider(b)?;
             let fig = root(&mut figure, i as u32);
             info.push(BodyInfo::new(b, &mp, shape, fig));
+            names.push(&b.name);
             motion.push(BodyMotion::new(b, &mp));
             let com = b.pose.transform_point(mp.local_com);
             let (v, w) = if b.is_fixed() {
@@ -89,7 +94,8 @@ impl MultibodyWorld {
                     continue;
                 }
                 let (pa, pb) = (shape_pose(&states, &info, a), shape_pose(&states, &info, b));
-                let overlap = query::contact(&pa, &*info[a].collider, &pb, &*info[b].collider, 0.0)
+                let (ca, cb) = (info[a].collider(), info[b].collider());
+                let overlap = query::contact(&pa, ca.shape(), &pb, cb.shape(), 0.0)
                     .ok()
                     .flatten()
                     .is_some_and(|c| c.dist < -1e-3);
@@ -119,6 +125,7 @@ impl MultibodyWorld {
             settings: scene.settings.clone(),
             states,
             info,
+            names,
             motion,
             joints,
             contacts,
@@ -154,7 +161,7 @@ impl MultibodyWorld {
                     .ground
                     .as_ref()
                     .expect("ground pair without ground");
-                if let Some(sm) = self.info[a].collider.as_support_map() {
+                if let Some(sm) = self.info[a].collider().shape().as_support_map() {
                     let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
                     let p = pa.transform_point(local);
                     let depth = -g.normal.dot(p - g.origin);
@@ -168,9 +175,9 @@ impl MultibodyWorld {
             let pb = shape_pose(&self.states, &self.info, b);
             if let Ok(Some(c)) = query::contact(
                 &pa,
-                &*self.info[a].collider,
+                self.info[a].collider().shape(),
                 &pb,
-                &*self.info[b].collider,
+                self.info[b].collider().shape(),
                 0.0,
             ) && -c.dist > deepest
             {
@@ -178,11 +185,7 @@ impl MultibodyWorld {
                 which = Some((a, b));
             }
         }
-        let name = |i: usize| {
-            self.info
-                .get(i)
-                .map_or("ground".to_string(), |b| b.name.clone())
-        };
+        let name = |i: usize| self.names.get(i).unwrap_or("ground").to_string();
         which.map(|(a, b)| (deepest, name(a), name(b)))
     }
 
@@ -346,7 +349,7 @@ impl Method for MultibodyWorld {
         let mut best: Option<RayHit> = None;
         for (i, b) in self.info.iter().enumerate() {
             let pose = shape_pose(&self.states, &self.info, i);
-            if let Some(t) = b.collider.cast_ray(&pose, &ray, f32::MAX, true)
+            if let Some(t) = b.collider().shape().cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
                 best = Some(RayHit {
@@ -372,6 +375,7 @@ impl Method for MultibodyWorld {
         let mut b = BodyInfo::new(desc, &mp, shape, u32::MAX - i as u32);
         b.projectile = true;
         self.info.push(b);
+        self.names.push(&desc.name);
         self.motion.push(BodyMotion::new(desc, &mp));
         // Insert before the static anchor, which stays last.
         let com = desc.pose.transform_point(mp.local_com);
