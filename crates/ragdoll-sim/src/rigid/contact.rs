@@ -61,6 +61,9 @@ pub struct ContactPoint {
     pub pb0: Vec3,
     /// Separation at prepare time (negative = overlap).
     pub base_separation: f32,
+    /// Separation at the start of the current substep's iterations
+    /// ([`prepare_substep`]): the positions hold still until they are integrated.
+    pub separation: f32,
     /// 1 / (n·K·n).
     pub normal_mass: f32,
     /// Effective masses of the two tangent rows.
@@ -427,9 +430,24 @@ pub fn warm_start(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool])
     }
 }
 
+/// Evaluates each point's current separation for a substep's biased iterations: between
+/// the velocity and the position integration the bodies do not move, so the iterations
+/// share one value (the relax pass, after the positions moved, evaluates its own).
+pub fn prepare_substep(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
+    for pair in active(pairs, awake) {
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        let (qa, qb) = (s.rot[a], s.rot[b]);
+        let (ca, cb) = (s.com[a], s.com[b]);
+        for p in &mut pair.points {
+            p.separation = current_separation(p, ca, qa, cb, qb);
+        }
+    }
+}
+
 /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
 /// impulse just computed (Box2D v3's order; friction first would cap it with a
-/// normal impulse the relax pass is about to raise, and slide too easily).
+/// normal impulse the relax pass is about to raise, and slide too easily). The biased
+/// pass reads the separations of [`prepare_substep`].
 pub fn solve(
     pairs: &mut [ContactPair],
     s: &mut BodyStates,
@@ -444,7 +462,11 @@ pub fn solve(
         let tangents = pair.tangents();
         for p in &mut pair.points {
             // Non-penetration at the current separation.
-            let sep = current_separation(p, ca, qa, cb, qb);
+            let sep = if use_bias {
+                p.separation
+            } else {
+                current_separation(p, ca, qa, cb, qb)
+            };
             let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
                 // Speculative: the gap may close this substep, no further.
                 (sep * ctx.inv_h, 1.0, 0.0)
@@ -613,6 +635,7 @@ fn prepare_pair(
                 pa0: pa,
                 pb0: pb,
                 base_separation: c.dist,
+                separation: c.dist,
                 normal_impulse: ni,
                 tangent_impulse: ti,
                 ..Default::default()

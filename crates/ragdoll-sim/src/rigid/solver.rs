@@ -158,6 +158,7 @@ pub fn solve(
         joints.prepare(s, awake);
         joints.warm_start(s, awake);
         contact::warm_start(pairs, s, awake);
+        contact::prepare_substep(pairs, s, awake);
         for _ in 0..p.iterations {
             joints.solve(s, awake, &p.ctx, true);
             contact::solve(pairs, s, awake, &p.ctx, true);
