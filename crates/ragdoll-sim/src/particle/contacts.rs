@@ -89,6 +89,18 @@ impl ContactSet {
         self.points.clear();
     }
 
+    /// Appends another set's manifolds and points, in order.
+    pub fn append(&mut self, other: &ContactSet) {
+        let base = self.points.len() as u32;
+        self.manifolds
+            .extend(other.manifolds.iter().map(|m| Manifold {
+                start: m.start + base,
+                end: m.end + base,
+                ..*m
+            }));
+        self.points.extend_from_slice(&other.points);
+    }
+
     /// Adds a point between sides `(a, b)` with normal `n` and materials `(μ, e)`: to the
     /// last manifold if it was opened for this pair (index `first` or later) with the
     /// same normal, else to a new one. Parry reports a pair's points manifold by
