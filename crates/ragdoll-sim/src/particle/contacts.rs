@@ -258,3 +258,47 @@ pub(crate) fn ground_pair(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(x: f32) -> ContactPoint {
+        ContactPoint::new(Vec3::splat(x), Vec3::ZERO)
+    }
+
+    /// A pair's points with one normal share a manifold; a second pair, or a second
+    /// normal within a pair, opens another; a pair without points opens none.
+    #[test]
+    fn points_group_into_manifolds_by_pair_and_normal() {
+        let mut set = ContactSet::default();
+        let (up, side) = (Vec3::Y, Vec3::X);
+        let first = set.manifolds.len();
+        set.push(first, (0, Some(1)), up, (0.5, 0.0), point(0.0));
+        set.push(first, (0, Some(1)), up, (0.5, 0.0), point(1.0));
+        set.push(first, (0, Some(1)), side, (0.5, 0.0), point(2.0));
+        // Pair (1, 2) brings no point; pair (2, None) one, with the same normal as the
+        // last manifold, which must not absorb it.
+        let first = set.manifolds.len();
+        set.push(first, (2, None), side, (0.3, 0.1), point(3.0));
+        let ranges: Vec<_> = set.manifolds.iter().map(|m| m.range()).collect();
+        assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
+        assert_eq!((set.manifolds[2].a, set.manifolds[2].b), (2, None));
+        assert_eq!(set.manifolds[2].mu, 0.3);
+    }
+
+    /// Appending rebases the manifolds' point ranges onto the combined points.
+    #[test]
+    fn append_rebases_point_ranges() {
+        let mut a = ContactSet::default();
+        a.push(0, (0, None), Vec3::Y, (0.5, 0.0), point(0.0));
+        let mut b = ContactSet::default();
+        b.push(0, (1, None), Vec3::Y, (0.5, 0.0), point(1.0));
+        b.push(0, (1, None), Vec3::Y, (0.5, 0.0), point(2.0));
+        let mut all = ContactSet::default();
+        all.append(&a);
+        all.append(&b);
+        assert_eq!(all.manifolds[1].range(), 1..3);
+        assert_eq!(all.points[all.manifolds[1].range()][1].ra, Vec3::splat(2.0));
+    }
+}
