@@ -129,30 +129,100 @@ impl BodyStates {
 /// What the integrator reads of a body every substep, constant over its life: kept
 /// apart from the cold [`BodyInfo`] so an island can carry a compact copy of it to
 /// another thread (see [`super::parallel`]).
+///
+/// The body-space inertia and its inverse are diagonal for every primitive (a box,
+/// capsule, cylinder or cone is symmetric about its shape frame's axes), so they are kept
+/// as their diagonals, 24 bytes instead of two `Mat3` (72). A tensor that is not exactly
+/// diagonal (a convex hull, a skewed `inertiaScale`) is kept whole in the world's
+/// [`FullInertia`] table and referred to by index. Either way the solver gets back the
+/// very `Mat3` it was given, bit for bit (see [`BodyMotion::new`]).
 #[derive(Clone, Copy, Debug)]
 pub struct BodyMotion {
-    /// Body-space inertia about the centre of mass.
-    pub inertia: Mat3,
-    /// Body-space inverse inertia (zero for fixed bodies).
-    pub inv_inertia_local: Mat3,
+    /// Diagonal of the body-space inertia about the centre of mass, if `full` is `NONE`.
+    inertia_diagonal: Vec3,
+    /// Diagonal of the body-space inverse inertia (zero for fixed bodies), likewise.
+    inv_inertia_diagonal: Vec3,
+    /// Index of the body's tensors in the [`FullInertia`] table, or `NONE`.
+    full: u32,
     /// Doom 3 air friction on translation, fraction of velocity lost per second.
     pub linear_damping: f32,
     /// Doom 3 air friction on rotation, fraction lost per second.
     pub angular_damping: f32,
 }
 
+/// `BodyMotion::full` of a body whose tensors are diagonal.
+const NONE: u32 = u32::MAX;
+
+/// The inertia tensors of a body that are not diagonal in its shape frame.
+#[derive(Clone, Copy, Debug)]
+pub struct FullInertia {
+    /// Body-space inertia about the centre of mass.
+    pub inertia: Mat3,
+    /// Body-space inverse inertia (zero for fixed bodies).
+    pub inv_inertia_local: Mat3,
+}
+
+/// The motion data of some bodies and the table of full tensors their indices refer to.
+#[derive(Clone, Copy, Debug)]
+pub struct Motions<'a> {
+    /// Per body.
+    pub bodies: &'a [BodyMotion],
+    /// The world's full tensors.
+    pub full: &'a [FullInertia],
+}
+
 impl BodyMotion {
-    /// Motion data of one body from its description and mass properties.
-    pub fn new(desc: &BodyDesc, mp: &MassProps) -> BodyMotion {
+    /// Motion data of one body from its description and mass properties; a tensor that
+    /// is not exactly diagonal goes to `full`. "Exactly" is to the bit (a `-0.0` off the
+    /// diagonal counts as not diagonal), so `Mat3::from_diagonal` rebuilds the same
+    /// matrix and every product with it is unchanged.
+    pub fn new(desc: &BodyDesc, mp: &MassProps, full: &mut Vec<FullInertia>) -> BodyMotion {
+        let inertia = mp.inertia;
+        let inv_inertia_local = if desc.is_fixed() {
+            Mat3::ZERO
+        } else {
+            mp.inverse_inertia()
+        };
+        let diagonal = |m: &Mat3| Vec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
+        let is_diagonal = |m: &Mat3| {
+            Mat3::from_diagonal(diagonal(m))
+                .to_cols_array()
+                .map(f32::to_bits)
+                == m.to_cols_array().map(f32::to_bits)
+        };
+        let index = if is_diagonal(&inertia) && is_diagonal(&inv_inertia_local) {
+            NONE
+        } else {
+            full.push(FullInertia {
+                inertia,
+                inv_inertia_local,
+            });
+            (full.len() - 1) as u32
+        };
         BodyMotion {
-            inertia: mp.inertia,
-            inv_inertia_local: if desc.is_fixed() {
-                Mat3::ZERO
-            } else {
-                mp.inverse_inertia()
-            },
+            inertia_diagonal: diagonal(&inertia),
+            inv_inertia_diagonal: diagonal(&inv_inertia_local),
+            full: index,
             linear_damping: desc.friction.linear,
             angular_damping: desc.friction.angular,
+        }
+    }
+
+    /// Body-space inertia about the centre of mass.
+    #[inline]
+    pub fn inertia(&self, full: &[FullInertia]) -> Mat3 {
+        match full.get(self.full as usize) {
+            Some(f) => f.inertia,
+            None => Mat3::from_diagonal(self.inertia_diagonal),
+        }
+    }
+
+    /// Body-space inverse inertia (zero for fixed bodies).
+    #[inline]
+    pub fn inv_inertia_local(&self, full: &[FullInertia]) -> Mat3 {
+        match full.get(self.full as usize) {
+            Some(f) => f.inv_inertia_local,
+            None => Mat3::from_diagonal(self.inv_inertia_diagonal),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates};
+use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates, FullInertia, Motions};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -25,6 +25,8 @@ pub struct MultibodyWorld {
     info: Vec<BodyInfo>,
     names: BodyNames,
     motion: Vec<BodyMotion>,
+    /// The tensors of the bodies whose inertia is not diagonal (see [`BodyMotion`]).
+    full_inertia: Vec<FullInertia>,
     joints: JointSet,
     contacts: Contacts,
     islands: Islands,
@@ -59,6 +61,7 @@ impl MultibodyWorld {
         let mut states = BodyStates::with_capacity(n + 1);
         let mut info = Vec::with_capacity(n);
         let mut motion = Vec::with_capacity(n);
+        let mut full_inertia = Vec::new();
         let mut names =
             BodyNames::with_capacity(n, scene.bodies.iter().map(|b| b.name.len()).sum());
         for (i, b) in scene.bodies.iter().enumerate() {
@@ -67,7 +70,7 @@ impl MultibodyWorld {
             let fig = root(&mut figure, i as u32);
             info.push(BodyInfo::new(b, &mp, shape, fig));
             names.push(&b.name);
-            motion.push(BodyMotion::new(b, &mp));
+            motion.push(BodyMotion::new(b, &mp, &mut full_inertia));
             let com = b.pose.transform_point(mp.local_com);
             let (v, w) = if b.is_fixed() {
                 (Vec3::ZERO, Vec3::ZERO)
@@ -76,6 +79,8 @@ impl MultibodyWorld {
             };
             states.push(com, b.pose.rotation, v, w);
         }
+        // Pushed one hull at a time; its size is known now.
+        full_inertia.shrink_to_fit();
         // The static anchor: the world and the ground.
         states.push(Vec3::ZERO, Quat::IDENTITY, Vec3::ZERO, Vec3::ZERO);
         let dynamic: Vec<bool> = info.iter().map(|b: &BodyInfo| !b.fixed).collect();
@@ -127,6 +132,7 @@ impl MultibodyWorld {
             info,
             names,
             motion,
+            full_inertia,
             joints,
             contacts,
             islands,
@@ -235,7 +241,10 @@ impl Method for MultibodyWorld {
         solver::step(
             &mut self.states,
             &self.info,
-            &self.motion,
+            Motions {
+                bodies: &self.motion,
+                full: &self.full_inertia,
+            },
             &mut self.joints,
             &mut self.contacts,
             &mut self.islands,
@@ -304,7 +313,7 @@ impl Method for MultibodyWorld {
             // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
             let wb = q.inverse() * w;
             kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
-                + 0.5 * wb.dot(self.motion[i].inertia * wb) as f64;
+                + 0.5 * wb.dot(self.motion[i].inertia(&self.full_inertia) * wb) as f64;
             potential += potential_energy(&self.settings, b.mass, self.states.com[i]);
         }
         Sample {
@@ -376,7 +385,8 @@ impl Method for MultibodyWorld {
         b.projectile = true;
         self.info.push(b);
         self.names.push(&desc.name);
-        self.motion.push(BodyMotion::new(desc, &mp));
+        self.motion
+            .push(BodyMotion::new(desc, &mp, &mut self.full_inertia));
         // Insert before the static anchor, which stays last.
         let com = desc.pose.transform_point(mp.local_com);
         let s = &mut self.states;
