@@ -150,7 +150,8 @@ pub struct BodyMotion {
     pub angular_damping: f32,
 }
 
-/// `BodyMotion::full` of a body whose tensors are diagonal.
+/// No index: `BodyMotion::full` of a body whose tensors are diagonal, `BodyInfo::hull`
+/// of a primitive.
 const NONE: u32 = u32::MAX;
 
 /// The inertia tensors of a body that are not diagonal in its shape frame.
@@ -233,17 +234,15 @@ pub struct BodyInfo {
     /// The scene shape: drawn in snapshots, and the collision shape itself for the
     /// primitives (see [`BodyInfo::collider`]).
     pub shape: Shape,
-    /// parry's collider of a convex hull, built once (its faces and adjacency are worth
-    /// keeping); `None` for the primitives, whose parry shapes are a few floats made on
-    /// the spot instead of a shared allocation per body.
-    hull: Option<SharedShape>,
+    /// Index of the body's parry collider in the world's hull table if it is a convex
+    /// hull, built once (its faces and adjacency are worth keeping); `NONE` for the
+    /// primitives, whose parry shapes are a few floats made on the spot instead of a
+    /// shared allocation per body.
+    hull: u32,
     /// Centre of mass in the shape frame.
     pub local_com: Vec3,
     /// Mass (kg), also for fixed bodies (they are treated as infinite).
     pub mass: f32,
-    /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
-    /// while the body sleeps and restored from here.
-    pub inv_mass: f32,
     /// Fixed bodies never move.
     pub fixed: bool,
     /// Coulomb coefficient.
@@ -254,8 +253,6 @@ pub struct BodyInfo {
     pub self_collision: bool,
     /// Figure (connected component of the joint graph) this body belongs to.
     pub figure: u32,
-    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
-    pub min_half_extent: f32,
     /// Largest distance from the centre of mass to the shape's bounding box: with it,
     /// `|v| + |ω| r` bounds the speed of every point of the body.
     pub bound_radius: f32,
@@ -265,21 +262,31 @@ pub struct BodyInfo {
 
 impl BodyInfo {
     /// Cold data of one body from its description, mass properties and parry collider
-    /// (`crate::scene::collider`, kept only for a convex hull).
-    pub fn new(desc: &BodyDesc, mp: &MassProps, collider: SharedShape, figure: u32) -> BodyInfo {
+    /// (`crate::scene::collider`, kept in `hulls` only for a convex hull).
+    pub fn new(
+        desc: &BodyDesc,
+        mp: &MassProps,
+        collider: SharedShape,
+        figure: u32,
+        hulls: &mut Vec<SharedShape>,
+    ) -> BodyInfo {
         let fixed = desc.is_fixed();
+        let hull = if matches!(desc.shape, Shape::ConvexHull { .. }) {
+            hulls.push(collider);
+            (hulls.len() - 1) as u32
+        } else {
+            NONE
+        };
         BodyInfo {
             shape: desc.shape.clone(),
-            hull: matches!(desc.shape, Shape::ConvexHull { .. }).then_some(collider),
+            hull,
             local_com: mp.local_com,
             mass: mp.mass,
-            inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
             fixed,
             friction: desc.friction.contact,
             restitution: desc.restitution,
             self_collision: desc.self_collision,
             figure,
-            min_half_extent: desc.shape.local_half_extents().min_element(),
             bound_radius: (desc.shape.local_half_extents() + mp.local_com.abs()).length(),
             projectile: false,
         }
@@ -290,8 +297,8 @@ impl BodyInfo {
     /// The collision shape, in the shape frame: for a primitive, the same parry shape
     /// `crate::scene::collider` builds (same constructor, same floats), made on the
     /// spot; for a convex hull, the one built with the body.
-    pub fn collider(&self) -> Collider<'_> {
-        match (&self.shape, &self.hull) {
+    pub fn collider<'a>(&self, hulls: &'a [SharedShape]) -> Collider<'a> {
+        match (&self.shape, hulls.get(self.hull as usize)) {
             (_, Some(hull)) => Collider::Shared(hull),
             (Shape::Box { half_extents }, None) => Collider::Cuboid(Cuboid::new(*half_extents)),
             (
@@ -324,6 +331,19 @@ impl BodyInfo {
                 unreachable!("BodyInfo::new keeps the collider of every convex hull")
             }
         }
+    }
+
+    /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
+    /// while the body sleeps and restored from here. Computed, not stored: one division
+    /// per body and step, the same one that was stored.
+    #[inline]
+    pub fn inv_mass(&self) -> f32 {
+        if self.fixed { 0.0 } else { 1.0 / self.mass }
+    }
+
+    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
+    pub fn min_half_extent(&self) -> f32 {
+        self.shape.local_half_extents().min_element()
     }
 }
 

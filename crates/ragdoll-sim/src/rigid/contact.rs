@@ -204,6 +204,8 @@ pub struct Contacts {
     pub excluded: Vec<(u32, u32)>,
     /// The ground, if any.
     pub ground: Option<GroundCollider>,
+    /// The parry colliders of the convex-hull bodies (see [`BodyInfo::collider`]).
+    pub hulls: Vec<SharedShape>,
 }
 
 /// Upper bound of the speed of any point of body `i`.
@@ -240,7 +242,7 @@ impl Contacts {
         for i in 0..n {
             let motion = point_speed(s, info, i) * dt;
             let aabb = info[i]
-                .collider()
+                .collider(&self.hulls)
                 .shape()
                 .compute_aabb(&shape_pose(s, info, i));
             self.aabbs
@@ -305,7 +307,7 @@ impl Contacts {
             // contact points' friction.
             let rolling = |i: usize| match info[i].shape {
                 Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
-                    info[i].min_half_extent
+                    info[i].min_half_extent()
                 }
                 _ => 0.0,
             };
@@ -345,20 +347,21 @@ impl Contacts {
         // Narrow phase: every pair on its own, so on all cores; each pair writes only its
         // own slot, the result does not depend on the thread count.
         let ground = &self.ground;
+        let hulls = &self.hulls;
         self.pairs.par_iter_mut().with_min_len(64).for_each(|pair| {
             let (a, b) = (pair.a as usize, pair.b as usize);
             if !awake[a] && !awake[b] {
                 return;
             }
             let pose_a = shape_pose(s, info, a);
-            let collider_a = info[a].collider();
+            let collider_a = info[a].collider(hulls);
             let (pose_b, collider_b) = if b == n {
                 let g = ground
                     .as_ref()
                     .expect("ground pairs exist only with a ground");
                 (g.pose, Collider::Shared(&g.shape))
             } else {
-                (shape_pose(s, info, b), info[b].collider())
+                (shape_pose(s, info, b), info[b].collider(hulls))
             };
             // A point of a approaches a point of b at most |v_a − v_b| + |ω_a| r_a +
             // |ω_b| r_b: contacts that may close this step are created now, so the

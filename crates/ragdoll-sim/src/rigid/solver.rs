@@ -181,6 +181,6 @@ pub fn refresh_awake(
 ) {
     for i in 0..info.len() {
         awake[i] = dynamic[i] && !islands.asleep[i];
-        s.inv_mass[i] = if awake[i] { info[i].inv_mass } else { 0.0 };
+        s.inv_mass[i] = if awake[i] { info[i].inv_mass() } else { 0.0 };
     }
 }

@@ -62,13 +62,14 @@ impl MultibodyWorld {
         let mut info = Vec::with_capacity(n);
         let mut motion = Vec::with_capacity(n);
         let mut full_inertia = Vec::new();
+        let mut hulls = Vec::new();
         let mut names =
             BodyNames::with_capacity(n, scene.bodies.iter().map(|b| b.name.len()).sum());
         for (i, b) in scene.bodies.iter().enumerate() {
             let mp = mass_props(b)?;
             let shape = collider(b)?;
             let fig = root(&mut figure, i as u32);
-            info.push(BodyInfo::new(b, &mp, shape, fig));
+            info.push(BodyInfo::new(b, &mp, shape, fig, &mut hulls));
             names.push(&b.name);
             motion.push(BodyMotion::new(b, &mp, &mut full_inertia));
             let com = b.pose.transform_point(mp.local_com);
@@ -79,8 +80,9 @@ impl MultibodyWorld {
             };
             states.push(com, b.pose.rotation, v, w);
         }
-        // Pushed one hull at a time; its size is known now.
+        // Pushed one hull at a time; their sizes are known now.
         full_inertia.shrink_to_fit();
+        hulls.shrink_to_fit();
         // The static anchor: the world and the ground.
         states.push(Vec3::ZERO, Quat::IDENTITY, Vec3::ZERO, Vec3::ZERO);
         let dynamic: Vec<bool> = info.iter().map(|b: &BodyInfo| !b.fixed).collect();
@@ -88,6 +90,7 @@ impl MultibodyWorld {
         let joints = JointSet::build(&scene.constraints, &states, &info, n, g);
 
         let mut contacts = Contacts::default();
+        contacts.hulls = hulls;
         joints.for_each_pair(|a, b| {
             if b < n {
                 contacts.excluded.push((a.min(b) as u32, a.max(b) as u32));
@@ -99,7 +102,8 @@ impl MultibodyWorld {
                     continue;
                 }
                 let (pa, pb) = (shape_pose(&states, &info, a), shape_pose(&states, &info, b));
-                let (ca, cb) = (info[a].collider(), info[b].collider());
+                let hulls = &contacts.hulls;
+                let (ca, cb) = (info[a].collider(hulls), info[b].collider(hulls));
                 let overlap = query::contact(&pa, ca.shape(), &pb, cb.shape(), 0.0)
                     .ok()
                     .flatten()
@@ -167,7 +171,11 @@ impl MultibodyWorld {
                     .ground
                     .as_ref()
                     .expect("ground pair without ground");
-                if let Some(sm) = self.info[a].collider().shape().as_support_map() {
+                if let Some(sm) = self.info[a]
+                    .collider(&self.contacts.hulls)
+                    .shape()
+                    .as_support_map()
+                {
                     let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
                     let p = pa.transform_point(local);
                     let depth = -g.normal.dot(p - g.origin);
@@ -181,9 +189,9 @@ impl MultibodyWorld {
             let pb = shape_pose(&self.states, &self.info, b);
             if let Ok(Some(c)) = query::contact(
                 &pa,
-                self.info[a].collider().shape(),
+                self.info[a].collider(&self.contacts.hulls).shape(),
                 &pb,
-                self.info[b].collider().shape(),
+                self.info[b].collider(&self.contacts.hulls).shape(),
                 0.0,
             ) && -c.dist > deepest
             {
@@ -358,7 +366,10 @@ impl Method for MultibodyWorld {
         let mut best: Option<RayHit> = None;
         for (i, b) in self.info.iter().enumerate() {
             let pose = shape_pose(&self.states, &self.info, i);
-            if let Some(t) = b.collider().shape().cast_ray(&pose, &ray, f32::MAX, true)
+            if let Some(t) =
+                b.collider(&self.contacts.hulls)
+                    .shape()
+                    .cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
                 best = Some(RayHit {
@@ -381,7 +392,13 @@ impl Method for MultibodyWorld {
             // A degenerate projectile is not added; the caller gets the id it would have had.
             return BodyId(i as u32);
         };
-        let mut b = BodyInfo::new(desc, &mp, shape, u32::MAX - i as u32);
+        let mut b = BodyInfo::new(
+            desc,
+            &mp,
+            shape,
+            u32::MAX - i as u32,
+            &mut self.contacts.hulls,
+        );
         b.projectile = true;
         self.info.push(b);
         self.names.push(&desc.name);
