@@ -294,7 +294,7 @@ impl Method for MultibodyWorld {
             });
         }
         for p in &self.contacts.pairs {
-            for c in &p.points {
+            for c in p.points() {
                 let (a, b) = (p.a as usize, p.b as usize);
                 let pa = self.states.com[a] + self.states.rot[a] * c.local_a;
                 let pb = self.states.com[b] + self.states.rot[b] * c.local_b;
