@@ -129,30 +129,101 @@ impl BodyStates {
 /// What the integrator reads of a body every substep, constant over its life: kept
 /// apart from the cold [`BodyInfo`] so an island can carry a compact copy of it to
 /// another thread (see [`super::parallel`]).
+///
+/// The body-space inertia and its inverse are diagonal for every primitive (a box,
+/// capsule, cylinder or cone is symmetric about its shape frame's axes), so they are kept
+/// as their diagonals, 24 bytes instead of two `Mat3` (72). A tensor that is not exactly
+/// diagonal (a convex hull, a skewed `inertiaScale`) is kept whole in the world's
+/// [`FullInertia`] table and referred to by index. Either way the solver gets back the
+/// very `Mat3` it was given, bit for bit (see [`BodyMotion::new`]).
 #[derive(Clone, Copy, Debug)]
 pub struct BodyMotion {
-    /// Body-space inertia about the centre of mass.
-    pub inertia: Mat3,
-    /// Body-space inverse inertia (zero for fixed bodies).
-    pub inv_inertia_local: Mat3,
+    /// Diagonal of the body-space inertia about the centre of mass, if `full` is `NONE`.
+    inertia_diagonal: Vec3,
+    /// Diagonal of the body-space inverse inertia (zero for fixed bodies), likewise.
+    inv_inertia_diagonal: Vec3,
+    /// Index of the body's tensors in the [`FullInertia`] table, or `NONE`.
+    full: u32,
     /// Doom 3 air friction on translation, fraction of velocity lost per second.
     pub linear_damping: f32,
     /// Doom 3 air friction on rotation, fraction lost per second.
     pub angular_damping: f32,
 }
 
+/// No index: `BodyMotion::full` of a body whose tensors are diagonal, `BodyInfo::hull`
+/// of a primitive.
+const NONE: u32 = u32::MAX;
+
+/// The inertia tensors of a body that are not diagonal in its shape frame.
+#[derive(Clone, Copy, Debug)]
+pub struct FullInertia {
+    /// Body-space inertia about the centre of mass.
+    pub inertia: Mat3,
+    /// Body-space inverse inertia (zero for fixed bodies).
+    pub inv_inertia_local: Mat3,
+}
+
+/// The motion data of some bodies and the table of full tensors their indices refer to.
+#[derive(Clone, Copy, Debug)]
+pub struct Motions<'a> {
+    /// Per body.
+    pub bodies: &'a [BodyMotion],
+    /// The world's full tensors.
+    pub full: &'a [FullInertia],
+}
+
 impl BodyMotion {
-    /// Motion data of one body from its description and mass properties.
-    pub fn new(desc: &BodyDesc, mp: &MassProps) -> BodyMotion {
+    /// Motion data of one body from its description and mass properties; a tensor that
+    /// is not exactly diagonal goes to `full`. "Exactly" is to the bit (a `-0.0` off the
+    /// diagonal counts as not diagonal), so `Mat3::from_diagonal` rebuilds the same
+    /// matrix and every product with it is unchanged.
+    pub fn new(desc: &BodyDesc, mp: &MassProps, full: &mut Vec<FullInertia>) -> BodyMotion {
+        let inertia = mp.inertia;
+        let inv_inertia_local = if desc.is_fixed() {
+            Mat3::ZERO
+        } else {
+            mp.inverse_inertia()
+        };
+        let diagonal = |m: &Mat3| Vec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
+        let is_diagonal = |m: &Mat3| {
+            Mat3::from_diagonal(diagonal(m))
+                .to_cols_array()
+                .map(f32::to_bits)
+                == m.to_cols_array().map(f32::to_bits)
+        };
+        let index = if is_diagonal(&inertia) && is_diagonal(&inv_inertia_local) {
+            NONE
+        } else {
+            full.push(FullInertia {
+                inertia,
+                inv_inertia_local,
+            });
+            (full.len() - 1) as u32
+        };
         BodyMotion {
-            inertia: mp.inertia,
-            inv_inertia_local: if desc.is_fixed() {
-                Mat3::ZERO
-            } else {
-                mp.inverse_inertia()
-            },
+            inertia_diagonal: diagonal(&inertia),
+            inv_inertia_diagonal: diagonal(&inv_inertia_local),
+            full: index,
             linear_damping: desc.friction.linear,
             angular_damping: desc.friction.angular,
+        }
+    }
+
+    /// Body-space inertia about the centre of mass.
+    #[inline]
+    pub fn inertia(&self, full: &[FullInertia]) -> Mat3 {
+        match full.get(self.full as usize) {
+            Some(f) => f.inertia,
+            None => Mat3::from_diagonal(self.inertia_diagonal),
+        }
+    }
+
+    /// Body-space inverse inertia (zero for fixed bodies).
+    #[inline]
+    pub fn inv_inertia_local(&self, full: &[FullInertia]) -> Mat3 {
+        match full.get(self.full as usize) {
+            Some(f) => f.inv_inertia_local,
+            None => Mat3::from_diagonal(self.inv_inertia_diagonal),
         }
     }
 }
@@ -163,17 +234,15 @@ pub struct BodyInfo {
     /// The scene shape: drawn in snapshots, and the collision shape itself for the
     /// primitives (see [`BodyInfo::collider`]).
     pub shape: Shape,
-    /// parry's collider of a convex hull, built once (its faces and adjacency are worth
-    /// keeping); `None` for the primitives, whose parry shapes are a few floats made on
-    /// the spot instead of a shared allocation per body.
-    hull: Option<SharedShape>,
+    /// Index of the body's parry collider in the world's hull table if it is a convex
+    /// hull, built once (its faces and adjacency are worth keeping); `NONE` for the
+    /// primitives, whose parry shapes are a few floats made on the spot instead of a
+    /// shared allocation per body.
+    hull: u32,
     /// Centre of mass in the shape frame.
     pub local_com: Vec3,
     /// Mass (kg), also for fixed bodies (they are treated as infinite).
     pub mass: f32,
-    /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
-    /// while the body sleeps and restored from here.
-    pub inv_mass: f32,
     /// Fixed bodies never move.
     pub fixed: bool,
     /// Coulomb coefficient.
@@ -184,8 +253,6 @@ pub struct BodyInfo {
     pub self_collision: bool,
     /// Figure (connected component of the joint graph) this body belongs to.
     pub figure: u32,
-    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
-    pub min_half_extent: f32,
     /// Largest distance from the centre of mass to the shape's bounding box: with it,
     /// `|v| + |ω| r` bounds the speed of every point of the body.
     pub bound_radius: f32,
@@ -195,21 +262,31 @@ pub struct BodyInfo {
 
 impl BodyInfo {
     /// Cold data of one body from its description, mass properties and parry collider
-    /// (`crate::scene::collider`, kept only for a convex hull).
-    pub fn new(desc: &BodyDesc, mp: &MassProps, collider: SharedShape, figure: u32) -> BodyInfo {
+    /// (`crate::scene::collider`, kept in `hulls` only for a convex hull).
+    pub fn new(
+        desc: &BodyDesc,
+        mp: &MassProps,
+        collider: SharedShape,
+        figure: u32,
+        hulls: &mut Vec<SharedShape>,
+    ) -> BodyInfo {
         let fixed = desc.is_fixed();
+        let hull = if matches!(desc.shape, Shape::ConvexHull { .. }) {
+            hulls.push(collider);
+            (hulls.len() - 1) as u32
+        } else {
+            NONE
+        };
         BodyInfo {
             shape: desc.shape.clone(),
-            hull: matches!(desc.shape, Shape::ConvexHull { .. }).then_some(collider),
+            hull,
             local_com: mp.local_com,
             mass: mp.mass,
-            inv_mass: if fixed { 0.0 } else { 1.0 / mp.mass },
             fixed,
             friction: desc.friction.contact,
             restitution: desc.restitution,
             self_collision: desc.self_collision,
             figure,
-            min_half_extent: desc.shape.local_half_extents().min_element(),
             bound_radius: (desc.shape.local_half_extents() + mp.local_com.abs()).length(),
             projectile: false,
         }
@@ -220,8 +297,8 @@ impl BodyInfo {
     /// The collision shape, in the shape frame: for a primitive, the same parry shape
     /// `crate::scene::collider` builds (same constructor, same floats), made on the
     /// spot; for a convex hull, the one built with the body.
-    pub fn collider(&self) -> Collider<'_> {
-        match (&self.shape, &self.hull) {
+    pub fn collider<'a>(&self, hulls: &'a [SharedShape]) -> Collider<'a> {
+        match (&self.shape, hulls.get(self.hull as usize)) {
             (_, Some(hull)) => Collider::Shared(hull),
             (Shape::Box { half_extents }, None) => Collider::Cuboid(Cuboid::new(*half_extents)),
             (
@@ -254,6 +331,19 @@ impl BodyInfo {
                 unreachable!("BodyInfo::new keeps the collider of every convex hull")
             }
         }
+    }
+
+    /// Inverse mass as built (zero for fixed bodies); `BodyStates::inv_mass` is zeroed
+    /// while the body sleeps and restored from here. Computed, not stored: one division
+    /// per body and step, the same one that was stored.
+    #[inline]
+    pub fn inv_mass(&self) -> f32 {
+        if self.fixed { 0.0 } else { 1.0 / self.mass }
+    }
+
+    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
+    pub fn min_half_extent(&self) -> f32 {
+        self.shape.local_half_extents().min_element()
     }
 }
 

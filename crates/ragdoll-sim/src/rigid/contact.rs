@@ -40,9 +40,12 @@ pub const LINEAR_SLOP: f32 = 0.0005;
 /// differently enough that a hard limit is pushed past 2°.
 pub const ROLLING_RESISTANCE: f32 = 0.005;
 
-/// One contact point with its solver state. Its persistent id (parry's feature ids) is
-/// not repeated here: point `k` of a touching pair was made from point `k` of the pair's
-/// manifold (see [`ContactPair::old_impulses`]).
+/// One contact point's solver state. It rides in the `data` slot of parry's tracked
+/// contact, next to the point's geometry (anchors in the shape frames, separation,
+/// feature ids): one array per pair holds both, and what parry already stores (the
+/// persistent id, the separation at prepare time) is not repeated here. parry copies
+/// `data` around when it refreshes a manifold, but [`prepare_pair`] rewrites it whole
+/// for every point, with impulses carried over by id as before.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ContactPoint {
     /// Normal from a to b (world), the same for every point of a pair.
@@ -59,8 +62,6 @@ pub struct ContactPoint {
     pub pa0: Vec3,
     /// World anchor on b at prepare time.
     pub pb0: Vec3,
-    /// Separation at prepare time (negative = overlap).
-    pub base_separation: f32,
     /// Separation at the start of the current substep's iterations
     /// ([`prepare_substep`]): the positions hold still until they are integrated.
     pub separation: f32,
@@ -78,8 +79,8 @@ pub struct ContactPoint {
     pub relative_velocity: f32,
 }
 
-/// A cached body pair. (No `Debug`: parry's workspace has none.)
-#[derive(Default)]
+/// A cached body pair.
+#[derive(Debug, Default)]
 pub struct ContactPair {
     /// Body a.
     pub a: u32,
@@ -93,15 +94,16 @@ pub struct ContactPair {
     pub rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
     pub rolling_impulse: Vec3,
-    /// Points of the last narrow phase.
-    pub points: Vec<ContactPoint>,
-    /// parry's persistent manifold of the pair, kept between steps because parry reads
-    /// it back (it keeps the points while the relative pose barely changed, and starts
-    /// GJK from the last normal). Every shape is convex, so a pair has exactly one
-    /// manifold; only the parts parry's convex–convex generators read and write are
-    /// stored (see [`ContactPair::collide`]), not a `Vec` of whole manifolds and a
-    /// composite-shape workspace, which cost ~290 bytes per pair, touching or not.
-    manifold_points: Vec<TrackedContact<()>>,
+    /// Whether the points carry solver state: the manifold has points and a normal.
+    touching: bool,
+    /// The points of parry's persistent manifold of the pair, each with its solver state
+    /// ([`ContactPoint`]). The manifold is kept between steps because parry reads it
+    /// back (it keeps the points while the relative pose barely changed, and starts GJK
+    /// from the last normal). Every shape is convex, so a pair has exactly one manifold;
+    /// only the parts parry's convex–convex generators read and write are stored (see
+    /// [`ContactPair::collide`]), not a `Vec` of whole manifolds and a composite-shape
+    /// workspace, which cost ~290 bytes per pair, touching or not.
+    points: Vec<TrackedContact<ContactPoint>>,
     /// The manifold's normal in a's shape frame.
     manifold_n1: Vec3,
     /// The manifold's normal in b's shape frame.
@@ -111,7 +113,13 @@ pub struct ContactPair {
 impl ContactPair {
     /// Whether any point is within the speculative margin.
     pub fn touching(&self) -> bool {
-        !self.points.is_empty()
+        self.touching
+    }
+
+    /// The solver points (none unless touching).
+    pub fn points(&self) -> impl Iterator<Item = &ContactPoint> {
+        let n = if self.touching { self.points.len() } else { 0 };
+        self.points[..n].iter().map(|c| &c.data)
     }
 
     /// The tangent basis of the pair's points. It is a function of the normal, which all
@@ -122,21 +130,24 @@ impl ContactPair {
         let (t0, t1) = self
             .points
             .first()
-            .map_or(Vec3::ZERO, |p| p.normal)
+            .map_or(Vec3::ZERO, |c| c.data.normal)
             .any_orthonormal_pair();
         [t0, t1]
     }
 
     /// The impulses of the points now, by persistent id, for warm starting once the
-    /// manifold is refreshed: read before [`ContactPair::collide`] overwrites the
-    /// manifold, whose point `k` has the id of solver point `k` (`prepare_pair` makes
-    /// one solver point per manifold point, in order, or none at all). A manifold holds
-    /// a handful of points; the first 8 are kept, as many as are looked up.
+    /// manifold is refreshed: read before [`ContactPair::collide`] rewrites the points
+    /// (none unless touching). A manifold holds a handful of points; the first 8 are
+    /// kept, as many as are looked up.
     fn old_impulses(&self) -> ([(u64, f32, Vec3); 8], usize) {
         let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
-        let n_old = self.points.len().min(8);
-        for ((slot, p), c) in old.iter_mut().zip(&self.points).zip(&self.manifold_points) {
-            *slot = (point_id(c), p.normal_impulse, p.tangent_impulse);
+        let n_old = if self.touching {
+            self.points.len().min(8)
+        } else {
+            0
+        };
+        for (slot, c) in old.iter_mut().zip(&self.points[..n_old]) {
+            *slot = (point_id(c), c.data.normal_impulse, c.data.tangent_impulse);
         }
         (old, n_old)
     }
@@ -154,8 +165,8 @@ impl ContactPair {
         shape_b: &dyn ParryShape,
         prediction: f32,
     ) {
-        let mut manifold = ContactManifold::<(), ()>::new();
-        manifold.points = std::mem::take(&mut self.manifold_points);
+        let mut manifold = ContactManifold::<(), ContactPoint>::new();
+        manifold.points = std::mem::take(&mut self.points);
         manifold.local_n1 = self.manifold_n1;
         manifold.local_n2 = self.manifold_n2;
         let ok = DefaultQueryDispatcher.contact_manifold_convex_convex(
@@ -173,7 +184,7 @@ impl ContactPair {
             manifold.local_n1 = Vec3::ZERO;
             manifold.local_n2 = Vec3::ZERO;
         }
-        self.manifold_points = manifold.points;
+        self.points = manifold.points;
         self.manifold_n1 = manifold.local_n1;
         self.manifold_n2 = manifold.local_n2;
     }
@@ -207,6 +218,8 @@ pub struct Contacts {
     pub excluded: Vec<(u32, u32)>,
     /// The ground, if any.
     pub ground: Option<GroundCollider>,
+    /// The parry colliders of the convex-hull bodies (see [`BodyInfo::collider`]).
+    pub hulls: Vec<SharedShape>,
 }
 
 /// Upper bound of the speed of any point of body `i`.
@@ -243,7 +256,7 @@ impl Contacts {
         for i in 0..n {
             let motion = point_speed(s, info, i) * dt;
             let aabb = info[i]
-                .collider()
+                .collider(&self.hulls)
                 .shape()
                 .compute_aabb(&shape_pose(s, info, i));
             self.aabbs
@@ -308,7 +321,7 @@ impl Contacts {
             // contact points' friction.
             let rolling = |i: usize| match info[i].shape {
                 Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
-                    info[i].min_half_extent
+                    info[i].min_half_extent()
                 }
                 _ => 0.0,
             };
@@ -348,20 +361,21 @@ impl Contacts {
         // Narrow phase: every pair on its own, so on all cores; each pair writes only its
         // own slot, the result does not depend on the thread count.
         let ground = &self.ground;
+        let hulls = &self.hulls;
         self.pairs.par_iter_mut().with_min_len(64).for_each(|pair| {
             let (a, b) = (pair.a as usize, pair.b as usize);
             if !awake[a] && !awake[b] {
                 return;
             }
             let pose_a = shape_pose(s, info, a);
-            let collider_a = info[a].collider();
+            let collider_a = info[a].collider(hulls);
             let (pose_b, collider_b) = if b == n {
                 let g = ground
                     .as_ref()
                     .expect("ground pairs exist only with a ground");
                 (g.pose, Collider::Shared(&g.shape))
             } else {
-                (shape_pose(s, info, b), info[b].collider())
+                (shape_pose(s, info, b), info[b].collider(hulls))
             };
             // A point of a approaches a point of b at most |v_a − v_b| + |ω_a| r_a +
             // |ω_b| r_b: contacts that may close this step are created now, so the
@@ -397,7 +411,7 @@ pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool])
     for pair in active(pairs, awake) {
         let (a, b) = (pair.a as usize, pair.b as usize);
         let tangents = pair.tangents();
-        for p in &mut pair.points {
+        for p in pair.points.iter_mut().map(|c| &mut c.data) {
             let k = |d: Vec3| {
                 let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
                 s.inv_mass[a]
@@ -420,7 +434,7 @@ pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool])
 pub fn warm_start(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
     for pair in active(pairs, awake) {
         let (a, b) = (pair.a as usize, pair.b as usize);
-        for p in &pair.points {
+        for p in pair.points.iter().map(|c| &c.data) {
             let imp = p.normal * p.normal_impulse + p.tangent_impulse;
             s.apply_impulse(a, p.ra, -imp);
             s.apply_impulse(b, p.rb, imp);
@@ -438,8 +452,8 @@ pub fn prepare_substep(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]
         let (a, b) = (pair.a as usize, pair.b as usize);
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
-        for p in &mut pair.points {
-            p.separation = current_separation(p, ca, qa, cb, qb);
+        for c in &mut pair.points {
+            c.data.separation = current_separation(c, ca, qa, cb, qb);
         }
     }
 }
@@ -460,13 +474,14 @@ pub fn solve(
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
         let tangents = pair.tangents();
-        for p in &mut pair.points {
+        for c in &mut pair.points {
             // Non-penetration at the current separation.
             let sep = if use_bias {
-                p.separation
+                c.data.separation
             } else {
-                current_separation(p, ca, qa, cb, qb)
+                current_separation(c, ca, qa, cb, qb)
             };
+            let p = &mut c.data;
             let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
                 // Speculative: the gap may close this substep, no further.
                 (sep * ctx.inv_h, 1.0, 0.0)
@@ -510,7 +525,12 @@ pub fn solve(
         // Rolling resistance: drive the relative angular velocity to zero with at most
         // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
         if pair.rolling_arm > 0.0 {
-            let cap = pair.rolling_arm * pair.points.iter().map(|p| p.normal_impulse).sum::<f32>();
+            let cap = pair.rolling_arm
+                * pair
+                    .points
+                    .iter()
+                    .map(|c| c.data.normal_impulse)
+                    .sum::<f32>();
             let k = s.inv_inertia[a] + s.inv_inertia[b];
             if k.determinant().abs() > 1e-20 {
                 let w = s.ang_vel[b] - s.ang_vel[a];
@@ -540,7 +560,7 @@ fn restitution_pass(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool
             continue;
         }
         let (a, b) = (pair.a as usize, pair.b as usize);
-        for p in &mut pair.points {
+        for p in pair.points.iter_mut().map(|c| &mut c.data) {
             if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
                 continue;
             }
@@ -563,8 +583,9 @@ fn restitution_pass(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool
 pub fn project(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
     for pair in active(pairs, awake) {
         let (a, b) = (pair.a as usize, pair.b as usize);
-        for p in &pair.points {
-            let sep = current_separation(p, s.com[a], s.rot[a], s.com[b], s.rot[b]);
+        for c in &pair.points {
+            let sep = current_separation(c, s.com[a], s.rot[a], s.com[b], s.rot[b]);
+            let p = &c.data;
             let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
             if c == 0.0 {
                 continue;
@@ -587,15 +608,22 @@ pub fn project(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
 
 /// Separation now, from the motion of both anchors since prepare.
 #[inline]
-fn current_separation(p: &ContactPoint, ca: Vec3, qa: Quat, cb: Vec3, qb: Quat) -> f32 {
+fn current_separation(
+    c: &TrackedContact<ContactPoint>,
+    ca: Vec3,
+    qa: Quat,
+    cb: Vec3,
+    qb: Quat,
+) -> f32 {
+    let p = &c.data;
     let da = ca + qa * p.local_a - p.pa0;
     let db = cb + qb * p.local_b - p.pb0;
-    p.base_separation + p.normal.dot(db - da)
+    c.dist + p.normal.dot(db - da)
 }
 
 /// Persistent id of a manifold point: parry's feature ids of both shapes.
 #[inline]
-fn point_id(c: &TrackedContact<()>) -> u64 {
+fn point_id<D>(c: &TrackedContact<D>) -> u64 {
     ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64
 }
 
@@ -609,37 +637,37 @@ fn prepare_pair(
     old: &[(u64, f32, Vec3)],
 ) {
     let (a, b) = (pair.a as usize, pair.b as usize);
-    pair.points.clear();
+    pair.touching = false;
     // An empty manifold makes no points whatever its normal.
-    if !pair.manifold_points.is_empty() {
-        let normal = (pose_a.rotation * pair.manifold_n1).normalize_or_zero();
-        if normal == Vec3::ZERO {
-            return;
-        }
-        for c in &pair.manifold_points {
-            let pa = pose_a.transform_point(c.local_p1);
-            let pb = pose_b.transform_point(c.local_p2);
-            let id = point_id(c);
-            let (ni, ti) = old
-                .iter()
-                .find(|o| o.0 == id)
-                .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
-            let ra = pa - s.com[a];
-            let rb = pb - s.com[b];
-            pair.points.push(ContactPoint {
-                normal,
-                ra,
-                rb,
-                local_a: s.rot[a].inverse() * ra,
-                local_b: s.rot[b].inverse() * rb,
-                pa0: pa,
-                pb0: pb,
-                base_separation: c.dist,
-                separation: c.dist,
-                normal_impulse: ni,
-                tangent_impulse: ti,
-                ..Default::default()
-            });
-        }
+    if pair.points.is_empty() {
+        return;
     }
+    let normal = (pose_a.rotation * pair.manifold_n1).normalize_or_zero();
+    if normal == Vec3::ZERO {
+        return;
+    }
+    for c in &mut pair.points {
+        let pa = pose_a.transform_point(c.local_p1);
+        let pb = pose_b.transform_point(c.local_p2);
+        let id = point_id(c);
+        let (ni, ti) = old
+            .iter()
+            .find(|o| o.0 == id)
+            .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
+        let ra = pa - s.com[a];
+        let rb = pb - s.com[b];
+        c.data = ContactPoint {
+            normal,
+            ra,
+            rb,
+            local_a: s.rot[a].inverse() * ra,
+            local_b: s.rot[b].inverse() * rb,
+            pa0: pa,
+            pb0: pb,
+            normal_impulse: ni,
+            tangent_impulse: ti,
+            ..Default::default()
+        };
+    }
+    pair.touching = true;
 }

@@ -5,19 +5,19 @@
 //! is the integrator of Box2D v3's soft step and of Catto's GDC 2015 talk
 //! "Numerical methods".
 
-use super::body::{BodyMotion, BodyStates};
+use super::body::{BodyStates, Motions};
 use glam::{Mat3, Quat, Vec3};
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
 /// constraints use it. Sleeping and fixed bodies keep zero.
-pub fn update_inertia(states: &mut BodyStates, motion: &[BodyMotion], awake: &[bool]) {
-    for (i, m) in motion.iter().enumerate() {
+pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[bool]) {
+    for (i, m) in motion.bodies.iter().enumerate() {
         if !awake[i] {
             states.inv_inertia[i] = Mat3::ZERO;
             continue;
         }
         let r = Mat3::from_quat(states.rot[i]);
-        states.inv_inertia[i] = r * m.inv_inertia_local * r.transpose();
+        states.inv_inertia[i] = r * m.inv_inertia_local(motion.full) * r.transpose();
     }
 }
 
@@ -51,17 +51,17 @@ pub fn skew(a: Vec3) -> Mat3 {
 /// lost per second, applied as exact exponential decay), the gyroscopic term.
 pub fn integrate_velocities(
     states: &mut BodyStates,
-    motion: &[BodyMotion],
+    motion: Motions<'_>,
     awake: &[bool],
     gravity: Vec3,
     h: f32,
 ) {
-    for (i, b) in motion.iter().enumerate() {
+    for (i, b) in motion.bodies.iter().enumerate() {
         if !awake[i] {
             continue;
         }
         let mut v = states.lin_vel[i] + gravity * h;
-        let mut w = gyroscopic(states.ang_vel[i], states.rot[i], b.inertia, h);
+        let mut w = gyroscopic(states.ang_vel[i], states.rot[i], b.inertia(motion.full), h);
         if b.linear_damping > 0.0 {
             v *= (1.0 - b.linear_damping.min(1.0)).max(0.0).powf(h);
         }

@@ -15,7 +15,7 @@
 //! island writes, so each island's result is bit for bit what the serial solve gives
 //! it, whatever the number of threads or the order they finish in.
 
-use super::body::{BodyMotion, BodyStates};
+use super::body::{BodyMotion, BodyStates, Motions};
 use super::contact::ContactPair;
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -82,14 +82,14 @@ impl IslandTask {
 /// current rayon pool. `islands` must hold this step's links.
 pub fn solve_islands(
     s: &mut BodyStates,
-    motion: &[BodyMotion],
+    motion: Motions<'_>,
     joints: &mut JointSet,
     pairs: &mut [ContactPair],
     islands: &mut Islands,
     awake: &[bool],
     p: &SolveParams,
 ) {
-    let n = motion.len();
+    let n = motion.bodies.len();
     let work = awake[..n].iter().filter(|&&a| a).count()
         + joints.len()
         + pairs.iter().filter(|p| p.touching()).count();
@@ -169,7 +169,7 @@ pub fn solve_islands(
         }
         task.motion = task.bodies[..task.moving]
             .iter()
-            .map(|&i| motion[i])
+            .map(|&i| motion.bodies[i])
             .collect();
         task.awake = (0..task.bodies.len()).map(|l| l < task.moving).collect();
     }
@@ -177,7 +177,10 @@ pub fn solve_islands(
     tasks.par_iter_mut().for_each(|t| {
         solver::solve(
             &mut t.states,
-            &t.motion,
+            Motions {
+                bodies: &t.motion,
+                full: motion.full,
+            },
             &mut t.joints,
             &mut t.pairs,
             &t.awake,

@@ -18,7 +18,7 @@
 //! bodies, so on a rayon pool of several threads each island is solved on its own
 //! ([`super::parallel`]), with the same bits as on one.
 
-use super::body::{BodyInfo, BodyMotion, BodyStates};
+use super::body::{BodyInfo, BodyStates, Motions};
 use super::contact::{self, ContactPair, Contacts};
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
@@ -52,7 +52,7 @@ pub struct SolveParams<'a> {
 pub fn step(
     s: &mut BodyStates,
     info: &[BodyInfo],
-    motion: &[BodyMotion],
+    motion: Motions<'_>,
     joints: &mut JointSet,
     contacts: &mut Contacts,
     islands: &mut Islands,
@@ -143,7 +143,7 @@ pub fn step(
 /// pass and the position projection. Reads contacts prepared by [`Contacts::update`].
 pub fn solve(
     s: &mut BodyStates,
-    motion: &[BodyMotion],
+    motion: Motions<'_>,
     joints: &mut JointSet,
     pairs: &mut [ContactPair],
     awake: &[bool],
@@ -182,6 +182,6 @@ pub fn refresh_awake(
 ) {
     for i in 0..info.len() {
         awake[i] = dynamic[i] && !islands.asleep[i];
-        s.inv_mass[i] = if awake[i] { info[i].inv_mass } else { 0.0 };
+        s.inv_mass[i] = if awake[i] { info[i].inv_mass() } else { 0.0 };
     }
 }

@@ -1,7 +1,7 @@
 //! [`MultibodyWorld`]: the multibody method built from a `SceneDesc`, behind the
 //! [`Method`] trait.
 
-use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates};
+use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates, FullInertia, Motions};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -25,6 +25,8 @@ pub struct MultibodyWorld {
     info: Vec<BodyInfo>,
     names: BodyNames,
     motion: Vec<BodyMotion>,
+    /// The tensors of the bodies whose inertia is not diagonal (see [`BodyMotion`]).
+    full_inertia: Vec<FullInertia>,
     joints: JointSet,
     contacts: Contacts,
     islands: Islands,
@@ -59,15 +61,17 @@ impl MultibodyWorld {
         let mut states = BodyStates::with_capacity(n + 1);
         let mut info = Vec::with_capacity(n);
         let mut motion = Vec::with_capacity(n);
+        let mut full_inertia = Vec::new();
+        let mut hulls = Vec::new();
         let mut names =
             BodyNames::with_capacity(n, scene.bodies.iter().map(|b| b.name.len()).sum());
         for (i, b) in scene.bodies.iter().enumerate() {
             let mp = mass_props(b)?;
             let shape = collider(b)?;
             let fig = root(&mut figure, i as u32);
-            info.push(BodyInfo::new(b, &mp, shape, fig));
+            info.push(BodyInfo::new(b, &mp, shape, fig, &mut hulls));
             names.push(&b.name);
-            motion.push(BodyMotion::new(b, &mp));
+            motion.push(BodyMotion::new(b, &mp, &mut full_inertia));
             let com = b.pose.transform_point(mp.local_com);
             let (v, w) = if b.is_fixed() {
                 (Vec3::ZERO, Vec3::ZERO)
@@ -76,6 +80,9 @@ impl MultibodyWorld {
             };
             states.push(com, b.pose.rotation, v, w);
         }
+        // Pushed one hull at a time; their sizes are known now.
+        full_inertia.shrink_to_fit();
+        hulls.shrink_to_fit();
         // The static anchor: the world and the ground.
         states.push(Vec3::ZERO, Quat::IDENTITY, Vec3::ZERO, Vec3::ZERO);
         let dynamic: Vec<bool> = info.iter().map(|b: &BodyInfo| !b.fixed).collect();
@@ -83,6 +90,7 @@ impl MultibodyWorld {
         let joints = JointSet::build(&scene.constraints, &states, &info, n, g);
 
         let mut contacts = Contacts::default();
+        contacts.hulls = hulls;
         joints.for_each_pair(|a, b| {
             if b < n {
                 contacts.excluded.push((a.min(b) as u32, a.max(b) as u32));
@@ -94,7 +102,8 @@ impl MultibodyWorld {
                     continue;
                 }
                 let (pa, pb) = (shape_pose(&states, &info, a), shape_pose(&states, &info, b));
-                let (ca, cb) = (info[a].collider(), info[b].collider());
+                let hulls = &contacts.hulls;
+                let (ca, cb) = (info[a].collider(hulls), info[b].collider(hulls));
                 let overlap = query::contact(&pa, ca.shape(), &pb, cb.shape(), 0.0)
                     .ok()
                     .flatten()
@@ -127,6 +136,7 @@ impl MultibodyWorld {
             info,
             names,
             motion,
+            full_inertia,
             joints,
             contacts,
             islands,
@@ -161,7 +171,11 @@ impl MultibodyWorld {
                     .ground
                     .as_ref()
                     .expect("ground pair without ground");
-                if let Some(sm) = self.info[a].collider().shape().as_support_map() {
+                if let Some(sm) = self.info[a]
+                    .collider(&self.contacts.hulls)
+                    .shape()
+                    .as_support_map()
+                {
                     let local = sm.local_support_point(pa.rotation.inverse() * -g.normal);
                     let p = pa.transform_point(local);
                     let depth = -g.normal.dot(p - g.origin);
@@ -175,9 +189,9 @@ impl MultibodyWorld {
             let pb = shape_pose(&self.states, &self.info, b);
             if let Ok(Some(c)) = query::contact(
                 &pa,
-                self.info[a].collider().shape(),
+                self.info[a].collider(&self.contacts.hulls).shape(),
                 &pb,
-                self.info[b].collider().shape(),
+                self.info[b].collider(&self.contacts.hulls).shape(),
                 0.0,
             ) && -c.dist > deepest
             {
@@ -235,7 +249,10 @@ impl Method for MultibodyWorld {
         solver::step(
             &mut self.states,
             &self.info,
-            &self.motion,
+            Motions {
+                bodies: &self.motion,
+                full: &self.full_inertia,
+            },
             &mut self.joints,
             &mut self.contacts,
             &mut self.islands,
@@ -277,7 +294,7 @@ impl Method for MultibodyWorld {
             });
         }
         for p in &self.contacts.pairs {
-            for c in &p.points {
+            for c in p.points() {
                 let (a, b) = (p.a as usize, p.b as usize);
                 let pa = self.states.com[a] + self.states.rot[a] * c.local_a;
                 let pb = self.states.com[b] + self.states.rot[b] * c.local_b;
@@ -304,7 +321,7 @@ impl Method for MultibodyWorld {
             // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
             let wb = q.inverse() * w;
             kinetic += 0.5 * b.mass as f64 * v.length_squared() as f64
-                + 0.5 * wb.dot(self.motion[i].inertia * wb) as f64;
+                + 0.5 * wb.dot(self.motion[i].inertia(&self.full_inertia) * wb) as f64;
             potential += potential_energy(&self.settings, b.mass, self.states.com[i]);
         }
         Sample {
@@ -349,7 +366,10 @@ impl Method for MultibodyWorld {
         let mut best: Option<RayHit> = None;
         for (i, b) in self.info.iter().enumerate() {
             let pose = shape_pose(&self.states, &self.info, i);
-            if let Some(t) = b.collider().shape().cast_ray(&pose, &ray, f32::MAX, true)
+            if let Some(t) =
+                b.collider(&self.contacts.hulls)
+                    .shape()
+                    .cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
                 best = Some(RayHit {
@@ -372,11 +392,18 @@ impl Method for MultibodyWorld {
             // A degenerate projectile is not added; the caller gets the id it would have had.
             return BodyId(i as u32);
         };
-        let mut b = BodyInfo::new(desc, &mp, shape, u32::MAX - i as u32);
+        let mut b = BodyInfo::new(
+            desc,
+            &mp,
+            shape,
+            u32::MAX - i as u32,
+            &mut self.contacts.hulls,
+        );
         b.projectile = true;
         self.info.push(b);
         self.names.push(&desc.name);
-        self.motion.push(BodyMotion::new(desc, &mp));
+        self.motion
+            .push(BodyMotion::new(desc, &mp, &mut self.full_inertia));
         // Insert before the static anchor, which stays last.
         let com = desc.pose.transform_point(mp.local_com);
         let s = &mut self.states;
