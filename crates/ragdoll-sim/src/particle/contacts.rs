@@ -89,18 +89,6 @@ impl ContactSet {
         self.points.clear();
     }
 
-    /// Appends another set's manifolds and points, in order.
-    pub fn append(&mut self, other: &ContactSet) {
-        let base = self.points.len() as u32;
-        self.manifolds
-            .extend(other.manifolds.iter().map(|m| Manifold {
-                start: m.start + base,
-                end: m.end + base,
-                ..*m
-            }));
-        self.points.extend_from_slice(&other.points);
-    }
-
     /// Adds a point between sides `(a, b)` with normal `n` and materials `(μ, e)`: to the
     /// last manifold if it was opened for this pair (index `first` or later) with the
     /// same normal, else to a new one. Parry reports a pair's points manifold by
@@ -285,20 +273,5 @@ mod tests {
         assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
         assert_eq!((set.manifolds[2].a, set.manifolds[2].b), (2, None));
         assert_eq!(set.manifolds[2].mu, 0.3);
-    }
-
-    /// Appending rebases the manifolds' point ranges onto the combined points.
-    #[test]
-    fn append_rebases_point_ranges() {
-        let mut a = ContactSet::default();
-        a.push(0, (0, None), Vec3::Y, (0.5, 0.0), point(0.0));
-        let mut b = ContactSet::default();
-        b.push(0, (1, None), Vec3::Y, (0.5, 0.0), point(1.0));
-        b.push(0, (1, None), Vec3::Y, (0.5, 0.0), point(2.0));
-        let mut all = ContactSet::default();
-        all.append(&a);
-        all.append(&b);
-        assert_eq!(all.manifolds[1].range(), 1..3);
-        assert_eq!(all.points[all.manifolds[1].range()][1].ra, Vec3::splat(2.0));
     }
 }

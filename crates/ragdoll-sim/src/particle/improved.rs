@@ -16,14 +16,13 @@
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
-use super::contacts::{ContactPoint, ContactSet, Manifold, broad_phase, ground_pair, shape_pair};
+use super::contacts::{ContactPoint, Manifold, broad_phase, ground_pair, shape_pair};
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
 use crate::method::Grab;
-use crate::scene::Settings;
+use crate::scene::{Ground, Settings};
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// Collision detection for the frame, with each bone's margin from its speed.
 fn detect(w: &mut ParticleWorld, dt: f32) {
@@ -38,75 +37,40 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
         .collect();
     let mut pairs = std::mem::take(&mut w.pairs);
     broad_phase(&w.bones, &margins, &w.filter, &mut pairs);
-    let bones = &w.bones;
-    // The narrow phase runs on the pool, a chunk of pairs (then of bones, against the
-    // ground) per task; the chunks' contacts are appended in order, so the set is the
-    // same on any number of threads.
-    let shape_chunks: Vec<ContactSet> = pairs
-        .par_chunks(NARROW_PHASE_CHUNK)
-        .map(|chunk| {
-            let mut set = ContactSet::default();
-            let mut scratch = Vec::new();
-            for &(i, j) in chunk {
-                let prediction = margins[i] + margins[j];
-                let mu = (bones[i].friction * bones[j].friction).sqrt();
-                let e = bones[i].restitution.max(bones[j].restitution);
-                let first = set.manifolds.len();
-                shape_pair(bones, i, j, prediction, &mut scratch, |pa, pb, n, _| {
-                    let point = ContactPoint::new(
-                        bones[i].rot.inverse() * (pa - bones[i].center()),
-                        bones[j].rot.inverse() * (pb - bones[j].center()),
-                    );
-                    set.push(first, (i, Some(j)), n, (mu, e), point);
-                });
-            }
-            set
-        })
-        .collect();
-    let ground_chunks: Vec<ContactSet> = match w.settings.ground {
-        Some(ground) => bones
-            .par_chunks(NARROW_PHASE_CHUNK)
-            .enumerate()
-            .map(|(k, chunk)| {
-                let mut set = ContactSet::default();
-                let mut scratch = Vec::new();
-                for (o, b) in chunk.iter().enumerate() {
-                    let i = k * NARROW_PHASE_CHUNK + o;
-                    if b.is_static() {
-                        continue;
-                    }
-                    let mu = (b.friction * ground.friction).sqrt();
-                    let e = b.restitution.max(ground.restitution);
-                    let first = set.manifolds.len();
-                    ground_pair(
-                        bones,
-                        i,
-                        &ground,
-                        margins[i],
-                        &mut scratch,
-                        |pa, pb, n, _| {
-                            let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
-                            set.push(first, (i, None), n, (mu, e), point);
-                        },
-                    );
-                }
-                set
-            })
-            .collect(),
-        None => Vec::new(),
-    };
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
-    for chunk in shape_chunks.iter().chain(&ground_chunks) {
-        contacts.append(chunk);
+    let bones = &w.bones;
+    for &(i, j) in &pairs {
+        let prediction = margins[i] + margins[j];
+        let mu = (bones[i].friction * bones[j].friction).sqrt();
+        let e = bones[i].restitution.max(bones[j].restitution);
+        let first = contacts.manifolds.len();
+        shape_pair(bones, i, j, prediction, &mut w.manifolds, |pa, pb, n, _| {
+            let point = ContactPoint::new(
+                bones[i].rot.inverse() * (pa - bones[i].center()),
+                bones[j].rot.inverse() * (pb - bones[j].center()),
+            );
+            contacts.push(first, (i, Some(j)), n, (mu, e), point);
+        });
+    }
+    if let Some(ground) = w.settings.ground {
+        for (i, b) in bones.iter().enumerate() {
+            if b.is_static() {
+                continue;
+            }
+            let mu = (b.friction * ground.friction).sqrt();
+            let e = b.restitution.max(ground.restitution);
+            let g: &Ground = &ground;
+            let first = contacts.manifolds.len();
+            ground_pair(bones, i, g, margins[i], &mut w.manifolds, |pa, pb, n, _| {
+                let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
+                contacts.push(first, (i, None), n, (mu, e), point);
+            });
+        }
     }
     w.contacts = contacts;
     w.pairs = pairs;
 }
-
-/// Pairs (or bones, against the ground) per narrow-phase task: enough that a task
-/// outweighs its scheduling, few enough that a pile's thousands of pairs spread.
-const NARROW_PHASE_CHUNK: usize = 128;
 
 /// Contacts, manifold by manifold: each point's normal correction, then its friction
 /// against the manifold's Coulomb cone so far.
