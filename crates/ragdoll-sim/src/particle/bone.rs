@@ -248,6 +248,7 @@ const EXTRACT_TOLERANCE: f32 = 1e-6;
 pub(crate) type Side = Option<usize>;
 
 /// World point and frame origin of a point given in a side's local frame (world: as is).
+#[inline]
 pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
     match s {
         Some(i) => bones[i].world(local),
@@ -257,6 +258,7 @@ pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
 
 /// Generalised inverse mass of a side for a positional correction along unit `n` at
 /// world point `p`: `1/M + (r × n)ᵀ I⁻¹ (r × n)`.
+#[inline]
 pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
     match s {
         Some(i) => {
@@ -272,6 +274,7 @@ pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
 }
 
 /// Generalised inverse mass of a side for a rotation about unit `n`.
+#[inline]
 pub(crate) fn rot_inv_mass(bones: &[Bone], s: Side, n: Vec3) -> f32 {
     match s {
         Some(i) if !bones[i].is_static() => bones[i].inv_inertia_quad(n),

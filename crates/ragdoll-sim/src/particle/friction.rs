@@ -26,6 +26,7 @@ fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
 }
 
 /// Velocity of a side's material point at world `p`.
+#[inline]
 pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
     match s {
         Some(i) if !bones[i].is_static() => {
