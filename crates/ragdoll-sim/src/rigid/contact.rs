@@ -473,6 +473,13 @@ pub fn solve(
         let (a, b) = (pair.a as usize, pair.b as usize);
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
+        // The pair's two bodies in locals for its points (Box2D v3's solver bodies):
+        // the same arithmetic as `BodyStates::apply_impulse`, without a load and a
+        // store of each velocity per impulse. A pair has two distinct bodies.
+        let (ma, mb) = (s.inv_mass[a], s.inv_mass[b]);
+        let (ia, ib) = (s.inv_inertia[a], s.inv_inertia[b]);
+        let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
+        let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
         let tangents = pair.tangents();
         for c in &mut pair.points {
             // Non-penetration at the current separation.
@@ -495,19 +502,20 @@ pub fn solve(
             } else {
                 (0.0, 1.0, 0.0)
             };
-            let vn = p
-                .normal
-                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
+            let vn = p.normal.dot((vb + wb.cross(p.rb)) - (va + wa.cross(p.ra)));
             let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
             let new = (p.normal_impulse + l).max(0.0);
             let d = new - p.normal_impulse;
             p.normal_impulse = new;
             p.max_normal_impulse = p.max_normal_impulse.max(new);
-            s.apply_impulse(a, p.ra, -p.normal * d);
-            s.apply_impulse(b, p.rb, p.normal * d);
+            let (pa, pb) = (-p.normal * d, p.normal * d);
+            va += pa * ma;
+            wa += ia * p.ra.cross(pa);
+            vb += pb * mb;
+            wb += ib * p.rb.cross(pb);
 
             // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
-            let dv = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
+            let dv = (vb + wb.cross(p.rb)) - (va + wa.cross(p.ra));
             let old = p.tangent_impulse;
             let mut new = old;
             for (t, m) in tangents.iter().zip(p.tangent_mass) {
@@ -519,8 +527,11 @@ pub fn solve(
             }
             p.tangent_impulse = new;
             let d = new - old;
-            s.apply_impulse(a, p.ra, -d);
-            s.apply_impulse(b, p.rb, d);
+            let (pa, pb) = (-d, d);
+            va += pa * ma;
+            wa += ia * p.ra.cross(pa);
+            vb += pb * mb;
+            wb += ib * p.rb.cross(pb);
         }
         // Rolling resistance: drive the relative angular velocity to zero with at most
         // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
@@ -531,16 +542,20 @@ pub fn solve(
                     .iter()
                     .map(|c| c.data.normal_impulse)
                     .sum::<f32>();
-            let k = s.inv_inertia[a] + s.inv_inertia[b];
+            let k = ia + ib;
             if k.determinant().abs() > 1e-20 {
-                let w = s.ang_vel[b] - s.ang_vel[a];
+                let w = wb - wa;
                 let old = pair.rolling_impulse;
                 let new = (old - k.inverse() * w).clamp_length_max(cap);
                 pair.rolling_impulse = new;
-                s.apply_angular_impulse(a, -(new - old));
-                s.apply_angular_impulse(b, new - old);
+                wa += ia * -(new - old);
+                wb += ib * (new - old);
             }
         }
+        s.lin_vel[a] = va;
+        s.ang_vel[a] = wa;
+        s.lin_vel[b] = vb;
+        s.ang_vel[b] = wb;
     }
 }
 
