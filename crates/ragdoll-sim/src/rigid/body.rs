@@ -126,6 +126,61 @@ impl BodyStates {
     }
 }
 
+/// One body's velocities and inverse mass and inertia, copied out of [`BodyStates`] for
+/// a run of impulses on it and written back after (Box2D v3's solver body): the same
+/// arithmetic as [`BodyStates::apply_impulse`] and [`BodyStates::point_velocity`],
+/// without a load and a store of the arrays per impulse.
+#[derive(Clone, Copy, Debug)]
+pub struct SolverBody {
+    /// Linear velocity (m/s).
+    pub v: Vec3,
+    /// Angular velocity (rad/s).
+    pub w: Vec3,
+    /// Inverse mass as the solver sees it (zero when static or asleep).
+    pub inv_mass: f32,
+    /// World inverse inertia as the solver sees it.
+    pub inv_inertia: Mat3,
+}
+
+impl SolverBody {
+    /// Body `i` of `s`.
+    #[inline]
+    pub fn load(s: &BodyStates, i: usize) -> SolverBody {
+        SolverBody {
+            v: s.lin_vel[i],
+            w: s.ang_vel[i],
+            inv_mass: s.inv_mass[i],
+            inv_inertia: s.inv_inertia[i],
+        }
+    }
+
+    /// Writes the velocities back to body `i` of `s`.
+    #[inline]
+    pub fn store(&self, s: &mut BodyStates, i: usize) {
+        s.lin_vel[i] = self.v;
+        s.ang_vel[i] = self.w;
+    }
+
+    /// Velocity of the material point at world offset `r` from the centre of mass.
+    #[inline]
+    pub fn point_velocity(&self, r: Vec3) -> Vec3 {
+        self.v + self.w.cross(r)
+    }
+
+    /// Applies the impulse `p` at offset `r`.
+    #[inline]
+    pub fn apply_impulse(&mut self, r: Vec3, p: Vec3) {
+        self.v += p * self.inv_mass;
+        self.w += self.inv_inertia * r.cross(p);
+    }
+
+    /// Applies the angular impulse `l`.
+    #[inline]
+    pub fn apply_angular_impulse(&mut self, l: Vec3) {
+        self.w += self.inv_inertia * l;
+    }
+}
+
 /// What the integrator reads of a body every substep, constant over its life: kept
 /// apart from the cold [`BodyInfo`] so an island can carry a compact copy of it to
 /// another thread (see [`super::parallel`]).

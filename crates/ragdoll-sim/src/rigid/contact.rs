@@ -12,7 +12,7 @@
 // Several per-body arrays are walked together by index.
 #![allow(clippy::needless_range_loop)]
 
-use super::body::{BodyInfo, BodyStates, Collider};
+use super::body::{BodyInfo, BodyStates, Collider, SolverBody};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use crate::scene::Shape;
@@ -473,13 +473,8 @@ pub fn solve(
         let (a, b) = (pair.a as usize, pair.b as usize);
         let (qa, qb) = (s.rot[a], s.rot[b]);
         let (ca, cb) = (s.com[a], s.com[b]);
-        // The pair's two bodies in locals for its points (Box2D v3's solver bodies):
-        // the same arithmetic as `BodyStates::apply_impulse`, without a load and a
-        // store of each velocity per impulse. A pair has two distinct bodies.
-        let (ma, mb) = (s.inv_mass[a], s.inv_mass[b]);
-        let (ia, ib) = (s.inv_inertia[a], s.inv_inertia[b]);
-        let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
-        let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
+        // The pair's two (distinct) bodies as solver bodies while its points are solved.
+        let (mut ba, mut bb) = (SolverBody::load(s, a), SolverBody::load(s, b));
         let tangents = pair.tangents();
         for c in &mut pair.points {
             // Non-penetration at the current separation.
@@ -502,20 +497,19 @@ pub fn solve(
             } else {
                 (0.0, 1.0, 0.0)
             };
-            let vn = p.normal.dot((vb + wb.cross(p.rb)) - (va + wa.cross(p.ra)));
+            let vn = p
+                .normal
+                .dot(bb.point_velocity(p.rb) - ba.point_velocity(p.ra));
             let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
             let new = (p.normal_impulse + l).max(0.0);
             let d = new - p.normal_impulse;
             p.normal_impulse = new;
             p.max_normal_impulse = p.max_normal_impulse.max(new);
-            let (pa, pb) = (-p.normal * d, p.normal * d);
-            va += pa * ma;
-            wa += ia * p.ra.cross(pa);
-            vb += pb * mb;
-            wb += ib * p.rb.cross(pb);
+            ba.apply_impulse(p.ra, -p.normal * d);
+            bb.apply_impulse(p.rb, p.normal * d);
 
             // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
-            let dv = (vb + wb.cross(p.rb)) - (va + wa.cross(p.ra));
+            let dv = bb.point_velocity(p.rb) - ba.point_velocity(p.ra);
             let old = p.tangent_impulse;
             let mut new = old;
             for (t, m) in tangents.iter().zip(p.tangent_mass) {
@@ -527,11 +521,8 @@ pub fn solve(
             }
             p.tangent_impulse = new;
             let d = new - old;
-            let (pa, pb) = (-d, d);
-            va += pa * ma;
-            wa += ia * p.ra.cross(pa);
-            vb += pb * mb;
-            wb += ib * p.rb.cross(pb);
+            ba.apply_impulse(p.ra, -d);
+            bb.apply_impulse(p.rb, d);
         }
         // Rolling resistance: drive the relative angular velocity to zero with at most
         // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
@@ -542,20 +533,18 @@ pub fn solve(
                     .iter()
                     .map(|c| c.data.normal_impulse)
                     .sum::<f32>();
-            let k = ia + ib;
+            let k = ba.inv_inertia + bb.inv_inertia;
             if k.determinant().abs() > 1e-20 {
-                let w = wb - wa;
+                let w = bb.w - ba.w;
                 let old = pair.rolling_impulse;
                 let new = (old - k.inverse() * w).clamp_length_max(cap);
                 pair.rolling_impulse = new;
-                wa += ia * -(new - old);
-                wb += ib * (new - old);
+                ba.apply_angular_impulse(-(new - old));
+                bb.apply_angular_impulse(new - old);
             }
         }
-        s.lin_vel[a] = va;
-        s.ang_vel[a] = wa;
-        s.lin_vel[b] = vb;
-        s.ang_vel[b] = wb;
+        ba.store(s, a);
+        bb.store(s, b);
     }
 }
 
