@@ -146,24 +146,29 @@ impl Bone {
         self.com + (self.dcom + self.rot * local)
     }
 
-    /// Largest relative stick-length error of the bone now.
-    pub fn stretch(&self, x: &[Vec3]) -> f32 {
+    /// Improved mode: particle `k`, rigidly placed in the frame. Between substeps this is
+    /// where the solver's particle is; the improved world stores no particle arrays.
+    pub fn corner(&self, k: usize) -> Vec3 {
+        self.world(self.rest[k])
+    }
+
+    /// Improved mode: the velocity of particle `k` as the next substep starts from it,
+    /// the frame's rigid motion `v + ω × (R rest_k)`.
+    pub fn corner_velocity(&self, k: usize) -> Vec3 {
+        self.lin_vel + self.ang_vel.cross(self.rot * self.rest[k])
+    }
+
+    /// Largest relative stick-length error of the bone whose particles are `corners`.
+    pub fn stretch(&self, corners: &[Vec3; 4]) -> f32 {
         let mut worst = 0.0f32;
         for (k, &(i, j)) in EDGES.iter().enumerate() {
-            let l = x[self.particles[i] as usize].distance(x[self.particles[j] as usize]);
+            let l = corners[i].distance(corners[j]);
             let r = self.stick_rest[k];
             if r > 0.0 {
                 worst = worst.max((l - r).abs() / r);
             }
         }
         worst
-    }
-
-    /// Rewrites the particles from the frame: the rigid placement.
-    pub fn write_particles(&self, x: &mut [Vec3]) {
-        for k in 0..4 {
-            x[self.particles[k] as usize] = self.world(self.rest[k]);
-        }
     }
 
     /// Shape matching (Müller et al. 2005): the rigid frame that best fits the current

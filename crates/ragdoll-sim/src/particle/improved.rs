@@ -9,7 +9,7 @@
 //! 3. one Gauss–Seidel pass over contacts, joints and limits, each a rigid correction
 //!    of the bone frames weighted by generalised inverse mass (contacts first, so a
 //!    joint is what holds last);
-//! 4. rewrite the particles from the frames and derive `v = (x − x_prev)/h`;
+//! 4. derive the velocities from the particles' displacements, `v = (x − x_prev)/h`;
 //! 5. the velocity pass: restitution, air friction.
 //!
 //! Energy: every step is a projection or a dissipative velocity change; the only source
@@ -24,16 +24,29 @@ use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use glam::Vec3;
 
-/// Collision detection for the frame, with each bone's margin from its speed.
+/// Distance within which contacts are created before touching (speculative, m).
+const SPECULATIVE_DISTANCE: f32 = 0.005;
+
+/// Collision detection for the rest of the frame, `dt`.
+///
+/// Each bone's box is loosened by how far any of its points may travel, `(|v| + |ω| r)
+/// dt + g dt²`, so the broad phase finds every pair that may meet. A pair's contacts are
+/// then created within the distance it may close: its points approach at most
+/// `|v_a − v_b| + |ω_a| r_a + |ω_b| r_b`, so limbs falling side by side make none
+/// (a falling stack made a speculative point for every box it held).
 fn detect(w: &mut ParticleWorld, dt: f32) {
     let g = w.settings.gravity.length();
+    let reach = g * dt * dt + SPECULATIVE_DISTANCE;
+    let spins: Vec<f32> = w
+        .bones
+        .iter()
+        .map(|b| b.ang_vel.length() * b.shape.compute_local_aabb().half_extents().length())
+        .collect();
     let margins: Vec<f32> = w
         .bones
         .iter()
-        .map(|b| {
-            let ext = b.shape.compute_local_aabb().half_extents().length();
-            (b.lin_vel.length() + b.ang_vel.length() * ext) * dt + g * dt * dt + 0.005
-        })
+        .zip(&spins)
+        .map(|(b, spin)| (b.lin_vel.length() + spin) * dt + reach)
         .collect();
     let mut pairs = std::mem::take(&mut w.pairs);
     broad_phase(&w.bones, &margins, &w.filter, &mut pairs);
@@ -41,7 +54,8 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     contacts.clear();
     let bones = &w.bones;
     for &(i, j) in &pairs {
-        let prediction = margins[i] + margins[j];
+        let approach = (bones[i].lin_vel - bones[j].lin_vel).length() + spins[i] + spins[j];
+        let prediction = approach * dt + 2.0 * reach;
         let mu = (bones[i].friction * bones[j].friction).sqrt();
         let e = bones[i].restitution.max(bones[j].restitution);
         let first = contacts.manifolds.len();
@@ -86,25 +100,17 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
     }
 }
 
-/// Derives each bone's velocity from its particles' velocities `v`: `v = Σ m v_i / M`
-/// and `ω = I⁻¹ Σ m r_i × v_i` (angular momentum over inertia).
-fn bone_velocities(bones: &mut [Bone], v: &[Vec3]) {
-    for b in bones.iter_mut() {
-        if b.is_static() {
-            b.lin_vel = Vec3::ZERO;
-            b.ang_vel = Vec3::ZERO;
-            continue;
-        }
-        let vi = b.particles.map(|p| v[p as usize]);
-        let vc = (vi[0] + vi[1] + vi[2] + vi[3]) * 0.25;
-        let m = b.mass * 0.25;
-        let mut l = Vec3::ZERO;
-        for (r, v) in b.rest.iter().zip(&vi) {
-            l += (b.rot * *r).cross(*v - vc) * m;
-        }
-        b.lin_vel = vc;
-        b.ang_vel = b.inv_inertia_mul(l);
+/// The bone's velocity from its particles' velocities `v_k` over the substep:
+/// `v = Σ m v_k / M` and `ω = I⁻¹ Σ m r_k × v_k` (angular momentum over inertia).
+fn velocity_from_particles(b: &mut Bone, vk: &[Vec3; 4]) {
+    let vc = (vk[0] + vk[1] + vk[2] + vk[3]) * 0.25;
+    let m = b.mass * 0.25;
+    let mut l = Vec3::ZERO;
+    for (r, v) in b.rest.iter().zip(vk) {
+        l += (b.rot * *r).cross(*v - vc) * m;
     }
+    b.lin_vel = vc;
+    b.ang_vel = b.inv_inertia_mul(l);
 }
 
 /// Collision detection runs this many times per frame (every few substeps): a limb
@@ -131,13 +137,15 @@ pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
 
 /// What the substeps between two collision detections read and write: the world's
 /// own arrays, or a batch of islands gathered into arrays of its own (`islands`). Every
-/// index — a contact's bones, a bone's particles, a joint's sides — is into these.
+/// index — a contact's bones, a joint's sides — is into these.
+///
+/// There are no particle arrays: a bone's four particles sit rigidly in its frame at
+/// the end of every substep, at `world(rest_k)` with velocity `lin_vel + ω × (R rest_k)`
+/// (`Bone::corner`, `Bone::corner_velocity`), so they are evaluated where a substep
+/// needs them instead of being stored three times over (positions, previous positions,
+/// velocities: 144 B a bone, and the traffic of writing them every substep).
 pub(super) struct Part<'a> {
     pub bones: &'a mut [Bone],
-    /// Particle positions, previous positions and velocities.
-    pub x: &'a mut [Vec3],
-    pub x_prev: &'a mut [Vec3],
-    pub v: &'a mut [Vec3],
     /// Contact manifolds as detected, and their points (`Manifold::range`).
     pub manifolds: &'a [Manifold],
     pub points: &'a mut [ContactPoint],
@@ -160,9 +168,8 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             }
             let mut u = [Vec3::ZERO; 4];
             for (k, uk) in u.iter_mut().enumerate() {
-                let i = b.particles[k] as usize;
-                p.v[i] += s.gravity * h;
-                *uk = b.rot * b.rest[k] + p.v[i] * h;
+                let v = b.corner_velocity(k) + s.gravity * h;
+                *uk = b.rot * b.rest[k] + v * h;
             }
             b.shape_match(&u);
         }
@@ -186,24 +193,18 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 super::grab_improved(p.bones, g, h);
             }
         }
-        // 4. velocities from the particles' displacements, particles from the frames
+        // 4. velocities from the particles' displacements; the frame origin moves on
         for b in p.bones.iter_mut() {
             if b.is_static() {
+                b.lin_vel = Vec3::ZERO;
+                b.ang_vel = Vec3::ZERO;
                 continue;
             }
-            for k in 0..4 {
-                let i = b.particles[k] as usize;
-                p.v[i] = b.displacement(b.rest[k]) / h;
-            }
+            let vk: [Vec3; 4] = std::array::from_fn(|k| b.displacement(b.rest[k]) / h);
+            velocity_from_particles(b, &vk);
             b.com += b.dcom;
             b.dcom = Vec3::ZERO;
-            for k in 0..4 {
-                let i = b.particles[k] as usize;
-                p.x_prev[i] = b.prev_com + b.prev_rot * b.rest[k];
-            }
-            b.write_particles(p.x);
         }
-        bone_velocities(p.bones, p.v);
         // 5. velocity pass (contact points are relative to the updated frames)
         for _ in 0..VELOCITY_PASSES {
             for m in p.manifolds {
@@ -218,10 +219,6 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             }
             b.lin_vel *= (1.0 - b.air.0 * h).max(0.0);
             b.ang_vel *= (1.0 - b.air.1 * h).max(0.0);
-            for k in 0..4 {
-                let i = b.particles[k] as usize;
-                p.v[i] = b.lin_vel + b.ang_vel.cross(b.rot * b.rest[k]);
-            }
         }
     }
 }
@@ -236,7 +233,9 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let dt = s.timestep;
     let n_sub = substeps(&s);
     let h = dt / n_sub as f32;
-    w.particles.frame_start.clone_from(&w.particles.x);
+    w.frame_starts.clear();
+    w.frame_starts
+        .extend(w.bones.iter().map(|b| (b.com, b.rot)));
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
     // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is
@@ -255,9 +254,6 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             None => {
                 let mut part = Part {
                     bones: &mut w.bones,
-                    x: &mut w.particles.x,
-                    x_prev: &mut w.particles.x_prev,
-                    v: &mut w.particles.v,
                     manifolds: &w.contacts.manifolds,
                     points: &mut w.contacts.points,
                     joints: JointSet::All(&w.joints),
@@ -286,9 +282,5 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         let b = &mut w.bones[i];
         b.lin_vel = Vec3::ZERO;
         b.ang_vel = Vec3::ZERO;
-        for &p in &b.particles {
-            w.particles.v[p as usize] = Vec3::ZERO;
-            w.particles.x_prev[p as usize] = w.particles.x[p as usize];
-        }
     }
 }

@@ -187,17 +187,14 @@ impl Plan {
 }
 
 /// A batch of islands in dense arrays of its own: its moving bones first, then copies
-/// of the static bones its constraints read; bone `k`'s particles at `4k..4k + 4`; its
-/// contacts and joints in world order, their bones renumbered.
+/// of the static bones its constraints read; its contacts and joints in world order,
+/// their bones renumbered.
 struct Batch {
     /// World index of each bone.
     world_bones: Vec<u32>,
     /// How many of the bones move (and are written back).
     moving: usize,
     bones: Vec<Bone>,
-    x: Vec<Vec3>,
-    x_prev: Vec<Vec3>,
-    v: Vec<Vec3>,
     /// Its manifolds, their points rebased onto `points`.
     manifolds: Vec<Manifold>,
     points: Vec<ContactPoint>,
@@ -237,24 +234,10 @@ impl Batch {
         let renumber = |s: Side| s.map(local_of);
 
         let world_bones: Vec<u32> = m.bones.iter().chain(&statics).copied().collect();
-        let nb = world_bones.len();
-        let mut bones = Vec::with_capacity(nb);
-        let (mut x, mut x_prev, mut v) = (
-            Vec::with_capacity(4 * nb),
-            Vec::with_capacity(4 * nb),
-            Vec::with_capacity(4 * nb),
-        );
-        for (k, &i) in world_bones.iter().enumerate() {
-            let mut b = w.bones[i as usize].clone();
-            for (c, p) in b.particles.iter_mut().enumerate() {
-                let q = *p as usize;
-                x.push(w.particles.x[q]);
-                x_prev.push(w.particles.x_prev[q]);
-                v.push(w.particles.v[q]);
-                *p = (4 * k + c) as u32;
-            }
-            bones.push(b);
-        }
+        let bones = world_bones
+            .iter()
+            .map(|&i| w.bones[i as usize].clone())
+            .collect();
         let mut manifolds = Vec::with_capacity(m.manifolds.len());
         let mut points = Vec::new();
         for &k in &m.manifolds {
@@ -281,31 +264,21 @@ impl Batch {
             world_bones,
             moving,
             bones,
-            x,
-            x_prev,
-            v,
             manifolds,
             points,
             joints,
         }
     }
 
-    /// Writes the moving bones, their particles and the contacts' multipliers back.
+    /// Writes the moving bones and the contacts' multipliers back.
     fn scatter(self, m: &Members, w: &mut ParticleWorld) {
         let moving = self
             .bones
             .into_iter()
             .zip(&self.world_bones)
             .take(self.moving);
-        for (k, (bone, &i)) in moving.enumerate() {
-            let particles = w.bones[i as usize].particles;
-            for (c, &p) in particles.iter().enumerate() {
-                let p = p as usize;
-                w.particles.x[p] = self.x[4 * k + c];
-                w.particles.x_prev[p] = self.x_prev[4 * k + c];
-                w.particles.v[p] = self.v[4 * k + c];
-            }
-            w.bones[i as usize] = Bone { particles, ..bone };
+        for (bone, &i) in moving {
+            w.bones[i as usize] = bone;
         }
         for (local, &k) in self.manifolds.iter().zip(&m.manifolds) {
             let world = w.contacts.manifolds[k as usize].range();
@@ -334,9 +307,6 @@ pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f3
             let mut batch = Batch::gather(m, &plan.local, world);
             let mut part = Part {
                 bones: &mut batch.bones,
-                x: &mut batch.x,
-                x_prev: &mut batch.x_prev,
-                v: &mut batch.v,
                 manifolds: &batch.manifolds,
                 points: &mut batch.points,
                 joints: JointSet::Batch(&world.joints, &batch.joints),

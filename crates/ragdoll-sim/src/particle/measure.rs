@@ -19,17 +19,32 @@ use glam::Vec3;
 /// The sample for the current state.
 pub(crate) fn sample(w: &ParticleWorld) -> Sample {
     let dt = w.settings.timestep;
-    let p = &w.particles;
     let mut kinetic = 0.0f64;
     let mut potential = 0.0f64;
-    for i in 0..p.len() {
-        let m = p.mass[i];
-        if m <= 0.0 {
-            continue;
-        }
-        let v = (p.x[i] - p.frame_start[i]) / dt;
+    let mut add = |m: f32, x: Vec3, x_start: Vec3| {
+        let v = (x - x_start) / dt;
         kinetic += 0.5 * m as f64 * v.length_squared() as f64;
-        potential += potential_energy(&w.settings, m, p.x[i]);
+        potential += potential_energy(&w.settings, m, x);
+    };
+    match w.solver {
+        ParticleSolver::Improved => {
+            for (b, &(com, rot)) in w.bones.iter().zip(&w.frame_starts) {
+                if b.fixed {
+                    continue;
+                }
+                for (k, r) in b.rest.iter().enumerate() {
+                    add(b.mass * 0.25, b.corner(k), com + (Vec3::ZERO + rot * *r));
+                }
+            }
+        }
+        ParticleSolver::Paper => {
+            let p = &w.particles;
+            for i in 0..p.len() {
+                if p.mass[i] > 0.0 {
+                    add(p.mass[i], p.x[i], p.frame_start[i]);
+                }
+            }
+        }
     }
     let mut pen = 0.0f32;
     let zero = vec![0.0; w.bones.len()];
@@ -65,7 +80,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         .bones
         .iter()
         .filter(|b| !b.fixed)
-        .map(|b| b.stretch(&p.x))
+        .map(|b| b.stretch(&w.corners(b)))
         .fold(0.0, f32::max);
     let all_asleep =
         w.solver == ParticleSolver::Improved && w.bones.iter().all(|b| b.fixed || b.asleep);
@@ -83,21 +98,25 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
 /// The state's energy: particle velocities as the integrator holds them (paper mode:
 /// Verlet's `(x − x_old)/Δt`; improved mode: the velocities after the last substep).
 pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
-    let p = &w.particles;
     let dt = w.settings.timestep;
-    let mut e = 0.0f64;
-    for i in 0..p.len() {
-        let m = p.mass[i];
-        if m <= 0.0 {
-            continue;
+    let energy = |m: f32, v: Vec3, x: Vec3| {
+        0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.settings, m, x)
+    };
+    match w.solver {
+        ParticleSolver::Improved => w
+            .bones
+            .iter()
+            .filter(|b| !b.fixed)
+            .flat_map(|b| (0..4).map(|k| energy(b.mass * 0.25, b.corner_velocity(k), b.corner(k))))
+            .sum(),
+        ParticleSolver::Paper => {
+            let p = &w.particles;
+            (0..p.len())
+                .filter(|&i| p.mass[i] > 0.0)
+                .map(|i| energy(p.mass[i], (p.x[i] - p.x_prev[i]) / dt, p.x[i]))
+                .sum()
         }
-        let v = match w.solver {
-            ParticleSolver::Improved => p.v[i],
-            ParticleSolver::Paper => (p.x[i] - p.x_prev[i]) / dt,
-        };
-        e += 0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.settings, m, p.x[i]);
     }
-    e
 }
 
 /// Kinematic state of every bone, as its frame implies.

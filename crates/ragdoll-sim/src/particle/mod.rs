@@ -7,7 +7,7 @@
 //!   the bones' frames; generalised-inverse-mass corrections; substeps; contact
 //!   manifolds with Coulomb friction and restitution; sleeping.
 //!
-//! Files, one concept each: `particles` (storage, Verlet), `bone` (tetrahedron, frame,
+//! Files, one concept each: `particles` (the paper's storage, Verlet), `bone` (tetrahedron, frame,
 //! rigid corrections), `placement` (particulation), `joints`, `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
 //! `improved` and `paper` (the two solver loops), `islands` (the improved loop on all
@@ -71,7 +71,12 @@ pub struct ParticleWorld {
     /// Bodies of the scene; later ones are projectiles (`add_body`).
     scene_bodies: usize,
     solver: ParticleSolver,
+    /// The paper's particles. The improved solver keeps none: its particles are the
+    /// corners of the bone frames (`Bone::corner`).
     particles: Particles,
+    /// Improved mode: each bone's frame (origin, orientation) at the start of the
+    /// current frame, for the energy metric's `(x(t) − x(t−dt))/dt`.
+    frame_starts: Vec<(Vec3, Quat)>,
     bones: Vec<Bone>,
     joints: Vec<Joint>,
     filter: Filter,
@@ -94,6 +99,7 @@ impl ParticleWorld {
             scene_bodies: scene.bodies.len(),
             solver,
             particles: Particles::default(),
+            frame_starts: Vec::new(),
             bones: Vec::new(),
             joints: Vec::new(),
             filter: Filter::default(),
@@ -192,12 +198,24 @@ impl ParticleWorld {
             .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
         let s = &self.settings;
         let (dt, g) = (s.timestep, s.gravity);
-        let h = if self.solver == ParticleSolver::Improved {
-            dt / improved::substeps(s) as f32
-        } else {
-            dt
-        };
         let movable = !desc.is_fixed();
+        if self.solver == ParticleSolver::Improved {
+            // The velocity form of Verlet keeps its velocity half a substep back,
+            // `v − ½ g h` (see `Particles::push`), which makes free fall exact. The
+            // frame a step earlier, for the first frame's energy, is the motion run
+            // backwards: `x − v dt + ½ g dt²`, turned back by `ω dt`.
+            let h = dt / improved::substeps(s) as f32;
+            if movable {
+                bone.lin_vel -= g * (0.5 * h);
+                let start = bone.com - desc.linear_velocity * dt + g * (0.5 * dt * dt);
+                let turn = Quat::from_scaled_axis(-desc.angular_velocity * dt);
+                self.frame_starts
+                    .push((start, (turn * bone.rot).normalize()));
+            } else {
+                self.frame_starts.push((bone.com, bone.rot));
+            }
+            return Ok(bone);
+        }
         for k in 0..4 {
             let x = bone.world(p.rest[k]);
             let v = desc.linear_velocity + desc.angular_velocity.cross(x - bone.com);
@@ -206,12 +224,20 @@ impl ParticleWorld {
                 v,
                 g,
                 dt,
-                h,
                 if movable { mp.mass * 0.25 } else { 0.0 },
                 movable,
             );
         }
         Ok(bone)
+    }
+
+    /// Where a bone's four particles are now: the paper's particles, or the corners of
+    /// the improved bone's frame.
+    pub(crate) fn corners(&self, b: &Bone) -> [Vec3; 4] {
+        match self.solver {
+            ParticleSolver::Improved => std::array::from_fn(|k| b.corner(k)),
+            ParticleSolver::Paper => b.particles.map(|p| self.particles.x[p as usize]),
+        }
     }
 
     /// Figures: connected components of the joint graph.
@@ -389,13 +415,22 @@ impl Method for ParticleWorld {
                 pose: b.shape_pose(),
                 role,
             });
-            for (k, &(i, j)) in EDGES.iter().enumerate() {
-                let _ = k;
+            let corners = self.corners(b);
+            for &(i, j) in &EDGES {
                 out.sticks.push(StickInstance {
-                    a: self.particles.x[b.particles[i] as usize],
-                    b: self.particles.x[b.particles[j] as usize],
+                    a: corners[i],
+                    b: corners[j],
                     role: StickRole::Bone,
                 });
+            }
+            if self.solver == ParticleSolver::Improved {
+                let role = if b.fixed {
+                    ParticleRole::Fixed
+                } else {
+                    ParticleRole::Internal
+                };
+                out.particles
+                    .extend(corners.map(|position| ParticleInstance { position, role }));
             }
         }
         for i in 0..self.particles.len() {
@@ -469,7 +504,10 @@ impl Method for ParticleWorld {
     }
 
     fn particle_count(&self) -> usize {
-        self.particles.len()
+        match self.solver {
+            ParticleSolver::Improved => 4 * self.bones.len(),
+            ParticleSolver::Paper => self.particles.len(),
+        }
     }
 
     fn body_states(&self, out: &mut Vec<BodyState>) {
@@ -478,7 +516,10 @@ impl Method for ParticleWorld {
 
     fn particle_positions(&self, out: &mut Vec<Vec3>) {
         out.clear();
-        out.extend_from_slice(&self.particles.x);
+        match self.solver {
+            ParticleSolver::Improved => out.extend(self.bones.iter().flat_map(|b| self.corners(b))),
+            ParticleSolver::Paper => out.extend_from_slice(&self.particles.x),
+        }
     }
 
     fn raycast(&self, origin: Vec3, dir: Vec3) -> Option<RayHit> {

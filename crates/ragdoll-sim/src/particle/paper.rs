@@ -139,7 +139,7 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         };
         let mut ids = Vec::new();
         for p in pts {
-            let id = w.particles.push(p, Vec3::ZERO, g, dt, dt, 0.0, movable);
+            let id = w.particles.push(p, Vec3::ZERO, g, dt, 0.0, movable);
             w.particles.joint[id as usize] = true;
             joint_points[b1].push((p, id));
             if let Some(b) = b2 {
@@ -205,7 +205,7 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         for k in 0..4 {
             particles[k] = if ids[k] == u32::MAX {
                 let v = v0 + body.angular_velocity.cross(chosen[k] - body.pose.position);
-                w.particles.push(chosen[k], v, g, dt, dt, 0.0, movable)
+                w.particles.push(chosen[k], v, g, dt, 0.0, movable)
             } else {
                 ids[k]
             };
@@ -267,7 +267,7 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
                 } else {
                     for &p in &w.bones[b1].particles.clone() {
                         let x = w.particles.x[p as usize];
-                        let anchor = w.particles.push(x, Vec3::ZERO, g, dt, dt, 0.0, false);
+                        let anchor = w.particles.push(x, Vec3::ZERO, g, dt, 0.0, false);
                         st.sticks.push(Stick {
                             a: p,
                             b: anchor,
@@ -334,7 +334,7 @@ fn hinge_limit(
             let off =
                 -radial.normalize_or(axis.any_orthonormal_vector()) * radial.length().max(0.05);
             w.particles
-                .push(x1 + off, Vec3::ZERO, Vec3::ZERO, dt, dt, 0.0, false)
+                .push(x1 + off, Vec3::ZERO, Vec3::ZERO, dt, 0.0, false)
         }
     };
     let xa = w.particles.x[ref_a as usize];
@@ -405,7 +405,6 @@ fn cone_limit(
             xj - axis * a_len.max(0.05),
             Vec3::ZERO,
             Vec3::ZERO,
-            dt,
             dt,
             0.0,
             false,

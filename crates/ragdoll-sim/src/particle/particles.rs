@@ -1,10 +1,11 @@
-//! Particle storage and the two integrators (section 2.5 of the paper).
+//! The paper solver's particle storage and its integrator (section 2.5 of the paper).
 //!
 //! Hot state in dense arrays addressed by particle index: position, previous position,
-//! velocity, mass. The paper's solver integrates with position Verlet,
-//! `x(t+Δt) = 2x(t) − x(t−Δt) + a Δt²` (eq. 41), keeping only positions; the improved
-//! solver uses the same scheme in its velocity form (`v += g h; x += v h`, which is
-//! algebraically identical) because restitution and friction need the velocity.
+//! mass. The paper's solver integrates with position Verlet,
+//! `x(t+Δt) = 2x(t) − x(t−Δt) + a Δt²` (eq. 41), keeping only positions. The improved
+//! solver uses the same scheme in its velocity form (`v += g h; x += v h`, algebraically
+//! identical) on particles that are the corners of its rigid bone frames, so it keeps
+//! them in the frames (`Bone::corner`) and needs none of this.
 
 use glam::Vec3;
 
@@ -15,8 +16,6 @@ pub(crate) struct Particles {
     pub x: Vec<Vec3>,
     /// Positions one (sub)step ago: Verlet's implicit velocity.
     pub x_prev: Vec<Vec3>,
-    /// Explicit velocities (improved solver only).
-    pub v: Vec<Vec3>,
     /// Positions at the start of the current frame, for E(t)'s `(x(t) − x(t−dt))/dt`.
     pub frame_start: Vec<Vec3>,
     /// Mass carried by each particle (kg; 0 for particles of fixed bones).
@@ -32,15 +31,13 @@ impl Particles {
     ///
     /// Verlet's velocity lives half a step back: `(x₀ − x₋₁)/Δt = v(−Δt/2)`. Starting it
     /// there, `x₋₁ = x₀ − v Δt + ½ g Δt²`, makes free fall exact (eq. 41 is exact for a
-    /// parabola); the velocity form gets `v − ½ g h` for its substep `h`.
-    #[allow(clippy::too_many_arguments)] // one call site per placement; all plain values
+    /// parabola).
     pub fn push(
         &mut self,
         x: Vec3,
         v: Vec3,
         gravity: Vec3,
         dt: f32,
-        h: f32,
         mass: f32,
         movable: bool,
     ) -> u32 {
@@ -53,7 +50,6 @@ impl Particles {
         self.x.push(x);
         let prev = x - v * dt + g * (0.5 * dt * dt);
         self.x_prev.push(prev);
-        self.v.push(v - g * (0.5 * h));
         self.frame_start.push(prev);
         self.mass.push(mass);
         self.inv_mass.push(if movable { 1.0 } else { 0.0 });
