@@ -13,9 +13,8 @@
 //! then rewrites the four particles from the frame. For particles that reproduce M, c
 //! and I exactly this is the limit of infinitely stiff sticks, reached in one step.
 
-use crate::scene::Pose;
+use crate::scene::{BodyCollider, Pose};
 use glam::{Mat3, Quat, Vec3};
-use parry3d::shape::SharedShape;
 
 /// The six edges of a tetrahedron, as pairs of corner indices.
 pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
@@ -46,8 +45,8 @@ pub(crate) struct Bone {
     pub prev_rot: Quat,
     /// The shape frame expressed in the bone frame.
     pub shape_in_bone: Pose,
-    /// Collision shape (parry), in the shape frame.
-    pub shape: SharedShape,
+    /// Collision shape, in the shape frame.
+    pub shape: BodyCollider,
     /// Centre of mass in the shape frame.
     pub shape_com: Vec3,
     /// Total mass (kg).

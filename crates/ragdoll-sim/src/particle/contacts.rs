@@ -162,7 +162,13 @@ pub(crate) fn broad_phase(
     let aabbs: Vec<_> = bones
         .iter()
         .zip(margin)
-        .map(|(b, m)| b.shape.compute_aabb(&b.parry_pose()).loosened(*m))
+        .map(|(b, m)| {
+            b.shape
+                .get()
+                .shape()
+                .compute_aabb(&b.parry_pose())
+                .loosened(*m)
+        })
         .collect();
     let mut pairs = Vec::new();
     crate::broadphase::overlapping_pairs(&aabbs, &mut pairs);
@@ -193,8 +199,8 @@ pub(crate) fn shape_pair(
     if DefaultQueryDispatcher
         .contact_manifolds(
             &pos12,
-            bones[i].shape.as_ref(),
-            bones[j].shape.as_ref(),
+            bones[i].shape.get().shape(),
+            bones[j].shape.get().shape(),
             prediction,
             manifolds,
             &mut ws,
@@ -230,7 +236,7 @@ pub(crate) fn ground_pair(
         .contact_manifolds(
             &pos12,
             &plane,
-            bones[i].shape.as_ref(),
+            bones[i].shape.get().shape(),
             prediction,
             manifolds,
             &mut ws,

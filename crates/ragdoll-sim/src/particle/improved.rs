@@ -40,7 +40,15 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     let spins: Vec<f32> = w
         .bones
         .iter()
-        .map(|b| b.ang_vel.length() * b.shape.compute_local_aabb().half_extents().length())
+        .map(|b| {
+            b.ang_vel.length()
+                * b.shape
+                    .get()
+                    .shape()
+                    .compute_local_aabb()
+                    .half_extents()
+                    .length()
+        })
         .collect();
     let margins: Vec<f32> = w
         .bones

@@ -28,7 +28,8 @@ mod sleeping;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
-    BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider, mass_props, validate,
+    BodyCollider, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider,
+    mass_props, validate,
 };
 use crate::snapshot::{
     BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
@@ -126,7 +127,8 @@ impl ParticleWorld {
                 }
             }
             ParticleSolver::Paper => {
-                let st = paper::build(&mut w, scene, &masses);
+                let mut st = paper::build(&mut w, scene, &masses);
+                st.sticks.shrink_to_fit();
                 w.paper = Some(st);
             }
         }
@@ -142,6 +144,11 @@ impl ParticleWorld {
             }
         }
         w.exclude_rest_overlaps();
+        // Built by pushing, these arrays have up to twice the room they use; they keep
+        // their size from here on (a projectile is the only thing ever added).
+        w.bones.shrink_to_fit();
+        w.joints.shrink_to_fit();
+        w.particles.shrink_to_fit();
         Ok(w)
     }
 
@@ -158,7 +165,8 @@ impl ParticleWorld {
             prev_com: desc.pose.position,
             prev_rot: desc.pose.rotation,
             shape_in_bone: Pose::IDENTITY,
-            shape: collider(desc).unwrap_or_else(|_| SharedShape::ball(0.01)),
+            shape: BodyCollider::new(desc)
+                .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             mass,
             inv_inertia_local: Vec3::ZERO,
@@ -527,7 +535,7 @@ impl Method for ParticleWorld {
         let mut best: Option<RayHit> = None;
         for b in &self.bones {
             let pose = b.parry_pose();
-            if let Some(t) = b.shape.cast_ray(&pose, &ray, f32::MAX, true)
+            if let Some(t) = b.shape.get().shape().cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
                 let local = b.shape_pose().inverse_transform_point(origin + dir * t);

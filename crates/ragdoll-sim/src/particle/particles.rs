@@ -57,6 +57,16 @@ impl Particles {
         i
     }
 
+    /// Gives back the room the arrays grew beyond their length.
+    pub fn shrink_to_fit(&mut self) {
+        self.x.shrink_to_fit();
+        self.x_prev.shrink_to_fit();
+        self.frame_start.shrink_to_fit();
+        self.mass.shrink_to_fit();
+        self.inv_mass.shrink_to_fit();
+        self.joint.shrink_to_fit();
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.x.len()

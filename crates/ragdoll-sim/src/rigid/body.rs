@@ -6,9 +6,9 @@
 //! *static anchor*: a body with zero inverse mass and zero velocity that stands for the
 //! world (`body2 "world"`) and the ground, so constraint code never branches on it.
 
-use crate::scene::{BodyDesc, MassProps, Shape};
+use crate::scene::{BodyDesc, Collider, MassProps, Shape};
 use glam::{Mat3, Quat, Vec3};
-use parry3d::shape::{Capsule, Cone, Cuboid, Cylinder, Shape as ParryShape, SharedShape};
+use parry3d::shape::SharedShape;
 
 /// Hot per-body state, one entry per body plus the trailing static anchor.
 #[derive(Clone, Debug, Default)]
@@ -353,38 +353,10 @@ impl BodyInfo {
     /// `crate::scene::collider` builds (same constructor, same floats), made on the
     /// spot; for a convex hull, the one built with the body.
     pub fn collider<'a>(&self, hulls: &'a [SharedShape]) -> Collider<'a> {
-        match (&self.shape, hulls.get(self.hull as usize)) {
-            (_, Some(hull)) => Collider::Shared(hull),
-            (Shape::Box { half_extents }, None) => Collider::Cuboid(Cuboid::new(*half_extents)),
-            (
-                Shape::Capsule {
-                    half_height,
-                    radius,
-                },
-                None,
-            ) => {
-                let p = Vec3::Y * *half_height;
-                Collider::Capsule(Capsule::new(-p, p, *radius))
-            }
-            (
-                Shape::Cylinder {
-                    half_height,
-                    radius,
-                    ..
-                },
-                None,
-            ) => Collider::Cylinder(Cylinder::new(*half_height, *radius)),
-            (
-                Shape::Cone {
-                    half_height,
-                    radius,
-                    ..
-                },
-                None,
-            ) => Collider::Cone(Cone::new(*half_height, *radius)),
-            (Shape::ConvexHull { .. }, None) => {
-                unreachable!("BodyInfo::new keeps the collider of every convex hull")
-            }
+        match hulls.get(self.hull as usize) {
+            Some(hull) => Collider::Shared(hull),
+            None => Collider::primitive(&self.shape)
+                .expect("BodyInfo::new keeps the collider of every convex hull"),
         }
     }
 
@@ -399,34 +371,6 @@ impl BodyInfo {
     /// Smallest half extent of the shape: the radius of "resting on its flattest side".
     pub fn min_half_extent(&self) -> f32 {
         self.shape.local_half_extents().min_element()
-    }
-}
-
-/// A body's parry collider (see [`BodyInfo::collider`]): a primitive by value or a
-/// shape built once (a hull); [`Collider::shape`] is what parry's queries take.
-pub enum Collider<'a> {
-    /// A box.
-    Cuboid(Cuboid),
-    /// A Y-aligned capsule.
-    Capsule(Capsule),
-    /// A Y-aligned cylinder.
-    Cylinder(Cylinder),
-    /// A Y-aligned cone.
-    Cone(Cone),
-    /// A shape built once and shared: a convex hull, the ground's half-space.
-    Shared(&'a SharedShape),
-}
-
-impl Collider<'_> {
-    /// The shape for parry's queries.
-    pub fn shape(&self) -> &dyn ParryShape {
-        match self {
-            Collider::Cuboid(c) => c,
-            Collider::Capsule(c) => c,
-            Collider::Cylinder(c) => c,
-            Collider::Cone(c) => c,
-            Collider::Shared(h) => &***h,
-        }
     }
 }
 

@@ -12,9 +12,10 @@
 // Several per-body arrays are walked together by index.
 #![allow(clippy::needless_range_loop)]
 
-use super::body::{BodyInfo, BodyStates, Collider, SolverBody};
+use super::body::{BodyInfo, BodyStates, SolverBody};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
+use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};

@@ -6,11 +6,13 @@
 //! - [`md5mesh`]: the joints section of an `.md5mesh` bind pose for `joint("name")`.
 
 pub mod af;
+pub mod collider;
 pub mod desc;
 pub mod mass;
 pub mod md5mesh;
 mod validate;
 
+pub use collider::{BodyCollider, Collider};
 pub use desc::*;
 pub use mass::{MassProps, collider, mass_props, scene_mass_props};
 pub use validate::validate;
