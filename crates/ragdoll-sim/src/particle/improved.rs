@@ -94,6 +94,37 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
     w.pairs = pairs;
 }
 
+/// Wakes every sleeping figure a moving bone touches, before the substeps that would
+/// otherwise meet it as a static wall: a shot hitting a resting box would stop dead
+/// against it and the box, woken only at the end of the frame, would never feel the
+/// hit. (The end of the frame would wake it anyway: contacts join sleep islands.)
+/// Returns whether any bone woke.
+fn wake_touched(w: &mut ParticleWorld) -> bool {
+    let mut figures = Vec::new();
+    for m in &w.contacts.manifolds {
+        let Some(b) = m.b else { continue };
+        let (a, b) = (&w.bones[m.a], &w.bones[b]);
+        if a.fixed || b.fixed || a.asleep == b.asleep {
+            continue;
+        }
+        figures.push(if a.asleep { a.figure } else { b.figure });
+    }
+    if figures.is_empty() {
+        return false;
+    }
+    figures.sort_unstable();
+    figures.dedup();
+    for b in w.bones.iter_mut() {
+        if b.asleep && figures.binary_search(&b.figure).is_ok() {
+            b.asleep = false;
+            b.sleep_time = 0.0;
+            b.still_time = 0.0;
+            b.still_anchor = (b.center(), b.rot);
+        }
+    }
+    true
+}
+
 /// Contacts, manifold by manifold: each point's normal correction, then its friction
 /// against the manifold's Coulomb cone so far.
 fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
@@ -184,6 +215,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // relative normal velocity before the solve, for restitution
         for m in p.manifolds {
             for c in &mut p.points[m.range()] {
+                if c.lambda_n == 0.0 {
+                    super::friction::reanchor(p.bones, m, c);
+                }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
                 let pa = p.bones[m.a].world(c.ra);
@@ -255,7 +289,13 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         0
     };
     while sub < n_sub {
-        detect(w, dt * (n_sub - sub) as f32 / n_sub as f32);
+        let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
+        detect(w, rest_of_frame);
+        if wake_touched(w) {
+            // The woken figures' own contacts (with the ground, with each other) were
+            // skipped while they slept.
+            detect(w, rest_of_frame);
+        }
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
             Some(plan) => islands::run_substeps(w, &plan, count, h, &s),
