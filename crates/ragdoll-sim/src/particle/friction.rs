@@ -114,18 +114,16 @@ pub(crate) fn solve_friction(
     } else {
         sub
     };
-    let w = w_along(pulled);
-    let slip_t = if w > 0.0 && pulled.length() <= allowed * w {
-        pulled
+    let w_pulled = w_along(pulled);
+    let (slip_t, w) = if w_pulled > 0.0 && pulled.length() <= allowed * w_pulled {
+        (pulled, w_pulled)
+    } else if pulled == sub {
+        (sub, w_pulled)
     } else {
-        sub
+        (sub, w_along(sub))
     };
     let len = slip_t.length();
-    if len < 1e-9 {
-        return 0.0;
-    }
-    let w = w_along(slip_t);
-    if w <= 0.0 {
+    if len < 1e-9 || w <= 0.0 {
         return 0.0;
     }
     let frac = (allowed / (len / w)).min(1.0);
