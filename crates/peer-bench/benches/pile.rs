@@ -4,6 +4,7 @@
 //! ```text
 //! cargo bench -p peer-bench --bench pile                  # 1, 10, 100, 270, 1000 humans
 //! cargo bench -p peer-bench --bench pile -- 100 270 --frames 300
+//! cargo bench -p peer-bench --bench pile -- 100 --timeline   # and CPU ms per second
 //! ```
 //!
 //! All three run single-threaded (Rapier without its `parallel` feature), the same
@@ -14,7 +15,7 @@
 mod rapier_scene;
 
 use ragdoll_lab::bench::scale::{self, FrameCost};
-use ragdoll_lab::bench::{Flavor, median, thread_cpu_seconds};
+use ragdoll_lab::bench::{Flavor, median, on_threads, thread_cpu_seconds};
 use std::time::Instant;
 
 fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec<String>) {
@@ -60,13 +61,46 @@ fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec
     )
 }
 
+/// CPU milliseconds each engine spends in each simulated second of the pile (`frames`
+/// frames at 1/60 s): where a mean per frame comes from, active phase or rest.
+fn timeline(scene: &ragdoll_sim::SceneDesc, frames: usize) -> Result<Vec<[f64; 3]>, String> {
+    let seconds = frames.div_ceil(60);
+    let mut out = vec![[0.0; 3]; seconds];
+    let mut r = rapier_scene::build(scene);
+    for f in 0..frames {
+        let t0 = thread_cpu_seconds();
+        r.world.step();
+        out[f / 60][0] += 1e3 * (thread_cpu_seconds() - t0);
+    }
+    for (k, flavor) in [(1, Flavor::Multibody), (2, Flavor::ParticleImproved)] {
+        let ms = on_threads(1, || {
+            let mut m = flavor.build(scene)?;
+            let mut ms = vec![0.0; seconds];
+            for f in 0..frames {
+                let t0 = thread_cpu_seconds();
+                m.step();
+                ms[f / 60] += 1e3 * (thread_cpu_seconds() - t0);
+            }
+            Ok(ms)
+        })
+        .map_err(|e| e.to_string())?;
+        for (row, v) in out.iter_mut().zip(ms) {
+            row[k] = v;
+        }
+    }
+    Ok(out)
+}
+
 fn main() {
     // `cargo bench` passes `--bench`; numbers are human counts, `--frames F` the frames.
     let mut humans: Vec<u32> = Vec::new();
     let mut frames = scale::FRAMES;
+    let mut show_timeline = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        if a == "--frames" {
+        if a == "--timeline" {
+            show_timeline = true;
+        } else if a == "--frames" {
             frames = args.next().and_then(|f| f.parse().ok()).unwrap_or(frames);
         } else if let Ok(n) = a.parse() {
             humans.push(n);
@@ -130,6 +164,17 @@ fn main() {
         .flatten()
         .collect();
         println!("  mean body height at the end: {}", states.join(", "));
+        if show_timeline {
+            match timeline(&scene, frames) {
+                Ok(rows) => {
+                    println!("  CPU ms per simulated second (rapier / multibody / particle):");
+                    for (k, [r, m, p]) in rows.iter().enumerate() {
+                        println!("    {k:>2}-{:<2} s {r:9.1} {m:9.1} {p:9.1}", k + 1);
+                    }
+                }
+                Err(e) => println!("  timeline: {e}"),
+            }
+        }
         if n == 1 && !approx.is_empty() {
             println!("  Rapier approximations: {}", approx.join("; "));
         }
