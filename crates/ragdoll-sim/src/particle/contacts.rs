@@ -58,6 +58,11 @@ pub(crate) struct ContactPoint {
     pub lambda_t: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
     pub vn_before: f32,
+    /// Tangential offset `pa − pb` of the two points when they last came into touch (at
+    /// the start of the first substep of an unbroken run of touching ones): what they
+    /// drift from it since is slip static friction may take back
+    /// (`friction::ANCHOR_PULL`); their approach before touching is not.
+    pub touched_at: Vec3,
 }
 
 impl ContactPoint {
@@ -69,6 +74,7 @@ impl ContactPoint {
             lambda_n: 0.0,
             lambda_t: 0.0,
             vn_before: 0.0,
+            touched_at: Vec3::ZERO,
         }
     }
 }

@@ -50,7 +50,8 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
 }
 
 /// Share of a contact point's tangential drift since detection that static friction
-/// takes back per substep, on top of the substep's own slip.
+/// takes back per substep, on top of the substep's own slip, counted from when the
+/// point last came into touch (`ContactPoint::touched_at`).
 ///
 /// Friction runs before the joints in each pass, so the joints' last corrections leave
 /// a slip of a few micrometres a substep that a friction anchored at the substep's
@@ -60,9 +61,10 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
 /// drift comes back in one substep as a velocity of drift / h and the human jitters at
 /// 5–14 cm/s, never sleeping. Half a substep's drift (it halves every substep) stops the
 /// creep without the jitter. Measured with `ragdoll-lab stats` over 10 s (with
-/// [`DRIFT_MAX`] and `reanchor`): the human (scene 8) sleeps at 2.3 s instead of 5.1, the
-/// capsule human at 2.9 instead of 3.8, the piles of 10, 100 and 270 humans at 2.1, 3.3
-/// and 2.9 s instead of 2.3, 4.8 and 5.3; every other figure within the same bounds.
+/// [`DRIFT_MAX`] and `ContactPoint::touched_at`): the human (scene 8) sleeps at 2.9 s
+/// instead of 5.1, the capsule human at 3.0 instead of 3.8, the piles of 100, 270 and
+/// 1000 humans at 2.9, 3.8 and 4.5 s instead of 4.8, 5.3 and 5.7; every other figure
+/// within the same bounds.
 const ANCHOR_PULL: f32 = 0.5;
 
 /// Largest drift (m) static friction takes back ([`ANCHOR_PULL`]). The creep it is for
@@ -94,10 +96,10 @@ pub(crate) fn solve_friction(
     let pa = bones[m.a].world(c.ra);
     let pb = side_world(bones, m.b, c.rb);
     let tangential = |d: Vec3| d - m.n * d.dot(m.n);
-    // The substep's slip, and the drift since the point became active (`reanchor`):
-    // `pa − pb = drift + substep slip` along the tangent.
+    // The substep's slip, and the drift since the points came into touch:
+    // `pa − pb = touched_at + drift + substep slip` along the tangent.
     let sub = tangential(bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb));
-    let drift = tangential(pa - pb) - sub;
+    let drift = tangential(pa - pb) - sub - c.touched_at;
     let allowed = m.mu * group_n - group_t;
     if allowed <= 0.0 {
         return 0.0;
@@ -132,20 +134,14 @@ pub(crate) fn solve_friction(
     lt
 }
 
-/// Moves a contact point's anchor on side b under the point on side a, as they stand at
-/// the start of the substep: the drift static friction takes back ([`ANCHOR_PULL`]) is
-/// counted from the last substep the point was inactive, never from an approach before
-/// it touched. Only the tangential offset changes; the depth along the normal is kept.
-pub(crate) fn reanchor(bones: &[Bone], m: &Manifold, c: &mut ContactPoint) {
+/// Marks where a point that did not touch in the last substep stands, at the start of
+/// this one (`ContactPoint::touched_at`): if it touches now, its drift counts from here.
+pub(crate) fn mark_touch(bones: &[Bone], m: &Manifold, c: &mut ContactPoint) {
     let pa = bones[m.a].world(c.ra);
     let pb = side_world(bones, m.b, c.rb);
     let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
     let d = pa - pb - sub;
-    let shift = d - m.n * d.dot(m.n);
-    c.rb = match m.b {
-        Some(j) => bones[j].rot.inverse() * (pb + shift - bones[j].center()),
-        None => c.rb + shift,
-    };
+    c.touched_at = d - m.n * d.dot(m.n);
 }
 
 /// Applies a velocity impulse `p` at world point `at` to a side.

@@ -216,7 +216,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         for m in p.manifolds {
             for c in &mut p.points[m.range()] {
                 if c.lambda_n == 0.0 {
-                    super::friction::reanchor(p.bones, m, c);
+                    super::friction::mark_touch(p.bones, m, c);
                 }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;

@@ -17,7 +17,7 @@ use super::joints::Joint;
 use crate::scene::SleepSettings;
 
 /// Updates sleep timers and puts islands to sleep or wakes them. Returns the bones that
-/// just fell asleep so the caller can zero their particles' velocities. A `held` bone
+/// just fell asleep so the caller can zero their velocities. A `held` bone
 /// (the mouse grab) never rests: the user is moving it, however slowly, so its island
 /// stays awake until it is let go.
 #[allow(clippy::too_many_arguments)]
