@@ -54,6 +54,7 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         error: None,
         last: Instant::now(),
         grab_viewport: None,
+        hidden: false,
     };
     event_loop
         .run_app(&mut app)
@@ -84,6 +85,10 @@ struct App {
     last: Instant,
     /// The half a grab started in: the cursor's ray is taken through it while dragging.
     grab_viewport: Option<crate::render::Viewport>,
+    /// The window cannot be seen (occluded, or minimised to no pixels): no frame is
+    /// drawn or simulated, and the event loop sleeps until something happens, instead
+    /// of a hidden demo keeping a core busy.
+    hidden: bool,
 }
 
 impl App {
@@ -355,6 +360,24 @@ impl App {
     }
 }
 
+impl App {
+    /// Stops drawing and stepping while the window cannot be seen. The simulation pauses
+    /// with it and resumes where it was: the clock restarts on showing, so the hidden
+    /// time is not caught up.
+    fn set_hidden(&mut self, hidden: bool) {
+        if hidden == self.hidden {
+            return;
+        }
+        self.hidden = hidden;
+        if !hidden {
+            self.last = Instant::now();
+            if let Some(w) = &self.window {
+                w.window.request_redraw();
+            }
+        }
+    }
+}
+
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         if self.window.is_some() {
@@ -393,6 +416,11 @@ impl ApplicationHandler for App {
                     w.config.height = size.height;
                     w.surface.configure(&w.gpu.device, &w.config);
                 }
+                self.set_hidden(size.width == 0 || size.height == 0);
+                None
+            }
+            WindowEvent::Occluded(occluded) => {
+                self.set_hidden(*occluded);
                 None
             }
             WindowEvent::RedrawRequested => {
@@ -438,7 +466,7 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
-        if let Some(w) = &self.window {
+        if let Some(w) = self.window.as_ref().filter(|_| !self.hidden) {
             w.window.request_redraw();
         }
     }
