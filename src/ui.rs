@@ -28,8 +28,11 @@ pub struct UiModel<'a> {
 /// Builds the UI of one frame; returns the area left for the 3D view (points).
 pub fn build(ui: &mut egui::Ui, model: &mut UiModel) -> Rect {
     if model.state.panel {
+        // At most 40 % of a small window, so the two views keep room to be seen.
+        let widest = (ui.available_width() * 0.4).max(150.0);
         egui::Panel::left("panel")
-            .default_size(290.0)
+            .default_size(290.0_f32.min(widest))
+            .max_size(widest)
             .resizable(true)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| panel(ui, model));
@@ -71,13 +74,19 @@ fn labels(ctx: &egui::Context, area: Rect, model: &UiModel) {
     // 14 px in a 720 px tall view, smaller in small captures (never below 8 px).
     let font = (area.height() / 50.0).clamp(8.0, 14.0);
     for i in 0..2 {
-        let x = if i == 0 { area.min.x } else { mid };
+        let (x, half) = if i == 0 {
+            (area.min.x, mid - area.min.x)
+        } else {
+            (mid, area.max.x - mid)
+        };
         let text = format!(
             "{}\nstep {:.2} ms",
             side_title(session, i),
             session.step_ms[i]
         );
-        let galley = painter.layout_no_wrap(text, FontId::proportional(font), Color32::WHITE);
+        // Wrapped to its half, or a narrow window runs it into the other one.
+        let wrap = (half - 28.0).max(40.0);
+        let galley = painter.layout(text, FontId::proportional(font), Color32::WHITE, wrap);
         let pos = Pos2::new(x + 10.0, area.min.y + 10.0);
         let bg = Rect::from_min_size(pos, galley.size()).expand(6.0);
         painter.rect_filled(bg, 4.0, Color32::from_black_alpha(150));
