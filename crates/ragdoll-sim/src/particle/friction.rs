@@ -49,22 +49,23 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
     }
 }
 
-/// Share of a contact point's tangential drift since detection that static friction
-/// takes back per substep, on top of the substep's own slip, counted from when the
-/// point last came into touch (`ContactPoint::touched_at`).
+/// Share of a contact point's tangential drift since it came into touch
+/// (`ContactPoint::touched_at`) that static friction takes back per substep, on top of
+/// the substep's own slip.
 ///
 /// Friction runs before the joints in each pass, so the joints' last corrections leave
 /// a slip of a few micrometres a substep that a friction anchored at the substep's
 /// start never sees again: at 20 substeps a frame it adds up to a creep of about 1 cm/s
 /// on a resting limb, and a pile of humans stays awake for seconds (the 100-human pile
-/// slept at 4.8 s). Anchored at the detection instead (all of the drift, 1), the whole
-/// drift comes back in one substep as a velocity of drift / h and the human jitters at
+/// slept at 4.8 s). Taking all of the drift back (1), the whole drift comes back in one
+/// substep as a velocity of drift / h and the human jitters at
 /// 5–14 cm/s, never sleeping. Half a substep's drift (it halves every substep) stops the
-/// creep without the jitter. Measured with `ragdoll-lab stats` over 10 s (with
-/// [`DRIFT_MAX`] and `ContactPoint::touched_at`): the human (scene 8) sleeps at 2.9 s
-/// instead of 5.1, the capsule human at 3.0 instead of 3.8, the piles of 100, 270 and
-/// 1000 humans at 2.9, 3.8 and 4.5 s instead of 4.8, 5.3 and 5.7; every other figure
-/// within the same bounds.
+/// creep without the jitter. Measured over piles of 4 to 44 humans (`ragdoll-lab stats
+/// --scene pile --count N`, 11 distinct piles): they fall asleep at 1.5–2.9 s, mean 2.3,
+/// against 2.2–4.9 s, mean 3.6, with the pull at zero. One scene's sleep time alone is
+/// chaotic and moves by seconds with the rounding of a single operation (the human,
+/// scene 8: 2.9 s with the pull, 2.8 s without, 5.1 s before this code), so the test
+/// (`resting_piles_stop_creeping_and_sleep_sooner`) averages piles.
 const ANCHOR_PULL: f32 = 0.5;
 
 /// Largest drift (m) static friction takes back ([`ANCHOR_PULL`]). The creep it is for
@@ -76,7 +77,7 @@ const DRIFT_MAX: f32 = 1e-4;
 
 /// Friction position pass for one contact of a manifold whose normal multipliers sum to
 /// `group_n` and whose friction has spent `group_t` so far: cancel the contact point's
-/// tangential slip during the substep (and half its drift since detection,
+/// tangential slip during the substep (and half its drift since it came into touch,
 /// [`ANCHOR_PULL`]) entirely if that stays inside the Coulomb cone of the whole manifold
 /// (static), else as far as the cone allows (kinetic). Returns the tangential multiplier
 /// spent.
