@@ -286,27 +286,46 @@ pub(crate) fn rot_inv_mass(bones: &[Bone], s: Side, n: Vec3) -> f32 {
     }
 }
 
-/// Applies a positional impulse `p` (kg·m) at world point `at` to a side, rigidly.
-pub(crate) fn apply_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
-    if let Some(i) = s {
-        let b = &mut bones[i];
-        if b.is_static() {
-            return;
-        }
-        let dtheta = b.inv_inertia_mul((at - b.center()).cross(p));
-        b.dcom += p * b.inv_mass();
-        b.rot = rotate(b.rot, dtheta);
-    }
+/// One moving side of a correction along a unit direction: the bone, and `I⁻¹ (r × n)`
+/// in its frame. Computed once for the generalised inverse mass, `1/M + (r × n)ᵀ I⁻¹
+/// (r × n)`, and reused for the rotation the correction applies, `R I⁻¹ (r × n) λ`,
+/// instead of forming `r × n` and rotating it into the bone frame a second time.
+#[derive(Clone, Copy)]
+struct Lever {
+    bone: usize,
+    /// `I⁻¹ (r × n)` (or `I⁻¹ n` for a pure rotation) in the bone frame.
+    turn: Vec3,
 }
 
-/// Applies an angular impulse (kg·m²·rad) to a side, rigidly.
-pub(crate) fn apply_angular(bones: &mut [Bone], s: Side, l: Vec3) {
-    if let Some(i) = s {
-        let b = &mut bones[i];
+impl Lever {
+    /// The lever of side `s` for a correction along `n` at world point `p` (`None` for
+    /// a pure rotation about `n`), with its generalised inverse mass; no lever for a
+    /// static side.
+    #[inline]
+    fn of(bones: &[Bone], s: Side, p: Option<Vec3>, n: Vec3) -> (Option<Lever>, f32) {
+        let Some(i) = s else {
+            return (None, 0.0);
+        };
+        let b = &bones[i];
         if b.is_static() {
-            return;
+            return (None, 0.0);
         }
-        let dtheta = b.inv_inertia_mul(l);
+        let (axis, linear) = match p {
+            Some(p) => ((p - b.center()).cross(n), b.inv_mass()),
+            None => (n, 0.0),
+        };
+        let local = b.rot.inverse() * axis;
+        let turn = b.inv_inertia_local * local;
+        (Some(Lever { bone: i, turn }), linear + local.dot(turn))
+    }
+
+    /// Applies the correction `λ` along the lever's direction: the centre moves by
+    /// `n λ / M` (`linear`, zero for a pure rotation) and the frame turns by `R turn λ`.
+    #[inline]
+    fn apply(self, bones: &mut [Bone], linear: Vec3, lambda: f32) {
+        let b = &mut bones[self.bone];
+        b.dcom += linear * b.inv_mass();
+        let dtheta = b.rot * (self.turn * lambda);
         b.rot = rotate(b.rot, dtheta);
     }
 }
@@ -340,13 +359,19 @@ pub(crate) fn positional(
         return 0.0;
     }
     let n = delta / c;
-    let w = point_inv_mass(bones, a, pa, n) + point_inv_mass(bones, b, pb, n);
+    let (lever_a, wa) = Lever::of(bones, a, Some(pa), n);
+    let (lever_b, wb) = Lever::of(bones, b, Some(pb), n);
+    let w = wa + wb;
     if w + alpha_tilde <= 0.0 {
         return 0.0;
     }
     let lambda = c / (w + alpha_tilde);
-    apply_impulse(bones, a, pa, n * lambda);
-    apply_impulse(bones, b, pb, -n * lambda);
+    if let Some(l) = lever_a {
+        l.apply(bones, n * lambda, lambda);
+    }
+    if let Some(l) = lever_b {
+        l.apply(bones, -n * lambda, -lambda);
+    }
     lambda
 }
 
@@ -358,13 +383,19 @@ pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3, alpha_ti
         return;
     }
     let n = dphi / angle;
-    let w = rot_inv_mass(bones, a, n) + rot_inv_mass(bones, b, n);
+    let (lever_a, wa) = Lever::of(bones, a, None, n);
+    let (lever_b, wb) = Lever::of(bones, b, None, n);
+    let w = wa + wb;
     if w + alpha_tilde <= 0.0 {
         return;
     }
     let lambda = angle / (w + alpha_tilde);
-    apply_angular(bones, a, n * lambda);
-    apply_angular(bones, b, -n * lambda);
+    if let Some(l) = lever_a {
+        l.apply(bones, Vec3::ZERO, lambda);
+    }
+    if let Some(l) = lever_b {
+        l.apply(bones, Vec3::ZERO, -lambda);
+    }
 }
 
 /// Orientation of a side (identity for the world).
