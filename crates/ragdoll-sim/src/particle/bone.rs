@@ -342,6 +342,43 @@ pub(crate) fn rotate(q: Quat, theta: Vec3) -> Quat {
     .normalize()
 }
 
+/// A positional correction between two sides along a unit direction, its levers
+/// computed once: `w` is the generalised inverse mass along it (Müller et al. 2020,
+/// eq. 2–3), [`Correction::apply`] moves the points by `λ` along it.
+pub(crate) struct Correction {
+    a: Option<Lever>,
+    b: Option<Lever>,
+    n: Vec3,
+    /// Generalised inverse mass of the two sides along `n`.
+    pub w: f32,
+}
+
+impl Correction {
+    /// Moving point `pa` of side `a` along unit `n` and `pb` of `b` against it.
+    #[inline]
+    pub fn along(bones: &[Bone], (a, pa): (Side, Vec3), (b, pb): (Side, Vec3), n: Vec3) -> Self {
+        let (a, wa) = Lever::of(bones, a, Some(pa), n);
+        let (b, wb) = Lever::of(bones, b, Some(pb), n);
+        Correction {
+            a,
+            b,
+            n,
+            w: wa + wb,
+        }
+    }
+
+    /// Applies the multiplier `λ`: `pa − pb` changes by `n λ w`.
+    #[inline]
+    pub fn apply(self, bones: &mut [Bone], lambda: f32) {
+        if let Some(l) = self.a {
+            l.apply(bones, self.n * lambda, lambda);
+        }
+        if let Some(l) = self.b {
+            l.apply(bones, -self.n * lambda, -lambda);
+        }
+    }
+}
+
 /// XPBD positional constraint between two sides (Müller et al. 2020, eq. 2–5): moves
 /// the points so that `pa − pb` changes by `delta`, splitting by generalised inverse
 /// mass; `alpha_tilde` = compliance / h². Returns the Lagrange multiplier λ (≥ 0).
@@ -358,20 +395,12 @@ pub(crate) fn positional(
     if c < 1e-9 {
         return 0.0;
     }
-    let n = delta / c;
-    let (lever_a, wa) = Lever::of(bones, a, Some(pa), n);
-    let (lever_b, wb) = Lever::of(bones, b, Some(pb), n);
-    let w = wa + wb;
-    if w + alpha_tilde <= 0.0 {
+    let corr = Correction::along(bones, (a, pa), (b, pb), delta / c);
+    if corr.w + alpha_tilde <= 0.0 {
         return 0.0;
     }
-    let lambda = c / (w + alpha_tilde);
-    if let Some(l) = lever_a {
-        l.apply(bones, n * lambda, lambda);
-    }
-    if let Some(l) = lever_b {
-        l.apply(bones, -n * lambda, -lambda);
-    }
+    let lambda = c / (corr.w + alpha_tilde);
+    corr.apply(bones, lambda);
     lambda
 }
 

@@ -16,7 +16,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{Bone, Side, point_inv_mass, positional, rot_inv_mass, side_world};
+use super::bone::{Bone, Correction, Side, point_inv_mass, positional, rot_inv_mass, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::Vec3;
 
@@ -105,10 +105,8 @@ pub(crate) fn solve_friction(
     if allowed <= 0.0 {
         return 0.0;
     }
-    let w_along = |d: Vec3| {
-        let t = d.normalize_or_zero();
-        point_inv_mass(bones, a, pa, t) + point_inv_mass(bones, m.b, pb, t)
-    };
+    // Corrections move pa − pb against the slip.
+    let against = |d: Vec3| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
     // Static friction takes back the slip and a share of the drift when the cone allows
     // both; kinetic friction (or a static one that cannot afford the drift) acts on the
     // substep's slip alone, so it only ever opposes the motion it sees.
@@ -117,20 +115,21 @@ pub(crate) fn solve_friction(
     } else {
         sub
     };
-    let w_pulled = w_along(pulled);
-    let (slip_t, w) = if w_pulled > 0.0 && pulled.length() <= allowed * w_pulled {
-        (pulled, w_pulled)
+    let corr_pulled = against(pulled);
+    let (slip_t, corr) = if corr_pulled.w > 0.0 && pulled.length() <= allowed * corr_pulled.w {
+        (pulled, corr_pulled)
     } else if pulled == sub {
-        (sub, w_pulled)
+        (sub, corr_pulled)
     } else {
-        (sub, w_along(sub))
+        (sub, against(sub))
     };
     let len = slip_t.length();
-    if len < 1e-9 || w <= 0.0 {
+    if len < 1e-9 || corr.w <= 0.0 {
         return 0.0;
     }
-    let frac = (allowed / (len / w)).min(1.0);
-    let lt = positional(bones, a, m.b, pa, pb, -slip_t * frac, 0.0);
+    // λ = |correction| / w, the correction being the slip or as much as the cone allows.
+    let lt = (len / corr.w).min(allowed);
+    corr.apply(bones, lt);
     c.lambda_t += lt;
     lt
 }
