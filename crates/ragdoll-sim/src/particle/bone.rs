@@ -260,23 +260,6 @@ pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
     }
 }
 
-/// Generalised inverse mass of a side for a positional correction along unit `n` at
-/// world point `p`: `1/M + (r × n)ᵀ I⁻¹ (r × n)`.
-#[inline]
-pub(crate) fn point_inv_mass(bones: &[Bone], s: Side, p: Vec3, n: Vec3) -> f32 {
-    match s {
-        Some(i) => {
-            let b = &bones[i];
-            if b.is_static() {
-                return 0.0;
-            }
-            let rn = (p - b.center()).cross(n);
-            b.inv_mass() + b.inv_inertia_quad(rn)
-        }
-        None => 0.0,
-    }
-}
-
 /// Generalised inverse mass of a side for a rotation about unit `n`.
 #[inline]
 pub(crate) fn rot_inv_mass(bones: &[Bone], s: Side, n: Vec3) -> f32 {
@@ -317,6 +300,15 @@ impl Lever {
         let local = b.rot.inverse() * axis;
         let turn = b.inv_inertia_local * local;
         (Some(Lever { bone: i, turn }), linear + local.dot(turn))
+    }
+
+    /// Applies the velocity impulse `λ` along the lever's direction: the centre's
+    /// velocity changes by `n λ / M` (`linear`) and the angular one by `R turn λ`.
+    #[inline]
+    fn apply_velocity(self, bones: &mut [Bone], linear: Vec3, lambda: f32) {
+        let b = &mut bones[self.bone];
+        b.lin_vel += linear * b.inv_mass();
+        b.ang_vel += b.rot * (self.turn * lambda);
     }
 
     /// Applies the correction `λ` along the lever's direction: the centre moves by
@@ -375,6 +367,18 @@ impl Correction {
         }
         if let Some(l) = self.b {
             l.apply(bones, -self.n * lambda, -lambda);
+        }
+    }
+
+    /// Applies the velocity impulse `λ`: the velocity of `pa` relative to `pb` changes
+    /// by `n λ w`.
+    #[inline]
+    pub fn apply_velocity(self, bones: &mut [Bone], lambda: f32) {
+        if let Some(l) = self.a {
+            l.apply_velocity(bones, self.n * lambda, lambda);
+        }
+        if let Some(l) = self.b {
+            l.apply_velocity(bones, -self.n * lambda, -lambda);
         }
     }
 }

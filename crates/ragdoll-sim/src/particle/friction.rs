@@ -16,7 +16,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{Bone, Correction, Side, point_inv_mass, positional, rot_inv_mass, side_world};
+use super::bone::{Bone, Correction, Side, positional, rot_inv_mass, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::Vec3;
 
@@ -144,19 +144,6 @@ pub(crate) fn mark_touch(bones: &[Bone], m: &Manifold, c: &mut ContactPoint) {
     c.touched_at = d - m.n * d.dot(m.n);
 }
 
-/// Applies a velocity impulse `p` at world point `at` to a side.
-fn apply_velocity_impulse(bones: &mut [Bone], s: Side, at: Vec3, p: Vec3) {
-    if let Some(i) = s {
-        let b = &mut bones[i];
-        if b.is_static() {
-            return;
-        }
-        let dw = b.inv_inertia_mul((at - b.center()).cross(p));
-        b.lin_vel += p * b.inv_mass();
-        b.ang_vel += dw;
-    }
-}
-
 /// Radius of the contact patch a point contact stands for (m): the lever arm of its
 /// torsional friction. A box resting on one corner otherwise spins about the normal
 /// without losing energy, since a point cannot resist twist.
@@ -184,11 +171,10 @@ pub(crate) fn solve_velocity(
     } else {
         0.0
     };
-    let wn = point_inv_mass(bones, a, pa, m.n) + point_inv_mass(bones, m.b, pb, m.n);
-    if wn > 0.0 {
-        let p = m.n * ((target - vn) / wn);
-        apply_velocity_impulse(bones, a, pa, p);
-        apply_velocity_impulse(bones, m.b, pb, -p);
+    let corr = Correction::along(bones, (a, pa), (m.b, pb), m.n);
+    if corr.w > 0.0 {
+        let lambda = (target - vn) / corr.w;
+        corr.apply_velocity(bones, lambda);
     }
     // Torsional friction: twist about the normal, capped by μ r λ_n / h.
     let twist = |bones: &[Bone], s: Side| match s {
