@@ -141,12 +141,14 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
 
 /// The bone's velocity from its particles' velocities `v_k` over the substep:
 /// `v = Σ m v_k / M` and `ω = I⁻¹ Σ m r_k × v_k` (angular momentum over inertia).
-fn velocity_from_particles(b: &mut Bone, vk: &[Vec3; 4]) {
+///
+/// `arms` are the particles relative to the frame origin, `R rest_k`.
+fn velocity_from_particles(b: &mut Bone, arms: &[Vec3; 4], vk: &[Vec3; 4]) {
     let vc = (vk[0] + vk[1] + vk[2] + vk[3]) * 0.25;
     let m = b.mass * 0.25;
     let mut l = Vec3::ZERO;
-    for (r, v) in b.rest.iter().zip(vk) {
-        l += (b.rot * *r).cross(*v - vc) * m;
+    for (arm, v) in arms.iter().zip(vk) {
+        l += arm.cross(*v - vc) * m;
     }
     b.lin_vel = vc;
     b.ang_vel = b.inv_inertia_mul(l);
@@ -207,8 +209,10 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             }
             let mut u = [Vec3::ZERO; 4];
             for (k, uk) in u.iter_mut().enumerate() {
-                let v = b.corner_velocity(k) + s.gravity * h;
-                *uk = b.rot * b.rest[k] + v * h;
+                // `Bone::corner_velocity`, its arm kept for the position.
+                let arm = b.rot * b.rest[k];
+                let v = b.lin_vel + b.ang_vel.cross(arm) + s.gravity * h;
+                *uk = arm + v * h;
             }
             b.shape_match(&u);
         }
@@ -242,8 +246,11 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 b.ang_vel = Vec3::ZERO;
                 continue;
             }
-            let vk: [Vec3; 4] = std::array::from_fn(|k| b.displacement(b.rest[k]) / h);
-            velocity_from_particles(b, &vk);
+            // `Bone::displacement` of each particle, its arm kept for the momentum.
+            let arms: [Vec3; 4] = std::array::from_fn(|k| b.rot * b.rest[k]);
+            let vk: [Vec3; 4] =
+                std::array::from_fn(|k| (b.dcom + (arms[k] - b.prev_rot * b.rest[k])) / h);
+            velocity_from_particles(b, &arms, &vk);
             b.com += b.dcom;
             b.dcom = Vec3::ZERO;
         }
