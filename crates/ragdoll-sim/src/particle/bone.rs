@@ -85,6 +85,16 @@ impl Bone {
         self.fixed || self.asleep
     }
 
+    /// Wakes the bone with both rest timers restarted (and its no-move box around where
+    /// it is now), or its island's longest-resting bone would put it straight back to
+    /// sleep.
+    pub fn wake(&mut self) {
+        self.asleep = false;
+        self.sleep_time = 0.0;
+        self.still_time = 0.0;
+        self.still_anchor = (self.center(), self.rot);
+    }
+
     /// Inverse mass seen by the solver.
     pub fn inv_mass(&self) -> f32 {
         if self.is_static() {
@@ -334,8 +344,8 @@ pub(crate) fn rotate(q: Quat, theta: Vec3) -> Quat {
     .normalize()
 }
 
-/// A positional correction between two sides along a unit direction, its levers
-/// computed once: `w` is the generalised inverse mass along it (Müller et al. 2020,
+/// A correction between two sides along a unit direction (or a turn about it), its
+/// levers computed once: `w` is the generalised inverse mass along it (Müller et al. 2020,
 /// eq. 2–3), [`Correction::apply`] moves the points by `λ` along it.
 pub(crate) struct Correction {
     a: Option<Lever>,
@@ -355,6 +365,19 @@ impl Correction {
             a,
             b,
             n,
+            w: wa + wb,
+        }
+    }
+
+    /// Turning side `a` about unit `n` and `b` against it; no point moves along `n`.
+    #[inline]
+    fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3) -> Self {
+        let (a, wa) = Lever::of(bones, a, None, n);
+        let (b, wb) = Lever::of(bones, b, None, n);
+        Correction {
+            a,
+            b,
+            n: Vec3::ZERO,
             w: wa + wb,
         }
     }
@@ -415,20 +438,12 @@ pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3, alpha_ti
     if angle < 1e-9 {
         return;
     }
-    let n = dphi / angle;
-    let (lever_a, wa) = Lever::of(bones, a, None, n);
-    let (lever_b, wb) = Lever::of(bones, b, None, n);
-    let w = wa + wb;
-    if w + alpha_tilde <= 0.0 {
+    let corr = Correction::turning(bones, a, b, dphi / angle);
+    if corr.w + alpha_tilde <= 0.0 {
         return;
     }
-    let lambda = angle / (w + alpha_tilde);
-    if let Some(l) = lever_a {
-        l.apply(bones, Vec3::ZERO, lambda);
-    }
-    if let Some(l) = lever_b {
-        l.apply(bones, Vec3::ZERO, -lambda);
-    }
+    let lambda = angle / (corr.w + alpha_tilde);
+    corr.apply(bones, lambda);
 }
 
 /// Orientation of a side (identity for the world).

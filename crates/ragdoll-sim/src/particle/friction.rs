@@ -136,9 +136,8 @@ pub(crate) fn solve_friction(
 
 /// Marks where a point that did not touch in the last substep stands, at the start of
 /// this one (`ContactPoint::touched_at`): if it touches now, its drift counts from here.
-pub(crate) fn mark_touch(bones: &[Bone], m: &Manifold, c: &mut ContactPoint) {
-    let pa = bones[m.a].world(c.ra);
-    let pb = side_world(bones, m.b, c.rb);
+/// `pa` and `pb` are the point on each side now.
+pub(crate) fn mark_touch(bones: &[Bone], m: &Manifold, c: &mut ContactPoint, pa: Vec3, pb: Vec3) {
     let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
     let d = pa - pb - sub;
     c.touched_at = d - m.n * d.dot(m.n);

@@ -116,10 +116,7 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
     figures.dedup();
     for b in w.bones.iter_mut() {
         if b.asleep && figures.binary_search(&b.figure).is_ok() {
-            b.asleep = false;
-            b.sleep_time = 0.0;
-            b.still_time = 0.0;
-            b.still_anchor = (b.center(), b.rot);
+            b.wake();
         }
     }
     true
@@ -219,13 +216,13 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // relative normal velocity before the solve, for restitution
         for m in p.manifolds {
             for c in &mut p.points[m.range()] {
+                let pa = p.bones[m.a].world(c.ra);
+                let pb = super::bone::side_world(p.bones, m.b, c.rb);
                 if c.lambda_n == 0.0 {
-                    super::friction::mark_touch(p.bones, m, c);
+                    super::friction::mark_touch(p.bones, m, c, pa, pb);
                 }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
-                let pa = p.bones[m.a].world(c.ra);
-                let pb = super::bone::side_world(p.bones, m.b, c.rb);
                 c.vn_before = (point_velocity(p.bones, Some(m.a), pa)
                     - point_velocity(p.bones, m.b, pb))
                 .dot(m.n);

@@ -553,12 +553,7 @@ impl Method for ParticleWorld {
         if let Some(g) = grab {
             for b in self.bones.iter_mut() {
                 if b.body == g.body.index() {
-                    // Both rest timers restart, or the island's longest-resting bone
-                    // puts it straight back to sleep.
-                    b.asleep = false;
-                    b.sleep_time = 0.0;
-                    b.still_time = 0.0;
-                    b.still_anchor = (b.center(), b.rot);
+                    b.wake();
                 }
             }
         }

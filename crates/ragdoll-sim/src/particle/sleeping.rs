@@ -51,10 +51,7 @@ pub(crate) fn update(
         }
     }
     if let Some(b) = held.and_then(|i| bones.get_mut(i)) {
-        b.asleep = false;
-        b.sleep_time = 0.0;
-        b.still_time = 0.0;
-        b.still_anchor = (b.center(), b.rot);
+        b.wake();
     }
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
