@@ -1,20 +1,19 @@
 //! Contacts: parry3d manifolds between bodies and against the ground plane, cached per
-//! body pair with persistent point ids for warm starting, solved as soft non-penetration
-//! constraints with Coulomb friction and a restitution pass (Box2D v3's contact solver,
-//! in 3D).
+//! body pair with persistent point ids for warm starting. They are solved as soft
+//! non-penetration constraints with Coulomb friction and a restitution pass by
+//! [`super::contact_solver`] (Box2D v3's contact solver, in 3D).
 //!
 //! Per step: the broad phase proposes pairs, the cache keeps each pair's parry workspace
 //! and last impulses (a sorted array keyed by the pair, merged with the new pair list),
-//! the narrow phase refreshes the manifolds, and `prepare` fixes anchors, normal and
-//! effective masses for the step. Separation is then tracked through the substeps from
-//! the bodies' motion (`s = s₀ + n·(Δp_b − Δp_a)`), as Box2D does.
+//! and the narrow phase refreshes the manifolds and anchors each point in both bodies'
+//! frames. The solver then fixes normal, Jacobians and effective masses for the step and
+//! tracks each separation through the substeps from the bodies' motion
+//! (`s = s₀ + n·(Δp_b − Δp_a)`), as Box2D does.
 
 // Several per-body arrays are walked together by index.
 #![allow(clippy::needless_range_loop)]
 
-use super::body::{BodyInfo, BodyStates, SolverBody};
-use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
-use super::soft::StepContext;
+use super::body::{BodyInfo, BodyStates};
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -41,43 +40,22 @@ pub const LINEAR_SLOP: f32 = 0.0005;
 /// differently enough that a hard limit is pushed past 2°.
 pub const ROLLING_RESISTANCE: f32 = 0.005;
 
-/// One contact point's solver state. It rides in the `data` slot of parry's tracked
-/// contact, next to the point's geometry (anchors in the shape frames, separation,
-/// feature ids): one array per pair holds both, and what parry already stores (the
-/// persistent id, the separation at prepare time) is not repeated here. parry copies
-/// `data` around when it refreshes a manifold, but [`prepare_pair`] rewrites it whole
-/// for every point, with impulses carried over by id as before.
+/// What a contact point keeps between steps. It rides in the `data` slot of parry's
+/// tracked contact, next to the point's geometry (anchors in the shape frames,
+/// separation, feature ids): one array per pair holds both, and what parry already
+/// stores is not repeated here. Everything the solver derives from it for one step (the
+/// Jacobians, effective masses, separations) lives in
+/// [`super::contact_solver::ContactConstraints`] for that step only.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ContactPoint {
-    /// Normal from a to b (world), the same for every point of a pair.
-    pub normal: Vec3,
-    /// Anchor on a relative to its centre of mass (world, fixed for the step).
-    pub ra: Vec3,
-    /// Anchor on b.
-    pub rb: Vec3,
-    /// Anchor in a's body space, to follow a through the substeps.
+    /// Anchor in a's body space, relative to its centre of mass.
     pub local_a: Vec3,
     /// Anchor in b's body space.
     pub local_b: Vec3,
-    /// World anchor on a at prepare time.
-    pub pa0: Vec3,
-    /// World anchor on b at prepare time.
-    pub pb0: Vec3,
-    /// Separation at the start of the current substep's iterations
-    /// ([`prepare_substep`]): the positions hold still until they are integrated.
-    pub separation: f32,
-    /// 1 / (n·K·n).
-    pub normal_mass: f32,
-    /// Effective masses of the two tangent rows.
-    pub tangent_mass: [f32; 2],
-    /// Accumulated normal impulse.
+    /// Accumulated normal impulse, for the next step's warm start.
     pub normal_impulse: f32,
     /// Accumulated friction impulse (world vector, survives basis changes).
     pub tangent_impulse: Vec3,
-    /// Largest normal impulse applied this step (restitution only bounces real contacts).
-    pub max_normal_impulse: f32,
-    /// Normal velocity at prepare time (negative = approaching).
-    pub relative_velocity: f32,
 }
 
 /// A cached body pair.
@@ -123,17 +101,23 @@ impl ContactPair {
         self.points[..n].iter().map(|c| &c.data)
     }
 
-    /// The tangent basis of the pair's points. It is a function of the normal, which all
-    /// points share, so it is computed where it is used rather than stored per point
-    /// (the same two vectors, bit for bit, as when they were stored).
-    #[inline]
-    fn tangents(&self) -> [Vec3; 2] {
-        let (t0, t1) = self
-            .points
-            .first()
-            .map_or(Vec3::ZERO, |c| c.data.normal)
-            .any_orthonormal_pair();
-        [t0, t1]
+    /// The points with their separation at the last narrow phase (none unless
+    /// touching).
+    pub(super) fn contact_points(&self) -> impl Iterator<Item = (&ContactPoint, f32)> {
+        let n = if self.touching { self.points.len() } else { 0 };
+        self.points[..n].iter().map(|c| (&c.data, c.dist))
+    }
+
+    /// The points, to write their impulses (none unless touching).
+    pub(super) fn contact_points_mut(&mut self) -> impl Iterator<Item = &mut ContactPoint> {
+        let n = if self.touching { self.points.len() } else { 0 };
+        self.points[..n].iter_mut().map(|c| &mut c.data)
+    }
+
+    /// The pair's normal from a to b (world) when a's orientation is `rot_a`: parry's
+    /// manifold normal, kept in a's shape frame, rotated out (zero if there is none).
+    pub fn normal(&self, rot_a: Quat) -> Vec3 {
+        (rot_a * self.manifold_n1).normalize_or_zero()
     }
 
     /// The impulses of the points now, by persistent id, for warm starting once the
@@ -397,243 +381,15 @@ impl Contacts {
     }
 }
 
-/// Pairs with points where at least one body is awake.
-fn active<'a>(
-    pairs: &'a mut [ContactPair],
-    awake: &'a [bool],
-) -> impl Iterator<Item = &'a mut ContactPair> {
-    pairs
-        .iter_mut()
-        .filter(move |p| p.touching() && (awake[p.a as usize] || awake[p.b as usize]))
-}
-
-/// Effective masses with the current inverse inertias (call after `update_inertia`).
-pub fn prepare_masses(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
-    for pair in active(pairs, awake) {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        let tangents = pair.tangents();
-        for p in pair.points.iter_mut().map(|c| &mut c.data) {
-            let k = |d: Vec3| {
-                let (ja, jb) = (p.ra.cross(d), p.rb.cross(d));
-                s.inv_mass[a]
-                    + s.inv_mass[b]
-                    + ja.dot(s.inv_inertia[a] * ja)
-                    + jb.dot(s.inv_inertia[b] * jb)
-            };
-            let inv = |x: f32| if x > 1e-20 { 1.0 / x } else { 0.0 };
-            p.normal_mass = inv(k(p.normal));
-            p.tangent_mass = [inv(k(tangents[0])), inv(k(tangents[1]))];
-            p.max_normal_impulse = 0.0;
-            p.relative_velocity = p
-                .normal
-                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-        }
-    }
-}
-
-/// Re-applies the impulses cached from the last step.
-pub fn warm_start(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
-    for pair in active(pairs, awake) {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        for p in pair.points.iter().map(|c| &c.data) {
-            let imp = p.normal * p.normal_impulse + p.tangent_impulse;
-            s.apply_impulse(a, p.ra, -imp);
-            s.apply_impulse(b, p.rb, imp);
-        }
-        s.apply_angular_impulse(a, -pair.rolling_impulse);
-        s.apply_angular_impulse(b, pair.rolling_impulse);
-    }
-}
-
-/// Evaluates each point's current separation for a substep's biased iterations: between
-/// the velocity and the position integration the bodies do not move, so the iterations
-/// share one value (the relax pass, after the positions moved, evaluates its own).
-pub fn prepare_substep(pairs: &mut [ContactPair], s: &BodyStates, awake: &[bool]) {
-    for pair in active(pairs, awake) {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        let (qa, qb) = (s.rot[a], s.rot[b]);
-        let (ca, cb) = (s.com[a], s.com[b]);
-        for c in &mut pair.points {
-            c.data.separation = current_separation(c, ca, qa, cb, qb);
-        }
-    }
-}
-
-/// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
-/// impulse just computed (Box2D v3's order; friction first would cap it with a
-/// normal impulse the relax pass is about to raise, and slide too easily). The biased
-/// pass reads the separations of [`prepare_substep`].
-pub fn solve(
-    pairs: &mut [ContactPair],
-    s: &mut BodyStates,
-    awake: &[bool],
-    ctx: &StepContext,
-    use_bias: bool,
-) {
-    for pair in active(pairs, awake) {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        let (qa, qb) = (s.rot[a], s.rot[b]);
-        let (ca, cb) = (s.com[a], s.com[b]);
-        // The pair's two (distinct) bodies as solver bodies while its points are solved.
-        let (mut ba, mut bb) = (SolverBody::load(s, a), SolverBody::load(s, b));
-        let tangents = pair.tangents();
-        for c in &mut pair.points {
-            // Non-penetration at the current separation.
-            let sep = if use_bias {
-                c.data.separation
-            } else {
-                current_separation(c, ca, qa, cb, qb)
-            };
-            let p = &mut c.data;
-            let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
-                // Speculative: the gap may close this substep, no further.
-                (sep * ctx.inv_h, 1.0, 0.0)
-            } else if use_bias {
-                let c = (sep + LINEAR_SLOP).min(0.0);
-                (
-                    (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
-                    ctx.contact.mass_scale,
-                    ctx.contact.impulse_scale,
-                )
-            } else {
-                (0.0, 1.0, 0.0)
-            };
-            let vn = p
-                .normal
-                .dot(bb.point_velocity(p.rb) - ba.point_velocity(p.ra));
-            let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
-            let new = (p.normal_impulse + l).max(0.0);
-            let d = new - p.normal_impulse;
-            p.normal_impulse = new;
-            p.max_normal_impulse = p.max_normal_impulse.max(new);
-            ba.apply_impulse(p.ra, -p.normal * d);
-            bb.apply_impulse(p.rb, p.normal * d);
-
-            // Coulomb friction, the tangent impulse clamped to the disk of radius μλₙ.
-            let dv = bb.point_velocity(p.rb) - ba.point_velocity(p.ra);
-            let old = p.tangent_impulse;
-            let mut new = old;
-            for (t, m) in tangents.iter().zip(p.tangent_mass) {
-                new -= *t * (m * t.dot(dv));
-            }
-            let cap = pair.friction * p.normal_impulse;
-            if new.length_squared() > cap * cap {
-                new = new.normalize_or_zero() * cap;
-            }
-            p.tangent_impulse = new;
-            let d = new - old;
-            ba.apply_impulse(p.ra, -d);
-            bb.apply_impulse(p.rb, d);
-        }
-        // Rolling resistance: drive the relative angular velocity to zero with at most
-        // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
-        if pair.rolling_arm > 0.0 {
-            let cap = pair.rolling_arm
-                * pair
-                    .points
-                    .iter()
-                    .map(|c| c.data.normal_impulse)
-                    .sum::<f32>();
-            let k = ba.inv_inertia + bb.inv_inertia;
-            if k.determinant().abs() > 1e-20 {
-                let w = bb.w - ba.w;
-                let old = pair.rolling_impulse;
-                let new = (old - k.inverse() * w).clamp_length_max(cap);
-                pair.rolling_impulse = new;
-                ba.apply_angular_impulse(-(new - old));
-                bb.apply_angular_impulse(new - old);
-            }
-        }
-        ba.store(s, a);
-        bb.store(s, b);
-    }
-}
-
-/// Box2D's restitution pass, after the substeps: points that were approaching faster
-/// than `threshold` and carried load get the normal velocity `−e · v_before`.
-pub fn restitution(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool], threshold: f32) {
-    // Block-free Gauss–Seidel over a face's points: one pass under-shoots, so
-    // the pass is run a few times (the clamp keeps it from over-shooting).
-    for _ in 0..4 {
-        restitution_pass(pairs, s, awake, threshold);
-    }
-}
-
-fn restitution_pass(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool], threshold: f32) {
-    for pair in active(pairs, awake) {
-        if pair.restitution == 0.0 {
-            continue;
-        }
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        for p in pair.points.iter_mut().map(|c| &mut c.data) {
-            if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
-                continue;
-            }
-            let vn = p
-                .normal
-                .dot(s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra));
-            let l = -p.normal_mass * (vn + pair.restitution * p.relative_velocity);
-            let new = (p.normal_impulse + l).max(0.0);
-            let d = new - p.normal_impulse;
-            p.normal_impulse = new;
-            s.apply_impulse(a, p.ra, -p.normal * d);
-            s.apply_impulse(b, p.rb, p.normal * d);
-        }
-    }
-}
-/// One position-projection pass (see [`super::project`]): each point deeper than
-/// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
-/// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
-/// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`).
-pub fn project(pairs: &mut [ContactPair], s: &mut BodyStates, awake: &[bool]) {
-    for pair in active(pairs, awake) {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        for c in &pair.points {
-            let sep = current_separation(c, s.com[a], s.rot[a], s.com[b], s.rot[b]);
-            let p = &c.data;
-            let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
-            if c == 0.0 {
-                continue;
-            }
-            let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
-            let (ja, jb) = (ra.cross(p.normal), rb.cross(p.normal));
-            let k = s.inv_mass[a]
-                + s.inv_mass[b]
-                + ja.dot(s.inv_inertia[a] * ja)
-                + jb.dot(s.inv_inertia[b] * jb);
-            if k <= 1e-20 {
-                continue;
-            }
-            let impulse = p.normal * (-c / k);
-            s.apply_position_impulse(a, ra, -impulse);
-            s.apply_position_impulse(b, rb, impulse);
-        }
-    }
-}
-
-/// Separation now, from the motion of both anchors since prepare.
-#[inline]
-fn current_separation(
-    c: &TrackedContact<ContactPoint>,
-    ca: Vec3,
-    qa: Quat,
-    cb: Vec3,
-    qb: Quat,
-) -> f32 {
-    let p = &c.data;
-    let da = ca + qa * p.local_a - p.pa0;
-    let db = cb + qb * p.local_b - p.pb0;
-    c.dist + p.normal.dot(db - da)
-}
-
 /// Persistent id of a manifold point: parry's feature ids of both shapes.
 #[inline]
 fn point_id<D>(c: &TrackedContact<D>) -> u64 {
     ((c.fid1.0 as u64) << 32) | c.fid2.0 as u64
 }
 
-/// Turns parry's manifold into solver points, carrying impulses over by feature id from
-/// `old` ([`ContactPair::old_impulses`]); a linear search is cheapest for a handful.
+/// Keeps parry's refreshed manifold as the pair's points: each point's anchors in the
+/// bodies' frames, and its impulses carried over by feature id from `old`
+/// ([`ContactPair::old_impulses`]; a linear search is cheapest for a handful).
 fn prepare_pair(
     pair: &mut ContactPair,
     s: &BodyStates,
@@ -642,37 +398,25 @@ fn prepare_pair(
     old: &[(u64, f32, Vec3)],
 ) {
     let (a, b) = (pair.a as usize, pair.b as usize);
-    pair.touching = false;
     // An empty manifold makes no points whatever its normal.
-    if pair.points.is_empty() {
+    pair.touching = !pair.points.is_empty() && pair.normal(pose_a.rotation) != Vec3::ZERO;
+    if !pair.touching {
         return;
     }
-    let normal = (pose_a.rotation * pair.manifold_n1).normalize_or_zero();
-    if normal == Vec3::ZERO {
-        return;
-    }
+    let (inv_qa, inv_qb) = (s.rot[a].inverse(), s.rot[b].inverse());
     for c in &mut pair.points {
         let pa = pose_a.transform_point(c.local_p1);
         let pb = pose_b.transform_point(c.local_p2);
         let id = point_id(c);
-        let (ni, ti) = old
+        let (normal_impulse, tangent_impulse) = old
             .iter()
             .find(|o| o.0 == id)
-            .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2 - normal * normal.dot(o.2)));
-        let ra = pa - s.com[a];
-        let rb = pb - s.com[b];
+            .map_or((0.0, Vec3::ZERO), |o| (o.1, o.2));
         c.data = ContactPoint {
-            normal,
-            ra,
-            rb,
-            local_a: s.rot[a].inverse() * ra,
-            local_b: s.rot[b].inverse() * rb,
-            pa0: pa,
-            pb0: pb,
-            normal_impulse: ni,
-            tangent_impulse: ti,
-            ..Default::default()
+            local_a: inv_qa * (pa - s.com[a]),
+            local_b: inv_qb * (pb - s.com[b]),
+            normal_impulse,
+            tangent_impulse,
         };
     }
-    pair.touching = true;
 }

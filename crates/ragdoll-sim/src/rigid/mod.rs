@@ -8,7 +8,7 @@
 //! - [`ball`], [`hinge`], [`universal`], [`fixed`], [`slider`], [`spring`]: one file per
 //!   joint type; [`joint_set`]: the arrays of them.
 //! - [`contact`]: collision detection (with [`crate::broadphase`]) and the contact
-//!   solver.
+//!   cache; [`contact_solver`]: the contact rows of one step, over dense arrays.
 //! - [`island`]: islands and sleeping; [`solver`]: the step; [`project`]: the position
 //!   projection after it; [`parallel`]: islands solved on all cores.
 //! - [`world`]: [`MultibodyWorld`], the `Method`.
@@ -16,6 +16,7 @@
 pub mod ball;
 pub mod body;
 pub mod contact;
+pub mod contact_solver;
 pub mod fixed;
 pub mod hinge;
 pub mod integrate;

@@ -23,7 +23,7 @@
 //! solve every step, and the island would creep and never sleep.
 
 use super::body::BodyStates;
-use super::contact::{self, ContactPair};
+use super::contact_solver::ContactConstraints;
 use super::joint_set::JointSet;
 use crate::scene::SleepSettings;
 use glam::Mat3;
@@ -51,7 +51,7 @@ pub const CONTACT_CORRECTION: f32 = 0.2;
 pub fn project_positions(
     s: &mut BodyStates,
     joints: &JointSet,
-    pairs: &mut [ContactPair],
+    contacts: &ContactConstraints,
     awake: &[bool],
     sleep: &SleepSettings,
 ) {
@@ -69,7 +69,7 @@ pub fn project_positions(
     }
     for _ in 0..POSITION_ITERATIONS {
         joints.project(s, awake);
-        contact::project(pairs, s, awake);
+        contacts.project(s);
     }
     for (i, m, inv) in held {
         s.inv_mass[i] = m;

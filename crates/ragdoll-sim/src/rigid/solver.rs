@@ -19,7 +19,8 @@
 //! ([`super::parallel`]), with the same bits as on one.
 
 use super::body::{BodyInfo, BodyStates, Motions};
-use super::contact::{self, ContactPair, Contacts};
+use super::contact::{ContactPair, Contacts};
+use super::contact_solver::ContactConstraints;
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -153,7 +154,7 @@ pub fn solve(
     awake: &[bool],
     p: &SolveParams,
 ) {
-    contact::prepare_masses(pairs, s, awake);
+    let mut contacts = ContactConstraints::build(pairs, s, awake);
     for sub in 0..p.substeps {
         if sub > 0 {
             update_inertia(s, motion, awake);
@@ -161,18 +162,19 @@ pub fn solve(
         integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
         joints.prepare(s, awake);
         joints.warm_start(s, awake);
-        contact::warm_start(pairs, s, awake);
-        contact::prepare_substep(pairs, s, awake);
+        contacts.prepare_substep(s);
+        contacts.warm_start(s);
         for _ in 0..p.iterations {
             joints.solve(s, awake, &p.ctx, true);
-            contact::solve(pairs, s, awake, &p.ctx, true);
+            contacts.solve(s, &p.ctx, true);
         }
         integrate_positions(s, awake, p.ctx.h);
         joints.solve(s, awake, &p.ctx, false);
-        contact::solve(pairs, s, awake, &p.ctx, false);
+        contacts.solve(s, &p.ctx, false);
     }
-    contact::restitution(pairs, s, awake, p.restitution_threshold);
-    project::project_positions(s, joints, pairs, awake, p.sleep);
+    contacts.restitution(s, p.restitution_threshold);
+    project::project_positions(s, joints, &contacts, awake, p.sleep);
+    contacts.store_impulses(pairs);
 }
 
 /// `awake` and the solver inverse masses from the sleep flags: sleeping bodies act as

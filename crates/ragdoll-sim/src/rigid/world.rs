@@ -294,14 +294,15 @@ impl Method for MultibodyWorld {
             });
         }
         for p in &self.contacts.pairs {
+            let (a, b) = (p.a as usize, p.b as usize);
+            let normal = p.normal(self.states.rot[a]);
             for c in p.points() {
-                let (a, b) = (p.a as usize, p.b as usize);
                 let pa = self.states.com[a] + self.states.rot[a] * c.local_a;
                 let pb = self.states.com[b] + self.states.rot[b] * c.local_b;
                 out.contacts.push(ContactInstance {
                     point: (pa + pb) * 0.5,
-                    normal: c.normal,
-                    depth: -c.normal.dot(pb - pa),
+                    normal,
+                    depth: -normal.dot(pb - pa),
                 });
             }
         }

@@ -1,0 +1,420 @@
+//! The contact solve of one step over dense constraint arrays (Box2D v3's
+//! `contact_solver.c`, in 3D, scalar).
+//!
+//! [`super::contact`] keeps what must survive between steps — parry's manifold and, per
+//! point, its body-space anchors and accumulated impulses. At the start of a step's
+//! solve, [`ContactConstraints::build`] turns every touching pair into a
+//! [`PairConstraint`] and its points into [`PointConstraint`]s laid out one after the
+//! other, with everything the iterations only read computed once:
+//!
+//! - the Jacobian's angular parts `r × n`, `r × t₁`, `r × t₂` (anchors fixed for the
+//!   step, as Box2D fixes them), and the effective masses `1 / (J M⁻¹ Jᵀ)`;
+//! - per substep ([`ContactConstraints::prepare_substep`], after the world inverse
+//!   inertias were refreshed): `I⁻¹ (r × d)` for each row and the separation the biased
+//!   iterations share.
+//!
+//! An iteration then reads a row's velocity as `d·(v_b − v_a) + (r_b × d)·ω_b −
+//! (r_a × d)·ω_a` and applies an impulse λ as `v ± d λ/m`, `ω ± I⁻¹(r × d) λ`: dot
+//! products and scaled additions, no cross product and no 3×3 product, where forming
+//! them in every iteration made the contact solve 40 % of a moving pile's step. The
+//! arrays live for one solve (one island on one thread), so they cost no memory
+//! between steps; [`ContactConstraints::store_impulses`] writes the impulses back to
+//! the pairs for the next step's warm start.
+//!
+//! The Gauss–Seidel order is the pairs' order, then their points' order, as before.
+
+use super::body::BodyStates;
+use super::contact::{ContactPair, LINEAR_SLOP};
+use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
+use super::soft::StepContext;
+use glam::{Mat3, Vec3};
+
+/// One touching pair's share of the step.
+#[derive(Clone, Copy, Debug)]
+struct PairConstraint {
+    /// Body a (index into the solved states).
+    a: usize,
+    /// Body b, or the static anchor.
+    b: usize,
+    /// Slot of the pair in the array the constraints were built from.
+    slot: usize,
+    /// The pair's points: `points[start..start + count]`.
+    start: usize,
+    count: usize,
+    /// Normal from a to b (world, fixed for the step).
+    normal: Vec3,
+    /// The friction rows' directions: an orthonormal pair across the normal.
+    tangents: [Vec3; 2],
+    /// Inverse masses as the solver sees them (zero when static or asleep).
+    inv_mass_a: f32,
+    inv_mass_b: f32,
+    /// Combined Coulomb coefficient.
+    friction: f32,
+    /// Combined restitution.
+    restitution: f32,
+    /// `ρ r` (see [`super::contact::ROLLING_RESISTANCE`]); zero when neither body rolls.
+    rolling_arm: f32,
+    /// Accumulated rolling-resistance angular impulse on b.
+    rolling_impulse: Vec3,
+    /// `(I_a⁻¹ + I_b⁻¹)⁻¹` of the substep; `None` when singular (both bodies static).
+    rolling_mass: Option<Mat3>,
+}
+
+/// One contact point's rows: non-penetration along the normal, friction along the two
+/// tangents.
+#[derive(Clone, Copy, Debug, Default)]
+struct PointConstraint {
+    /// Anchors in the bodies' frames, relative to their centres of mass.
+    local_a: Vec3,
+    local_b: Vec3,
+    /// `s₀ − n·(p_b − p_a)` at build time: the separation now is this plus
+    /// `n·(p_b − p_a)` for the anchors' current world positions.
+    base_separation: f32,
+    /// Separation at the start of the substep's biased iterations.
+    separation: f32,
+    /// `r_a × n`, `r_b × n`.
+    ja_n: Vec3,
+    jb_n: Vec3,
+    /// `r_a × t_k`, `r_b × t_k`.
+    ja_t: [Vec3; 2],
+    jb_t: [Vec3; 2],
+    /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia.
+    ia_n: Vec3,
+    ib_n: Vec3,
+    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`.
+    ia_t: [Vec3; 2],
+    ib_t: [Vec3; 2],
+    /// `1 / (n·K·n)`, with the inertia at the start of the step.
+    normal_mass: f32,
+    /// Effective masses of the two tangent rows.
+    tangent_mass: [f32; 2],
+    /// Accumulated normal impulse.
+    normal_impulse: f32,
+    /// Accumulated friction impulse along each tangent.
+    tangent_impulse: [f32; 2],
+    /// Largest normal impulse applied this step (restitution only bounces real contacts).
+    max_normal_impulse: f32,
+    /// Normal velocity at build time (negative = approaching).
+    relative_velocity: f32,
+}
+
+/// A row's velocity `d·(v_b − v_a) + (r_b × d)·ω_b − (r_a × d)·ω_a`, given `dv = v_b − v_a`.
+#[inline]
+fn row_velocity(d: Vec3, dv: Vec3, ja: Vec3, jb: Vec3, wa: Vec3, wb: Vec3) -> f32 {
+    d.dot(dv) + jb.dot(wb) - ja.dot(wa)
+}
+
+/// `1/x`, or zero for a row no body can move.
+#[inline]
+fn inverse_or_zero(x: f32) -> f32 {
+    if x > 1e-20 { 1.0 / x } else { 0.0 }
+}
+
+/// The contact constraints of one solve (the whole world, or one island).
+#[derive(Default)]
+pub struct ContactConstraints {
+    pairs: Vec<PairConstraint>,
+    points: Vec<PointConstraint>,
+}
+
+impl ContactConstraints {
+    /// Constraints for the touching pairs of `pairs` with at least one awake body, from
+    /// the bodies' poses, velocities and inverse inertias now (call after
+    /// `update_inertia`, before the substeps). Impulses carried by the pairs warm start.
+    pub fn build(pairs: &[ContactPair], s: &BodyStates, awake: &[bool]) -> ContactConstraints {
+        let active =
+            |p: &&ContactPair| p.touching() && (awake[p.a as usize] || awake[p.b as usize]);
+        let count = pairs.iter().filter(active).count();
+        let mut out = ContactConstraints {
+            pairs: Vec::with_capacity(count),
+            points: Vec::new(),
+        };
+        for (slot, pair) in pairs.iter().enumerate() {
+            if !active(&pair) {
+                continue;
+            }
+            let (a, b) = (pair.a as usize, pair.b as usize);
+            let normal = pair.normal(s.rot[a]);
+            let (t0, t1) = normal.any_orthonormal_pair();
+            let tangents = [t0, t1];
+            let (ma, mb) = (s.inv_mass[a], s.inv_mass[b]);
+            let (ia, ib) = (s.inv_inertia[a], s.inv_inertia[b]);
+            let mass =
+                |ja: Vec3, jb: Vec3| inverse_or_zero(ma + mb + ja.dot(ia * ja) + jb.dot(ib * jb));
+            let start = out.points.len();
+            for (c, separation) in pair.contact_points() {
+                let ra = s.rot[a] * c.local_a;
+                let rb = s.rot[b] * c.local_b;
+                let (ja_n, jb_n) = (ra.cross(normal), rb.cross(normal));
+                let ja_t = tangents.map(|t| ra.cross(t));
+                let jb_t = tangents.map(|t| rb.cross(t));
+                let dv = s.lin_vel[b] - s.lin_vel[a];
+                out.points.push(PointConstraint {
+                    local_a: c.local_a,
+                    local_b: c.local_b,
+                    base_separation: separation - normal.dot((s.com[b] + rb) - (s.com[a] + ra)),
+                    separation,
+                    ja_n,
+                    jb_n,
+                    ja_t,
+                    jb_t,
+                    normal_mass: mass(ja_n, jb_n),
+                    tangent_mass: [mass(ja_t[0], jb_t[0]), mass(ja_t[1], jb_t[1])],
+                    // The friction impulse is kept as a world vector between steps (the
+                    // basis follows the normal); its part across the new normal carries over.
+                    normal_impulse: c.normal_impulse,
+                    tangent_impulse: tangents.map(|t| t.dot(c.tangent_impulse)),
+                    relative_velocity: row_velocity(
+                        normal,
+                        dv,
+                        ja_n,
+                        jb_n,
+                        s.ang_vel[a],
+                        s.ang_vel[b],
+                    ),
+                    ..Default::default()
+                });
+            }
+            out.pairs.push(PairConstraint {
+                a,
+                b,
+                slot,
+                start,
+                count: out.points.len() - start,
+                normal,
+                tangents,
+                inv_mass_a: ma,
+                inv_mass_b: mb,
+                friction: pair.friction,
+                restitution: pair.restitution,
+                rolling_arm: pair.rolling_arm,
+                rolling_impulse: pair.rolling_impulse,
+                rolling_mass: None,
+            });
+        }
+        out
+    }
+
+    /// Writes the accumulated impulses back to the pairs the constraints were built from,
+    /// for the next step's warm start (the friction impulse as a world vector).
+    pub fn store_impulses(&self, pairs: &mut [ContactPair]) {
+        for pc in &self.pairs {
+            let pair = &mut pairs[pc.slot];
+            pair.rolling_impulse = pc.rolling_impulse;
+            let points = &self.points[pc.start..pc.start + pc.count];
+            for (c, p) in pair.contact_points_mut().zip(points) {
+                c.normal_impulse = p.normal_impulse;
+                c.tangent_impulse =
+                    pc.tangents[0] * p.tangent_impulse[0] + pc.tangents[1] * p.tangent_impulse[1];
+            }
+        }
+    }
+
+    /// Per substep, once the world inverse inertias are refreshed: each row's
+    /// `I⁻¹ (r × d)`, the rolling mass, and the separation the biased iterations share
+    /// (between the velocity and the position integration the bodies do not move).
+    pub fn prepare_substep(&mut self, s: &BodyStates) {
+        for pc in &mut self.pairs {
+            let (ia, ib) = (s.inv_inertia[pc.a], s.inv_inertia[pc.b]);
+            for p in &mut self.points[pc.start..pc.start + pc.count] {
+                p.ia_n = ia * p.ja_n;
+                p.ib_n = ib * p.jb_n;
+                p.ia_t = p.ja_t.map(|j| ia * j);
+                p.ib_t = p.jb_t.map(|j| ib * j);
+                p.separation = current_separation(pc, p, s);
+            }
+            if pc.rolling_arm > 0.0 {
+                let k = ia + ib;
+                pc.rolling_mass = (k.determinant().abs() > 1e-20).then(|| k.inverse());
+            }
+        }
+    }
+
+    /// Re-applies the accumulated impulses (last substep's, or last step's carried over).
+    pub fn warm_start(&self, s: &mut BodyStates) {
+        for pc in &self.pairs {
+            let (a, b) = (pc.a, pc.b);
+            let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
+            let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
+            let [t0, t1] = pc.tangents;
+            for p in &self.points[pc.start..pc.start + pc.count] {
+                let [l0, l1] = p.tangent_impulse;
+                let linear = pc.normal * p.normal_impulse + t0 * l0 + t1 * l1;
+                va -= linear * pc.inv_mass_a;
+                vb += linear * pc.inv_mass_b;
+                wa -= p.ia_n * p.normal_impulse + p.ia_t[0] * l0 + p.ia_t[1] * l1;
+                wb += p.ib_n * p.normal_impulse + p.ib_t[0] * l0 + p.ib_t[1] * l1;
+            }
+            wa -= s.inv_inertia[a] * pc.rolling_impulse;
+            wb += s.inv_inertia[b] * pc.rolling_impulse;
+            s.lin_vel[a] = va;
+            s.ang_vel[a] = wa;
+            s.lin_vel[b] = vb;
+            s.ang_vel[b] = wb;
+        }
+    }
+
+    /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
+    /// impulse just computed (Box2D v3's order; friction first would cap it with a
+    /// normal impulse the relax pass is about to raise, and slide too easily). The biased
+    /// pass reads the separations of [`ContactConstraints::prepare_substep`]; the relax
+    /// pass, after the positions moved, evaluates its own.
+    pub fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        for pc in &mut self.pairs {
+            let (a, b) = (pc.a, pc.b);
+            let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
+            let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
+            let (ma, mb) = (pc.inv_mass_a, pc.inv_mass_b);
+            let n = pc.normal;
+            let [t0, t1] = pc.tangents;
+            let mut total_normal = 0.0;
+            for k in pc.start..pc.start + pc.count {
+                let sep = if use_bias {
+                    self.points[k].separation
+                } else {
+                    current_separation(pc, &self.points[k], s)
+                };
+                let p = &mut self.points[k];
+                let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
+                    // Speculative: the gap may close this substep, no further.
+                    (sep * ctx.inv_h, 1.0, 0.0)
+                } else if use_bias {
+                    let c = (sep + LINEAR_SLOP).min(0.0);
+                    (
+                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
+                        ctx.contact.mass_scale,
+                        ctx.contact.impulse_scale,
+                    )
+                } else {
+                    (0.0, 1.0, 0.0)
+                };
+                // Non-penetration.
+                let vn = row_velocity(n, vb - va, p.ja_n, p.jb_n, wa, wb);
+                let l =
+                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+                let new = (p.normal_impulse + l).max(0.0);
+                let d = new - p.normal_impulse;
+                p.normal_impulse = new;
+                p.max_normal_impulse = p.max_normal_impulse.max(new);
+                total_normal += new;
+                va -= n * (d * ma);
+                vb += n * (d * mb);
+                wa -= p.ia_n * d;
+                wb += p.ib_n * d;
+
+                // Coulomb friction: both tangent rows from the same velocity, the
+                // impulse clamped to the disk of radius μλₙ.
+                let dv = vb - va;
+                let v0 = row_velocity(t0, dv, p.ja_t[0], p.jb_t[0], wa, wb);
+                let v1 = row_velocity(t1, dv, p.ja_t[1], p.jb_t[1], wa, wb);
+                let [o0, o1] = p.tangent_impulse;
+                let (mut n0, mut n1) = (o0 - p.tangent_mass[0] * v0, o1 - p.tangent_mass[1] * v1);
+                let cap = pc.friction * p.normal_impulse;
+                let len2 = n0 * n0 + n1 * n1;
+                if len2 > cap * cap {
+                    let scale = cap / len2.sqrt();
+                    n0 *= scale;
+                    n1 *= scale;
+                }
+                p.tangent_impulse = [n0, n1];
+                let (d0, d1) = (n0 - o0, n1 - o1);
+                let linear = t0 * d0 + t1 * d1;
+                va -= linear * ma;
+                vb += linear * mb;
+                wa -= p.ia_t[0] * d0 + p.ia_t[1] * d1;
+                wb += p.ib_t[0] * d0 + p.ib_t[1] * d1;
+            }
+            // Rolling resistance: drive the relative angular velocity to zero with at most
+            // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
+            if let (true, Some(mass)) = (pc.rolling_arm > 0.0, pc.rolling_mass) {
+                let cap = pc.rolling_arm * total_normal;
+                let old = pc.rolling_impulse;
+                let new = (old - mass * (wb - wa)).clamp_length_max(cap);
+                pc.rolling_impulse = new;
+                wa -= s.inv_inertia[a] * (new - old);
+                wb += s.inv_inertia[b] * (new - old);
+            }
+            s.lin_vel[a] = va;
+            s.ang_vel[a] = wa;
+            s.lin_vel[b] = vb;
+            s.ang_vel[b] = wb;
+        }
+    }
+
+    /// Box2D's restitution pass, after the substeps: points that were approaching faster
+    /// than `threshold` and carried load get the normal velocity `−e · v_before`.
+    /// Block-free Gauss–Seidel over a face's points: one pass under-shoots, so the pass
+    /// is run a few times (the clamp keeps it from over-shooting).
+    pub fn restitution(&mut self, s: &mut BodyStates, threshold: f32) {
+        for _ in 0..4 {
+            for pc in &self.pairs {
+                if pc.restitution == 0.0 {
+                    continue;
+                }
+                let (a, b) = (pc.a, pc.b);
+                for p in &mut self.points[pc.start..pc.start + pc.count] {
+                    if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
+                        continue;
+                    }
+                    let vn = row_velocity(
+                        pc.normal,
+                        s.lin_vel[b] - s.lin_vel[a],
+                        p.ja_n,
+                        p.jb_n,
+                        s.ang_vel[a],
+                        s.ang_vel[b],
+                    );
+                    let l = -p.normal_mass * (vn + pc.restitution * p.relative_velocity);
+                    let new = (p.normal_impulse + l).max(0.0);
+                    let d = new - p.normal_impulse;
+                    p.normal_impulse = new;
+                    s.lin_vel[a] -= pc.normal * (d * pc.inv_mass_a);
+                    s.lin_vel[b] += pc.normal * (d * pc.inv_mass_b);
+                    s.ang_vel[a] -= p.ia_n * d;
+                    s.ang_vel[b] += p.ib_n * d;
+                }
+            }
+        }
+    }
+
+    /// One position-projection pass (see [`super::project`]): each point deeper than
+    /// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
+    /// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`
+    /// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`). The Jacobian is
+    /// formed anew on the moved pose, with the inverse masses the projection holds
+    /// (`s`, where resting bodies count as static).
+    pub fn project(&self, s: &mut BodyStates) {
+        for pc in &self.pairs {
+            let (a, b) = (pc.a, pc.b);
+            let n = pc.normal;
+            for p in &self.points[pc.start..pc.start + pc.count] {
+                let sep = current_separation(pc, p, s);
+                let c =
+                    (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
+                if c == 0.0 {
+                    continue;
+                }
+                let (ra, rb) = (s.rot[a] * p.local_a, s.rot[b] * p.local_b);
+                let (ja, jb) = (ra.cross(n), rb.cross(n));
+                let k = s.inv_mass[a]
+                    + s.inv_mass[b]
+                    + ja.dot(s.inv_inertia[a] * ja)
+                    + jb.dot(s.inv_inertia[b] * jb);
+                if k <= 1e-20 {
+                    continue;
+                }
+                let impulse = n * (-c / k);
+                s.apply_position_impulse(a, ra, -impulse);
+                s.apply_position_impulse(b, rb, impulse);
+            }
+        }
+    }
+}
+
+/// Separation of a point now, from its anchors' current world positions.
+#[inline]
+fn current_separation(pc: &PairConstraint, p: &PointConstraint, s: &BodyStates) -> f32 {
+    let pa = s.com[pc.a] + s.rot[pc.a] * p.local_a;
+    let pb = s.com[pc.b] + s.rot[pc.b] * p.local_b;
+    p.base_separation + pc.normal.dot(pb - pa)
+}
