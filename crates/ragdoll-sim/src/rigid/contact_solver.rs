@@ -4,7 +4,7 @@
 //! [`super::contact`] keeps what must survive between steps — parry's manifold and, per
 //! point, its body-space anchors and accumulated impulses. At the start of a step's
 //! solve, [`ContactConstraints::build`] turns every touching pair into a
-//! [`PairConstraint`] and its points into [`PointConstraint`]s laid out one after the
+//! `PairConstraint` and its points into `PointConstraint`s laid out one after the
 //! other, with everything the iterations only read computed once:
 //!
 //! - the Jacobian's angular parts `r × n`, `r × t₁`, `r × t₂` (anchors fixed for the
@@ -21,81 +21,84 @@
 //! between steps; [`ContactConstraints::store_impulses`] writes the impulses back to
 //! the pairs for the next step's warm start.
 //!
-//! The Gauss–Seidel order is the pairs' order, then their points' order, as before.
+//! Most pairs are solved four at a time by [`super::contact_wide`] (graph colouring,
+//! SIMD lanes); the rest one by one here, first, in the pairs' order, each pair's points
+//! in order.
 
 use super::body::BodyStates;
 use super::contact::{ContactPair, LINEAR_SLOP};
+use super::contact_wide::{self, Bundle, LANES, SLOTS};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
 use glam::{Mat3, Vec3};
 
 /// One touching pair's share of the step.
-#[derive(Clone, Copy, Debug)]
-struct PairConstraint {
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PairConstraint {
     /// Body a (index into the solved states).
-    a: usize,
+    pub(super) a: usize,
     /// Body b, or the static anchor.
-    b: usize,
+    pub(super) b: usize,
     /// Slot of the pair in the array the constraints were built from.
-    slot: usize,
+    pub(super) slot: usize,
     /// The pair's points: `points[start..start + count]`.
-    start: usize,
-    count: usize,
+    pub(super) start: usize,
+    pub(super) count: usize,
     /// Normal from a to b (world, fixed for the step).
-    normal: Vec3,
+    pub(super) normal: Vec3,
     /// The friction rows' directions: an orthonormal pair across the normal.
-    tangents: [Vec3; 2],
+    pub(super) tangents: [Vec3; 2],
     /// Inverse masses as the solver sees them (zero when static or asleep).
-    inv_mass_a: f32,
-    inv_mass_b: f32,
+    pub(super) inv_mass_a: f32,
+    pub(super) inv_mass_b: f32,
     /// Combined Coulomb coefficient.
-    friction: f32,
+    pub(super) friction: f32,
     /// Combined restitution.
-    restitution: f32,
+    pub(super) restitution: f32,
     /// `ρ r` (see [`super::contact::ROLLING_RESISTANCE`]); zero when neither body rolls.
-    rolling_arm: f32,
+    pub(super) rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
-    rolling_impulse: Vec3,
+    pub(super) rolling_impulse: Vec3,
     /// `(I_a⁻¹ + I_b⁻¹)⁻¹` of the substep; `None` when singular (both bodies static).
-    rolling_mass: Option<Mat3>,
+    pub(super) rolling_mass: Option<Mat3>,
 }
 
 /// One contact point's rows: non-penetration along the normal, friction along the two
 /// tangents.
 #[derive(Clone, Copy, Debug, Default)]
-struct PointConstraint {
+pub(super) struct PointConstraint {
     /// Anchors in the bodies' frames, relative to their centres of mass.
-    local_a: Vec3,
-    local_b: Vec3,
+    pub(super) local_a: Vec3,
+    pub(super) local_b: Vec3,
     /// `s₀ − n·(p_b − p_a)` at build time: the separation now is this plus
     /// `n·(p_b − p_a)` for the anchors' current world positions.
-    base_separation: f32,
+    pub(super) base_separation: f32,
     /// Separation at the start of the substep's biased iterations.
-    separation: f32,
+    pub(super) separation: f32,
     /// `r_a × n`, `r_b × n`.
-    ja_n: Vec3,
-    jb_n: Vec3,
+    pub(super) ja_n: Vec3,
+    pub(super) jb_n: Vec3,
     /// `r_a × t_k`, `r_b × t_k`.
-    ja_t: [Vec3; 2],
-    jb_t: [Vec3; 2],
+    pub(super) ja_t: [Vec3; 2],
+    pub(super) jb_t: [Vec3; 2],
     /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia.
-    ia_n: Vec3,
-    ib_n: Vec3,
+    pub(super) ia_n: Vec3,
+    pub(super) ib_n: Vec3,
     /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`.
-    ia_t: [Vec3; 2],
-    ib_t: [Vec3; 2],
+    pub(super) ia_t: [Vec3; 2],
+    pub(super) ib_t: [Vec3; 2],
     /// `1 / (n·K·n)`, with the inertia at the start of the step.
-    normal_mass: f32,
+    pub(super) normal_mass: f32,
     /// Effective masses of the two tangent rows.
-    tangent_mass: [f32; 2],
+    pub(super) tangent_mass: [f32; 2],
     /// Accumulated normal impulse.
-    normal_impulse: f32,
+    pub(super) normal_impulse: f32,
     /// Accumulated friction impulse along each tangent.
-    tangent_impulse: [f32; 2],
+    pub(super) tangent_impulse: [f32; 2],
     /// Largest normal impulse applied this step (restitution only bounces real contacts).
-    max_normal_impulse: f32,
+    pub(super) max_normal_impulse: f32,
     /// Normal velocity at build time (negative = approaching).
-    relative_velocity: f32,
+    pub(super) relative_velocity: f32,
 }
 
 /// A row's velocity `d·(v_b − v_a) + (r_b × d)·ω_b − (r_a × d)·ω_a`, given `dv = v_b − v_a`.
@@ -115,6 +118,10 @@ fn inverse_or_zero(x: f32) -> f32 {
 pub struct ContactConstraints {
     pairs: Vec<PairConstraint>,
     points: Vec<PointConstraint>,
+    /// The pairs solved one by one, first, in array order (see [`super::contact_wide`]).
+    single: Vec<u32>,
+    /// The other pairs, four at a time, colour by colour.
+    bundles: Vec<Bundle>,
 }
 
 impl ContactConstraints {
@@ -127,7 +134,7 @@ impl ContactConstraints {
         let count = pairs.iter().filter(active).count();
         let mut out = ContactConstraints {
             pairs: Vec::with_capacity(count),
-            points: Vec::new(),
+            ..Default::default()
         };
         for (slot, pair) in pairs.iter().enumerate() {
             if !active(&pair) {
@@ -192,12 +199,42 @@ impl ContactConstraints {
                 rolling_mass: None,
             });
         }
+        out.bundle(s.len());
         out
+    }
+
+    /// Colours the pairs and loads the bundles (see [`super::contact_wide`]). Rolling
+    /// pairs (their resistance is a row of the whole pair) and pairs with more points
+    /// than a bundle has room for are solved one by one.
+    fn bundle(&mut self, bodies: usize) {
+        let moving = |i: usize, inv_mass: f32| (inv_mass > 0.0).then_some(i);
+        let (colors, single) = contact_wide::color(
+            bodies,
+            self.pairs.iter().map(|p| {
+                (
+                    moving(p.a, p.inv_mass_a),
+                    moving(p.b, p.inv_mass_b),
+                    p.count <= SLOTS && p.rolling_arm == 0.0,
+                )
+            }),
+        );
+        self.single = single;
+        self.bundles
+            .reserve_exact(colors.iter().map(|c| c.len().div_ceil(LANES)).sum());
+        for color in &colors {
+            for chunk in color.chunks(LANES) {
+                let lanes: [&PairConstraint; LANES] =
+                    std::array::from_fn(|k| &self.pairs[chunk[k.min(chunk.len() - 1)] as usize]);
+                self.bundles
+                    .push(Bundle::load(&lanes[..chunk.len()], &self.points));
+            }
+        }
     }
 
     /// Writes the accumulated impulses back to the pairs the constraints were built from,
     /// for the next step's warm start (the friction impulse as a world vector).
     pub fn store_impulses(&self, pairs: &mut [ContactPair]) {
+        debug_assert!(self.bundles.is_empty(), "end_substeps not called");
         for pc in &self.pairs {
             let pair = &mut pairs[pc.slot];
             pair.rolling_impulse = pc.rolling_impulse;
@@ -228,11 +265,22 @@ impl ContactConstraints {
                 pc.rolling_mass = (k.determinant().abs() > 1e-20).then(|| k.inverse());
             }
         }
+        for bundle in &mut self.bundles {
+            bundle.refresh(&self.points, true);
+        }
+    }
+
+    /// After the substeps: the bundles hand their impulses back to the points, which the
+    /// restitution pass, the projection and [`ContactConstraints::store_impulses`] read.
+    pub fn end_substeps(&mut self) {
+        for bundle in self.bundles.drain(..) {
+            bundle.write_back(&mut self.points);
+        }
     }
 
     /// Re-applies the accumulated impulses (last substep's, or last step's carried over).
     pub fn warm_start(&self, s: &mut BodyStates) {
-        for pc in &self.pairs {
+        for pc in self.single.iter().map(|&i| &self.pairs[i as usize]) {
             let (a, b) = (pc.a, pc.b);
             let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
             let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
@@ -252,6 +300,9 @@ impl ContactConstraints {
             s.lin_vel[b] = vb;
             s.ang_vel[b] = wb;
         }
+        for bundle in &self.bundles {
+            bundle.warm_start(s);
+        }
     }
 
     /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
@@ -260,7 +311,8 @@ impl ContactConstraints {
     /// pass reads the separations of [`ContactConstraints::prepare_substep`]; the relax
     /// pass, after the positions moved, evaluates its own.
     pub fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        for pc in &mut self.pairs {
+        for &i in &self.single {
+            let pc = &mut self.pairs[i as usize];
             let (a, b) = (pc.a, pc.b);
             let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
             let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
@@ -338,6 +390,20 @@ impl ContactConstraints {
             s.ang_vel[a] = wa;
             s.lin_vel[b] = vb;
             s.ang_vel[b] = wb;
+        }
+        if !use_bias && !self.bundles.is_empty() {
+            // The relax pass comes after the positions moved.
+            for pc in &self.pairs {
+                for p in &mut self.points[pc.start..pc.start + pc.count] {
+                    p.separation = current_separation(pc, p, s);
+                }
+            }
+            for bundle in &mut self.bundles {
+                bundle.refresh(&self.points, false);
+            }
+        }
+        for bundle in &mut self.bundles {
+            bundle.solve(s, ctx, use_bias);
         }
     }
 

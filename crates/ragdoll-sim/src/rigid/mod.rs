@@ -8,7 +8,8 @@
 //! - [`ball`], [`hinge`], [`universal`], [`fixed`], [`slider`], [`spring`]: one file per
 //!   joint type; [`joint_set`]: the arrays of them.
 //! - [`contact`]: collision detection (with [`crate::broadphase`]) and the contact
-//!   cache; [`contact_solver`]: the contact rows of one step, over dense arrays.
+//!   cache; [`contact_solver`]: the contact rows of one step, over dense arrays;
+//!   [`contact_wide`]: the same rows four pairs at a time (graph colouring, SIMD).
 //! - [`island`]: islands and sleeping; [`solver`]: the step; [`project`]: the position
 //!   projection after it; [`parallel`]: islands solved on all cores.
 //! - [`world`]: [`MultibodyWorld`], the `Method`.
@@ -17,6 +18,7 @@ pub mod ball;
 pub mod body;
 pub mod contact;
 pub mod contact_solver;
+pub mod contact_wide;
 pub mod fixed;
 pub mod hinge;
 pub mod integrate;

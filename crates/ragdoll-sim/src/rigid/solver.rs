@@ -172,6 +172,7 @@ pub fn solve(
         joints.solve(s, awake, &p.ctx, false);
         contacts.solve(s, &p.ctx, false);
     }
+    contacts.end_substeps();
     contacts.restitution(s, p.restitution_threshold);
     project::project_positions(s, joints, &contacts, awake, p.sleep);
     contacts.store_impulses(pairs);

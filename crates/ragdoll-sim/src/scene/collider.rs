@@ -38,7 +38,7 @@ impl Collider<'_> {
     }
 
     /// The parry primitive of a scene shape, made by the same constructor as
-    /// [`super::collider`] with the same floats; `None` for a convex hull, which is
+    /// [`super::collider()`] with the same floats; `None` for a convex hull, which is
     /// built once and kept.
     pub fn primitive(shape: &Shape) -> Option<Collider<'static>> {
         Some(match *shape {
@@ -86,7 +86,7 @@ pub enum BodyCollider {
 
 impl BodyCollider {
     /// The collider of a body: its primitive's dimensions, or the shape
-    /// [`super::collider`] builds (which fails, naming the body, for a convex hull parry
+    /// [`super::collider()`] builds (which fails, naming the body, for a convex hull parry
     /// cannot build).
     pub fn new(body: &BodyDesc) -> Result<BodyCollider, SceneError> {
         Ok(match body.shape {

@@ -1,0 +1,398 @@
+//! Contact pairs solved four at a time: graph colouring and SIMD lanes (Box2D v3's
+//! `constraint_graph.c` and the wide half of `contact_solver.c`, in 3D).
+//!
+//! Gauss–Seidel solves one constraint after another because each reads the velocities
+//! the previous ones wrote. Two pairs that share no moving body do not read each other's
+//! writes, so they can be solved at once. [`color`] deals the step's pairs into colours
+//! in which no moving body appears twice (static and sleeping bodies are never written,
+//! so they may appear in every pair of a colour: the ground does), and each colour is
+//! cut into `Bundle`s of [`LANES`] pairs, one per lane of an `f32x4`. A bundle is then
+//! solved with exactly the scalar solver's arithmetic per lane — the same rows, the same
+//! soft coefficients, the same friction disk — at a quarter of the instructions.
+//!
+//! What changes is only the order: the pairs no colour could take (a body in more than
+//! [`COLORS`] pairs), the rolling pairs and the pairs with more than [`SLOTS`] points are
+//! solved one by one first, then the colours in turn. Every order is deterministic: the
+//! colouring is a greedy pass over the pairs in their array order.
+//!
+//! During the substeps a bundle holds its pairs' accumulated impulses; they are written
+//! back to the scalar constraints once the substeps are done (`Bundle::write_back`).
+
+use super::body::BodyStates;
+use super::contact::LINEAR_SLOP;
+use super::contact_solver::{PairConstraint, PointConstraint};
+use super::soft::StepContext;
+use glam::Vec3;
+use std::ops::{Add, AddAssign, Mul, Sub, SubAssign};
+use wide::f32x4;
+
+/// Pairs per bundle: the lanes of an `f32x4`.
+pub const LANES: usize = 4;
+/// Points per pair a bundle has room for (a box face on a face or on the ground has 4).
+pub const SLOTS: usize = 4;
+/// Colours tried before a pair is left to the one-by-one solve. A body of a pile touches
+/// up to about a dozen others.
+pub const COLORS: usize = 16;
+
+/// Four `Vec3`s, one per lane, stored as three `f32x4`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Vec3x4 {
+    x: f32x4,
+    y: f32x4,
+    z: f32x4,
+}
+
+impl Vec3x4 {
+    /// The vectors `f(0) … f(3)` in the four lanes.
+    #[inline]
+    fn from_fn(f: impl Fn(usize) -> Vec3) -> Vec3x4 {
+        let v: [Vec3; LANES] = std::array::from_fn(f);
+        Vec3x4 {
+            x: f32x4::new([v[0].x, v[1].x, v[2].x, v[3].x]),
+            y: f32x4::new([v[0].y, v[1].y, v[2].y, v[3].y]),
+            z: f32x4::new([v[0].z, v[1].z, v[2].z, v[3].z]),
+        }
+    }
+
+    /// Lane `k`.
+    #[inline]
+    fn lane(&self, k: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array()[k],
+            self.y.as_array()[k],
+            self.z.as_array()[k],
+        )
+    }
+
+    #[inline]
+    fn dot(self, o: Vec3x4) -> f32x4 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+}
+
+impl Add for Vec3x4 {
+    type Output = Vec3x4;
+    #[inline]
+    fn add(self, o: Vec3x4) -> Vec3x4 {
+        Vec3x4 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl Sub for Vec3x4 {
+    type Output = Vec3x4;
+    #[inline]
+    fn sub(self, o: Vec3x4) -> Vec3x4 {
+        Vec3x4 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl Mul<f32x4> for Vec3x4 {
+    type Output = Vec3x4;
+    #[inline]
+    fn mul(self, s: f32x4) -> Vec3x4 {
+        Vec3x4 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+impl AddAssign for Vec3x4 {
+    #[inline]
+    fn add_assign(&mut self, o: Vec3x4) {
+        *self = *self + o;
+    }
+}
+
+impl SubAssign for Vec3x4 {
+    #[inline]
+    fn sub_assign(&mut self, o: Vec3x4) {
+        *self = *self - o;
+    }
+}
+
+/// One point slot of a bundle: the rows of each lane's point at that slot (see
+/// [`PointConstraint`] for each field's meaning).
+#[derive(Clone, Copy, Debug, Default)]
+struct WidePoint {
+    ja_n: Vec3x4,
+    jb_n: Vec3x4,
+    ja_t: [Vec3x4; 2],
+    jb_t: [Vec3x4; 2],
+    ia_n: Vec3x4,
+    ib_n: Vec3x4,
+    ia_t: [Vec3x4; 2],
+    ib_t: [Vec3x4; 2],
+    normal_mass: f32x4,
+    tangent_mass: [f32x4; 2],
+    normal_impulse: f32x4,
+    tangent_impulse: [f32x4; 2],
+    max_normal_impulse: f32x4,
+    separation: f32x4,
+}
+
+/// Up to [`LANES`] pairs of one colour, solved side by side.
+#[derive(Clone, Debug)]
+pub(super) struct Bundle {
+    /// Each lane's first point among the scalar points, and its number of points (0 for
+    /// an empty lane).
+    start: [usize; LANES],
+    count: [usize; LANES],
+    /// Each lane's bodies (an empty lane repeats lane 0's and writes nothing).
+    a: [usize; LANES],
+    b: [usize; LANES],
+    /// How many point slots any lane uses.
+    slots: usize,
+    normal: Vec3x4,
+    tangents: [Vec3x4; 2],
+    inv_mass_a: f32x4,
+    inv_mass_b: f32x4,
+    friction: f32x4,
+    points: [WidePoint; SLOTS],
+}
+
+/// `f(k)` for each lane as an `f32x4`.
+#[inline]
+fn f4(f: impl Fn(usize) -> f32) -> f32x4 {
+    f32x4::new(std::array::from_fn(f))
+}
+
+impl Bundle {
+    /// A bundle of 1 to [`LANES`] pairs, each with at most [`SLOTS`] points. A slot a lane
+    /// does not use keeps zero masses and impulses, so it applies nothing.
+    pub(super) fn load(lanes: &[&PairConstraint], points: &[PointConstraint]) -> Bundle {
+        let lane = |k: usize| lanes.get(k).copied();
+        let first = lanes[0];
+        let or_zero = |k: usize, f: fn(&PairConstraint) -> f32| lane(k).map_or(0.0, f);
+        let mut bundle = Bundle {
+            start: std::array::from_fn(|k| lane(k).map_or(0, |p| p.start)),
+            count: std::array::from_fn(|k| lane(k).map_or(0, |p| p.count)),
+            a: std::array::from_fn(|k| lane(k).unwrap_or(first).a),
+            b: std::array::from_fn(|k| lane(k).unwrap_or(first).b),
+            slots: lanes.iter().map(|p| p.count).max().unwrap_or(0),
+            normal: Vec3x4::from_fn(|k| lane(k).map_or(Vec3::ZERO, |p| p.normal)),
+            tangents: [0, 1]
+                .map(|t| Vec3x4::from_fn(|k| lane(k).map_or(Vec3::ZERO, |p| p.tangents[t]))),
+            inv_mass_a: f4(|k| or_zero(k, |p| p.inv_mass_a)),
+            inv_mass_b: f4(|k| or_zero(k, |p| p.inv_mass_b)),
+            friction: f4(|k| or_zero(k, |p| p.friction)),
+            points: [WidePoint::default(); SLOTS],
+        };
+        let empty = PointConstraint::default();
+        for j in 0..bundle.slots {
+            let l: [&PointConstraint; LANES] =
+                std::array::from_fn(|k| bundle.point(points, k, j).unwrap_or(&empty));
+            let v3 = |f: fn(&PointConstraint) -> Vec3| Vec3x4::from_fn(|k| f(l[k]));
+            let s4 = |f: fn(&PointConstraint) -> f32| f4(|k| f(l[k]));
+            bundle.points[j] = WidePoint {
+                ja_n: v3(|p| p.ja_n),
+                jb_n: v3(|p| p.jb_n),
+                ja_t: [v3(|p| p.ja_t[0]), v3(|p| p.ja_t[1])],
+                jb_t: [v3(|p| p.jb_t[0]), v3(|p| p.jb_t[1])],
+                normal_mass: s4(|p| p.normal_mass),
+                tangent_mass: [s4(|p| p.tangent_mass[0]), s4(|p| p.tangent_mass[1])],
+                normal_impulse: s4(|p| p.normal_impulse),
+                tangent_impulse: [s4(|p| p.tangent_impulse[0]), s4(|p| p.tangent_impulse[1])],
+                ..WidePoint::default()
+            };
+        }
+        bundle
+    }
+
+    /// Lane `k`'s point in slot `j`, if it has one.
+    #[inline]
+    fn point<'a>(
+        &self,
+        points: &'a [PointConstraint],
+        k: usize,
+        j: usize,
+    ) -> Option<&'a PointConstraint> {
+        (j < self.count[k]).then(|| &points[self.start[k] + j])
+    }
+
+    /// Takes the separations from the scalar points and, with `inertia_too`, what
+    /// changes every substep with the inertia (`I⁻¹ J`): after
+    /// `ContactConstraints::prepare_substep`, and before the relax pass (separations
+    /// only).
+    pub(super) fn refresh(&mut self, points: &[PointConstraint], inertia_too: bool) {
+        let empty = PointConstraint::default();
+        for j in 0..self.slots {
+            let l: [&PointConstraint; LANES] =
+                std::array::from_fn(|k| self.point(points, k, j).unwrap_or(&empty));
+            let w = &mut self.points[j];
+            w.separation = f4(|k| l[k].separation);
+            if inertia_too {
+                let v3 = |f: fn(&PointConstraint) -> Vec3| Vec3x4::from_fn(|k| f(l[k]));
+                w.ia_n = v3(|p| p.ia_n);
+                w.ib_n = v3(|p| p.ib_n);
+                w.ia_t = [v3(|p| p.ia_t[0]), v3(|p| p.ia_t[1])];
+                w.ib_t = [v3(|p| p.ib_t[0]), v3(|p| p.ib_t[1])];
+            }
+        }
+    }
+
+    /// The lanes' body velocities.
+    #[inline]
+    fn gather(&self, s: &BodyStates) -> [Vec3x4; 4] {
+        let (a, b) = (self.a, self.b);
+        [
+            Vec3x4::from_fn(|k| s.lin_vel[a[k]]),
+            Vec3x4::from_fn(|k| s.ang_vel[a[k]]),
+            Vec3x4::from_fn(|k| s.lin_vel[b[k]]),
+            Vec3x4::from_fn(|k| s.ang_vel[b[k]]),
+        ]
+    }
+
+    /// Writes the lanes' velocities back to their moving bodies (in one colour no moving
+    /// body is in two lanes; static and sleeping bodies are not written).
+    #[inline]
+    fn scatter(&self, s: &mut BodyStates, [va, wa, vb, wb]: [Vec3x4; 4]) {
+        for k in 0..LANES {
+            if self.count[k] == 0 {
+                continue;
+            }
+            let (a, b) = (self.a[k], self.b[k]);
+            if self.inv_mass_a.as_array()[k] > 0.0 {
+                s.lin_vel[a] = va.lane(k);
+                s.ang_vel[a] = wa.lane(k);
+            }
+            if self.inv_mass_b.as_array()[k] > 0.0 {
+                s.lin_vel[b] = vb.lane(k);
+                s.ang_vel[b] = wb.lane(k);
+            }
+        }
+    }
+
+    /// Re-applies the accumulated impulses.
+    pub(super) fn warm_start(&self, s: &mut BodyStates) {
+        let [mut va, mut wa, mut vb, mut wb] = self.gather(s);
+        let [t0, t1] = self.tangents;
+        for p in &self.points[..self.slots] {
+            let [l0, l1] = p.tangent_impulse;
+            let linear = self.normal * p.normal_impulse + t0 * l0 + t1 * l1;
+            va -= linear * self.inv_mass_a;
+            vb += linear * self.inv_mass_b;
+            wa -= p.ia_n * p.normal_impulse + p.ia_t[0] * l0 + p.ia_t[1] * l1;
+            wb += p.ib_n * p.normal_impulse + p.ib_t[0] * l0 + p.ib_t[1] * l1;
+        }
+        self.scatter(s, [va, wa, vb, wb]);
+    }
+
+    /// One Gauss–Seidel pass over the bundle's points: the scalar
+    /// `ContactConstraints::solve`, lane by lane, with the separations of the last
+    /// [`Bundle::refresh`].
+    pub(super) fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let [mut va, mut wa, mut vb, mut wb] = self.gather(s);
+        let (ma, mb) = (self.inv_mass_a, self.inv_mass_b);
+        let n = self.normal;
+        let [t0, t1] = self.tangents;
+        let zero = f32x4::ZERO;
+        let one = f32x4::ONE;
+        let inv_h = f32x4::splat(ctx.inv_h);
+        let (bias_rate, push_out, soft_mass, soft_impulse) = if use_bias {
+            (
+                f32x4::splat(ctx.contact.bias_rate),
+                f32x4::splat(-ctx.max_push_out),
+                f32x4::splat(ctx.contact.mass_scale),
+                f32x4::splat(ctx.contact.impulse_scale),
+            )
+        } else {
+            (zero, zero, one, zero)
+        };
+        let slop = f32x4::splat(LINEAR_SLOP);
+        for p in &mut self.points[..self.slots] {
+            // Speculative (the gap may close this substep, no further) or soft.
+            let sep = p.separation;
+            let speculative = sep.simd_gt(zero);
+            let soft_bias = (bias_rate * (sep + slop).fast_min(zero)).fast_max(push_out);
+            let bias = speculative.select(sep * inv_h, soft_bias);
+            let mass_scale = speculative.select(one, soft_mass);
+            let impulse_scale = speculative.select(zero, soft_impulse);
+
+            let vn = n.dot(vb - va) + p.jb_n.dot(wb) - p.ja_n.dot(wa);
+            let l = -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+            let new = (p.normal_impulse + l).fast_max(zero);
+            let d = new - p.normal_impulse;
+            p.normal_impulse = new;
+            p.max_normal_impulse = p.max_normal_impulse.fast_max(new);
+            va -= n * (d * ma);
+            vb += n * (d * mb);
+            wa -= p.ia_n * d;
+            wb += p.ib_n * d;
+
+            // Coulomb friction on the disk of radius μλₙ.
+            let dv = vb - va;
+            let v0 = t0.dot(dv) + p.jb_t[0].dot(wb) - p.ja_t[0].dot(wa);
+            let v1 = t1.dot(dv) + p.jb_t[1].dot(wb) - p.ja_t[1].dot(wa);
+            let [o0, o1] = p.tangent_impulse;
+            let n0 = o0 - p.tangent_mass[0] * v0;
+            let n1 = o1 - p.tangent_mass[1] * v1;
+            let cap = self.friction * p.normal_impulse;
+            let len2 = n0 * n0 + n1 * n1;
+            let over = len2.simd_gt(cap * cap);
+            // Lanes not over the cap keep their impulse (their 0/0 is never picked).
+            let scale = over.select(cap / len2.sqrt(), one);
+            let (n0, n1) = (n0 * scale, n1 * scale);
+            p.tangent_impulse = [n0, n1];
+            let (d0, d1) = (n0 - o0, n1 - o1);
+            let linear = t0 * d0 + t1 * d1;
+            va -= linear * ma;
+            vb += linear * mb;
+            wa -= p.ia_t[0] * d0 + p.ia_t[1] * d1;
+            wb += p.ib_t[0] * d0 + p.ib_t[1] * d1;
+        }
+        self.scatter(s, [va, wa, vb, wb]);
+    }
+
+    /// Writes the lanes' accumulated impulses back to the scalar points.
+    pub(super) fn write_back(&self, points: &mut [PointConstraint]) {
+        for k in 0..LANES {
+            for (j, w) in self.points[..self.count[k]].iter().enumerate() {
+                let p = &mut points[self.start[k] + j];
+                p.normal_impulse = w.normal_impulse.as_array()[k];
+                p.tangent_impulse = w.tangent_impulse.map(|t| t.as_array()[k]);
+                p.max_normal_impulse = w.max_normal_impulse.as_array()[k];
+            }
+        }
+    }
+}
+
+/// Deals `pairs` (their moving bodies: `None` for a body the solve does not write) into
+/// colours, greedily in array order; a pair `wide_ok` rejects, or that no colour can
+/// take, goes to the returned one-by-one list. Returns the colours' pairs and that list.
+pub fn color(
+    bodies: usize,
+    pairs: impl Iterator<Item = (Option<usize>, Option<usize>, bool)>,
+) -> (Vec<Vec<u32>>, Vec<u32>) {
+    let words = bodies.div_ceil(64);
+    let mut used = vec![0u64; COLORS * words];
+    let mut colors: Vec<Vec<u32>> = vec![Vec::new(); COLORS];
+    let mut single = Vec::new();
+    let taken = |used: &[u64], c: usize, i: Option<usize>| {
+        i.is_some_and(|i| used[c * words + i / 64] & (1 << (i % 64)) != 0)
+    };
+    for (index, (a, b, wide_ok)) in pairs.enumerate() {
+        let free = wide_ok
+            .then(|| (0..COLORS).find(|&c| !taken(&used, c, a) && !taken(&used, c, b)))
+            .flatten();
+        match free {
+            Some(c) => {
+                for i in [a, b].into_iter().flatten() {
+                    used[c * words + i / 64] |= 1 << (i % 64);
+                }
+                colors[c].push(index as u32);
+            }
+            None => single.push(index as u32),
+        }
+    }
+    (colors, single)
+}
