@@ -274,6 +274,9 @@ pub struct AlignPart {
     /// The effective mass `K = [u v]ᵀ (I_a⁻¹ + I_b⁻¹) [u v]`: `k11`, `k12`, `k22`, and its
     /// determinant.
     k: [f32; 4],
+    /// How a unit impulse along each row turns each body: `I_a⁻¹ u`, `I_a⁻¹ v`,
+    /// `I_b⁻¹ u`, `I_b⁻¹ v`, so an iteration applies its impulse with scaled additions.
+    turn: [Vec3; 4],
 }
 
 impl AlignPart {
@@ -297,17 +300,27 @@ impl AlignPart {
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (da, db, u, v) = self.basis(f, s);
         let e = db.cross(da);
-        let m = f.inv_inertia_sum(s);
-        let (k11, k12, k22) = (u.dot(m * u), u.dot(m * v), v.dot(m * v));
+        let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
+        self.turn = [ia * u, ia * v, ib * u, ib * v];
+        let [au, av, bu, bv] = self.turn;
+        let (k11, k12, k22) = (u.dot(au + bu), u.dot(av + bv), v.dot(av + bv));
         self.u = u;
         self.v = v;
         self.error = [u.dot(e), v.dot(e)];
         self.k = [k11, k12, k22, k11 * k22 - k12 * k12];
     }
 
+    /// Applies the angular impulse `u l₀ + v l₁` to a and its opposite to b.
+    #[inline]
+    fn apply(&self, f: &JointFrame, s: &mut BodyStates, [l0, l1]: [f32; 2]) {
+        let [au, av, bu, bv] = self.turn;
+        s.ang_vel[f.a] += au * l0 + av * l1;
+        s.ang_vel[f.b] -= bu * l0 + bv * l1;
+    }
+
     /// Re-applies the accumulated impulse along the rows (after [`AlignPart::prepare`]).
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        f.apply_angular(s, self.u * self.impulse[0] + self.v * self.impulse[1]);
+        self.apply(f, s, self.impulse);
     }
 
     /// One soft 2×2 block update; the relax pass (`use_bias` false) first prepares
@@ -335,7 +348,7 @@ impl AlignPart {
         let l1 = -soft.mass_scale * sol[1] - soft.impulse_scale * self.impulse[1];
         self.impulse[0] += l0;
         self.impulse[1] += l1;
-        f.apply_angular(s, u * l0 + v * l1);
+        self.apply(f, s, [l0, l1]);
     }
 
     /// Position projection: rotates the bodies so the two directions align again.
@@ -385,6 +398,11 @@ pub struct AxisRow {
     pub impulse: f32,
     /// Whether the row is near enough to its bound to be solved this substep.
     pub active: bool,
+    /// How a unit impulse along the axis turns each body, `I_a⁻¹ axis` and `I_b⁻¹ axis`,
+    /// and the row's `k = axisᵀ (I_a⁻¹ + I_b⁻¹) axis`: fixed from [`AxisRow::set`] to
+    /// the end of the substep, as the inertias are.
+    turn: [Vec3; 2],
+    k: f32,
 }
 
 impl AxisRow {
@@ -396,24 +414,37 @@ impl AxisRow {
             kind,
             impulse: 0.0,
             active: false,
+            turn: [Vec3::ZERO; 2],
+            k: 0.0,
         }
     }
 
-    /// Sets axis and value; rows far from their bound (more than `margin`) sleep.
-    pub fn set(&mut self, axis: Vec3, c: f32, margin: f32) {
+    /// Sets axis and value on the current pose and inertias of `f`'s bodies; rows far
+    /// from their bound (more than `margin`) sleep.
+    pub fn set(&mut self, f: &JointFrame, s: &BodyStates, axis: Vec3, c: f32, margin: f32) {
         self.axis = axis;
         self.c = c;
         let active = self.kind == RowKind::Equality || c < margin;
         if !active {
             self.impulse = 0.0;
+        } else {
+            self.turn = [s.inv_inertia[f.a] * axis, s.inv_inertia[f.b] * axis];
+            self.k = axis.dot(self.turn[0] + self.turn[1]);
         }
         self.active = active;
+    }
+
+    /// Applies the angular impulse `axis λ` to a and its opposite to b.
+    #[inline]
+    fn apply(&self, f: &JointFrame, s: &mut BodyStates, lambda: f32) {
+        s.ang_vel[f.a] += self.turn[0] * lambda;
+        s.ang_vel[f.b] -= self.turn[1] * lambda;
     }
 
     /// Re-applies the accumulated impulse.
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         if self.active {
-            f.apply_angular(s, self.axis * self.impulse);
+            self.apply(f, s, self.impulse);
         }
     }
 
@@ -422,7 +453,7 @@ impl AxisRow {
         if !self.active {
             return;
         }
-        let k = self.axis.dot(f.inv_inertia_sum(s) * self.axis);
+        let k = self.k;
         if !(k > 1e-20) {
             return;
         }
@@ -460,7 +491,7 @@ impl AxisRow {
             }
         };
         self.impulse = new;
-        f.apply_angular(s, self.axis * (new - old));
+        self.apply(f, s, new - old);
     }
 
     /// Position projection of a hard limit or an equality with the axis and value last

@@ -137,7 +137,7 @@ impl Swing {
                 } else {
                     a.any_orthonormal_vector()
                 };
-                row.set(-n, *half_angle - phi, MARGIN);
+                row.set(f, s, -n, *half_angle - phi, MARGIN);
             }
             Swing::Tight(p) => p.prepare(f, s),
             Swing::Pyramid {
@@ -155,7 +155,7 @@ impl Swing {
                 for (row, n) in rows.iter_mut().zip(normals) {
                     // d(shaft·n)/dt = (ω_a − ω_b)·(shaft × n).
                     let c = -sh.dot(n);
-                    row.set(-sh.cross(n), c, MARGIN);
+                    row.set(f, s, -sh.cross(n), c, MARGIN);
                 }
             }
         }
@@ -364,8 +364,8 @@ impl AngleLimit {
     pub fn update(&mut self, f: &JointFrame, s: &BodyStates) {
         let (axis, angle) = self.gauge.measure(f, s);
         self.gauge.angle = angle;
-        self.rows[0].set(axis, angle - self.range.min, MARGIN);
-        self.rows[1].set(-axis, self.range.max - angle, MARGIN);
+        self.rows[0].set(f, s, axis, angle - self.range.min, MARGIN);
+        self.rows[1].set(f, s, -axis, self.range.max - angle, MARGIN);
     }
 
     /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).

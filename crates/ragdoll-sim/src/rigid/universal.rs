@@ -39,7 +39,13 @@ impl UniversalJoint {
         let s1 = s.rot[f.a] * self.shaft_a;
         let s2 = s.rot[f.b] * self.shaft_b;
         let mut row = self.cross_row;
-        row.set(s1.cross(s2), s1.dot(s2) - self.rest_dot, f32::INFINITY);
+        row.set(
+            f,
+            s,
+            s1.cross(s2),
+            s1.dot(s2) - self.rest_dot,
+            f32::INFINITY,
+        );
         row
     }
 }
