@@ -8,7 +8,7 @@
 //! so they may appear in every pair of a colour: the ground does), and each colour is
 //! cut into `Bundle`s of [`LANES`] pairs, one per lane of an `f32x4`. A bundle is then
 //! solved with exactly the scalar solver's arithmetic per lane — the same rows, the same
-//! soft coefficients, the same friction disk — at a quarter of the instructions.
+//! soft coefficients, the same friction disk — four lanes to an instruction.
 //!
 //! What changes is only the order: the pairs no colour could take (a body in more than
 //! [`COLORS`] pairs), the rolling pairs and the pairs with more than [`SLOTS`] points are
@@ -395,4 +395,64 @@ pub fn color(
         }
     }
     (colors, single)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_colour_never_holds_a_moving_body_twice_but_shares_static_ones() {
+        // A chain of moving bodies 0-1-2-3, each also on the ground (static: None).
+        let pairs = [
+            (Some(0), Some(1), true),
+            (Some(1), Some(2), true),
+            (Some(2), Some(3), true),
+            (Some(0), None, true),
+            (Some(1), None, true),
+            (Some(2), None, true),
+            (Some(3), None, true),
+            (Some(3), Some(0), false),
+        ];
+        let (colors, single) = color(4, pairs.iter().copied());
+        assert_eq!(
+            single,
+            vec![7],
+            "a pair the caller keeps scalar stays scalar"
+        );
+        let mut seen = 0;
+        for c in &colors {
+            let mut bodies: Vec<usize> = c
+                .iter()
+                .flat_map(|&i| [pairs[i as usize].0, pairs[i as usize].1])
+                .flatten()
+                .collect();
+            seen += c.len();
+            let n = bodies.len();
+            bodies.sort_unstable();
+            bodies.dedup();
+            assert_eq!(bodies.len(), n, "a moving body twice in colour {c:?}");
+        }
+        assert_eq!(seen, 7);
+        // Greedy in array order: the chain's first and third links share the first colour.
+        assert_eq!(colors[0], vec![0, 2]);
+    }
+
+    #[test]
+    fn a_body_in_more_pairs_than_colours_overflows_to_the_scalar_solve() {
+        let pairs = (1..=COLORS + 3).map(|i| (Some(0), Some(i), true));
+        let (colors, single) = color(COLORS + 4, pairs);
+        assert!(colors.iter().all(|c| c.len() == 1));
+        assert_eq!(single, vec![16, 17, 18]);
+    }
+
+    #[test]
+    fn lanes_round_trip() {
+        let v = Vec3x4::from_fn(|k| Vec3::new(k as f32, 10.0 + k as f32, -(k as f32)));
+        for k in 0..LANES {
+            assert_eq!(v.lane(k), Vec3::new(k as f32, 10.0 + k as f32, -(k as f32)));
+        }
+        let d = v.dot(v).to_array();
+        assert_eq!(d[2], 4.0 + 144.0 + 4.0);
+    }
 }
