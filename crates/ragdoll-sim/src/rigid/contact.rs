@@ -95,22 +95,26 @@ impl ContactPair {
         self.touching
     }
 
+    /// How many of the stored points are live: all of them when touching, else none
+    /// (the manifold is kept for parry, the points carry no solver state).
+    fn live(&self) -> usize {
+        if self.touching { self.points.len() } else { 0 }
+    }
+
     /// The solver points (none unless touching).
     pub fn points(&self) -> impl Iterator<Item = &ContactPoint> {
-        let n = if self.touching { self.points.len() } else { 0 };
-        self.points[..n].iter().map(|c| &c.data)
+        self.points[..self.live()].iter().map(|c| &c.data)
     }
 
     /// The points with their separation at the last narrow phase (none unless
     /// touching).
     pub(super) fn contact_points(&self) -> impl Iterator<Item = (&ContactPoint, f32)> {
-        let n = if self.touching { self.points.len() } else { 0 };
-        self.points[..n].iter().map(|c| (&c.data, c.dist))
+        self.points[..self.live()].iter().map(|c| (&c.data, c.dist))
     }
 
     /// The points, to write their impulses (none unless touching).
     pub(super) fn contact_points_mut(&mut self) -> impl Iterator<Item = &mut ContactPoint> {
-        let n = if self.touching { self.points.len() } else { 0 };
+        let n = self.live();
         self.points[..n].iter_mut().map(|c| &mut c.data)
     }
 
@@ -126,11 +130,7 @@ impl ContactPair {
     /// kept, as many as are looked up.
     fn old_impulses(&self) -> ([(u64, f32, Vec3); 8], usize) {
         let mut old: [(u64, f32, Vec3); 8] = [(u64::MAX, 0.0, Vec3::ZERO); 8];
-        let n_old = if self.touching {
-            self.points.len().min(8)
-        } else {
-            0
-        };
+        let n_old = self.live().min(8);
         for (slot, c) in old.iter_mut().zip(&self.points[..n_old]) {
             *slot = (point_id(c), c.data.normal_impulse, c.data.tangent_impulse);
         }

@@ -148,6 +148,7 @@ impl ContactConstraints {
             let (ia, ib) = (s.inv_inertia[a], s.inv_inertia[b]);
             let mass =
                 |ja: Vec3, jb: Vec3| inverse_or_zero(ma + mb + ja.dot(ia * ja) + jb.dot(ib * jb));
+            let dv = s.lin_vel[b] - s.lin_vel[a];
             let start = out.points.len();
             for (c, separation) in pair.contact_points() {
                 let ra = s.rot[a] * c.local_a;
@@ -155,7 +156,6 @@ impl ContactConstraints {
                 let (ja_n, jb_n) = (ra.cross(normal), rb.cross(normal));
                 let ja_t = tangents.map(|t| ra.cross(t));
                 let jb_t = tangents.map(|t| rb.cross(t));
-                let dv = s.lin_vel[b] - s.lin_vel[a];
                 out.points.push(PointConstraint {
                     local_a: c.local_a,
                     local_b: c.local_b,
@@ -309,8 +309,20 @@ impl ContactConstraints {
     /// impulse just computed (Box2D v3's order; friction first would cap it with a
     /// normal impulse the relax pass is about to raise, and slide too easily). The biased
     /// pass reads the separations of [`ContactConstraints::prepare_substep`]; the relax
-    /// pass, after the positions moved, evaluates its own.
+    /// pass, after the positions moved, evaluates them anew first.
     pub fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        if !use_bias {
+            // The relax pass comes after the positions moved. The velocity solve does not
+            // move them, so every point's separation is evaluated once, up front.
+            for pc in &self.pairs {
+                for p in &mut self.points[pc.start..pc.start + pc.count] {
+                    p.separation = current_separation(pc, p, s);
+                }
+            }
+            for bundle in &mut self.bundles {
+                bundle.refresh(&self.points, false);
+            }
+        }
         for &i in &self.single {
             let pc = &mut self.pairs[i as usize];
             let (a, b) = (pc.a, pc.b);
@@ -321,12 +333,8 @@ impl ContactConstraints {
             let [t0, t1] = pc.tangents;
             let mut total_normal = 0.0;
             for k in pc.start..pc.start + pc.count {
-                let sep = if use_bias {
-                    self.points[k].separation
-                } else {
-                    current_separation(pc, &self.points[k], s)
-                };
                 let p = &mut self.points[k];
+                let sep = p.separation;
                 let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
                     // Speculative: the gap may close this substep, no further.
                     (sep * ctx.inv_h, 1.0, 0.0)
@@ -390,17 +398,6 @@ impl ContactConstraints {
             s.ang_vel[a] = wa;
             s.lin_vel[b] = vb;
             s.ang_vel[b] = wb;
-        }
-        if !use_bias && !self.bundles.is_empty() {
-            // The relax pass comes after the positions moved.
-            for pc in &self.pairs {
-                for p in &mut self.points[pc.start..pc.start + pc.count] {
-                    p.separation = current_separation(pc, p, s);
-                }
-            }
-            for bundle in &mut self.bundles {
-                bundle.refresh(&self.points, false);
-            }
         }
         for bundle in &mut self.bundles {
             bundle.solve(s, ctx, use_bias);
