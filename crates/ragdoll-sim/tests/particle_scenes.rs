@@ -8,6 +8,7 @@
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::scene::JointKind;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::snapshot::{RenderSnapshot, StickRole};
 use ragdoll_sim::{Method, SceneDesc};
@@ -187,6 +188,61 @@ fn paper_finding_articulated_figures_gain_energy_in_paper_mode_only() {
         );
         assert!(improved.energy_gain <= 0.02);
     }
+}
+
+/// `s` with every body and joint anchor raised by `dy` metres.
+fn raised(mut s: SceneDesc, dy: f32) -> SceneDesc {
+    let up = Vec3::new(0.0, dy, 0.0);
+    for b in &mut s.bodies {
+        b.pose.position += up;
+    }
+    for c in &mut s.constraints {
+        match &mut c.kind {
+            JointKind::BallAndSocket { anchor, .. }
+            | JointKind::Universal { anchor, .. }
+            | JointKind::Hinge { anchor, .. } => *anchor += up,
+            JointKind::Spring {
+                anchor1, anchor2, ..
+            } => {
+                *anchor1 += up;
+                *anchor2 += up;
+            }
+            JointKind::Slider { .. } | JointKind::Fixed => {}
+        }
+    }
+    s
+}
+
+/// The capsule human dropped from 24 heights 1 mm apart: its energy never rises by
+/// more than 2 %, whichever way it lands. The shoulder's twist limit (±45°) is reached
+/// with the arm swung far (130°); corrected by turning the upper arm about its own axis,
+/// on which it has almost no inertia, it fought the elbow every substep and spun the arm
+/// up (state energy +30 % at one of these heights, 6 of 24 over 2 % by the frame
+/// measure). Corrected along the twist angle's gradient it measures at most 0.6 %.
+#[test]
+fn capsule_human_keeps_its_energy_from_any_drop_height() {
+    let base = scene("capsule-human", 1);
+    let mut worst = (0.0f64, 0);
+    for mm in 0..24 {
+        let (_, state_gain, _) = run(
+            &raised(base.clone(), mm as f32 * 1e-3),
+            ParticleSolver::Improved,
+            10.0,
+        );
+        if state_gain > worst.0 {
+            worst = (state_gain, mm);
+        }
+    }
+    println!(
+        "capsule human: largest state energy rise {:.4} (raised {} mm)",
+        worst.0, worst.1
+    );
+    assert!(
+        worst.0 <= 0.02,
+        "state energy rose by {:.4} when raised {} mm",
+        worst.0,
+        worst.1
+    );
 }
 
 fn com(w: &ParticleWorld, body: usize) -> (Vec3, Vec3) {

@@ -65,9 +65,20 @@ pub(crate) fn perpendicular(n: Vec3) -> Vec3 {
 impl AngleLimit {
     /// Current angle: rotation of body1 relative to body2 about the axis, right-handed,
     /// zero at rest — the twist of the swing–twist decomposition of body1's rotation
-    /// since rest relative to body2, `Δ = (q_b⁻¹ q_a)_rest⁻¹ (q_b⁻¹ q_a)` in body1's
-    /// frame: `2 atan2(Δ_xyz · axis, Δ_w)`. Unlike projecting a reference direction it
-    /// stays defined however far the joint swings (short of a half turn).
+    /// since rest relative to body2, `Δ = (q_b⁻¹ q_a)_rest⁻¹ (q_b⁻¹ q_a) = (w, v)` in
+    /// body1's frame: `φ = 2 atan2(v · x, w)` with `x` the axis. Unlike projecting a
+    /// reference direction it stays defined however far the joint swings (short of a
+    /// half turn).
+    ///
+    /// Also returns the angle's gradient `J` (world), `φ̇ = J · (ω_a − ω_b)`. A turn `δ`
+    /// of body1 in its own frame moves `Δ` to `Δ (0, δ/2)`, so with `y = v · x`
+    /// ```text
+    /// J = q_a (w² x + w (x × v) + y v) / (w² + y²)
+    /// ```
+    /// and a turn of body2 acts as the opposite turn of body1. In pure twist `J` is the
+    /// axis; once the joint has swung, turns across the axis move the twist too (by up
+    /// to `tan(swing/2)` times as much), and the swing–twist angle is no longer a
+    /// rotation about the axis alone.
     pub fn angle(&self, bones: &[Bone], a: Side, b: Side) -> (f32, Vec3) {
         let qa = side_rot(bones, a);
         let qb = side_rot(bones, b);
@@ -75,8 +86,16 @@ impl AngleLimit {
         if d.w < 0.0 {
             d = -d;
         }
-        let phi = 2.0 * Vec3::new(d.x, d.y, d.z).dot(self.axis_a).atan2(d.w);
-        (phi, qa * self.axis_a)
+        let (x, v, w) = (self.axis_a, Vec3::new(d.x, d.y, d.z), d.w);
+        let y = v.dot(x);
+        let phi = 2.0 * y.atan2(w);
+        let n = w * w + y * y;
+        let grad = if n > 1e-12 {
+            (x * (w * w) + x.cross(v) * w + v * y) / n
+        } else {
+            x
+        };
+        (phi, qa * grad)
     }
 
     /// Excess beyond the range (rad, ≥ 0).
@@ -85,12 +104,23 @@ impl AngleLimit {
         (phi - self.max).max(self.min - phi).max(0.0)
     }
 
-    /// Rotates the bones back into the range.
+    /// Rotates the bones back into the range: XPBD on `C = φ − bound` along its gradient
+    /// `J` ([`AngleLimit::angle`]), `Δλ = −C / (Jᵀ W J)` with `W` the two inverse
+    /// inertias.
+    ///
+    /// Turning about the axis alone (`J`'s value in pure twist) also restores the angle,
+    /// but at a large swing it is far from the least-inertia correction: the capsule
+    /// human's shoulder (twist ±45°, swung 130°) then turned the upper arm, light about
+    /// its own axis, back and forth against the elbow every substep and spun the arm up
+    /// to 60-120 rad/s; over 24 starts shifted 0-23 mm in height the state energy rose
+    /// by up to 30 %, and by at most 0.6 % along the gradient.
     pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32) {
-        let (phi, t) = self.angle(bones, a, b);
+        let (phi, j) = self.angle(bones, a, b);
         let target = phi.clamp(self.min, self.max);
-        if target != phi {
-            angular(bones, a, b, t * (target - phi), alpha_tilde);
+        let j2 = j.length_squared();
+        if target != phi && j2 > 1e-12 {
+            // `angular` turns by an angle along a unit direction: `J/|J|` by `C/|J|`.
+            angular(bones, a, b, j * ((target - phi) / j2), alpha_tilde);
         }
     }
 }
