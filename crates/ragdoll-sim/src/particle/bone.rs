@@ -327,14 +327,16 @@ impl Lever {
     fn apply(self, bones: &mut [Bone], linear: Vec3, lambda: f32) {
         let b = &mut bones[self.bone];
         b.dcom += linear * b.inv_mass();
-        let dtheta = b.rot * (self.turn * lambda);
-        b.rot = rotate(b.rot, dtheta);
+        b.rot = rotate_local(b.rot, self.turn * lambda);
     }
 }
 
-/// `q + ½ [θ, 0] q`, normalised: the XPBD orientation update for a small rotation θ.
-pub(crate) fn rotate(q: Quat, theta: Vec3) -> Quat {
-    let dq = Quat::from_xyzw(theta.x, theta.y, theta.z, 0.0) * q;
+/// `q + ½ [θ, 0] q`, normalised: the XPBD orientation update for a small rotation θ
+/// (world), given in the body frame as `θ_local = q⁻¹ θ q`. Since `[θ, 0] q = q [θ_local,
+/// 0]`, this is `q + ½ q [θ_local, 0]`: no rotation of θ into the world first, which
+/// every correction of the solver would otherwise pay.
+pub(crate) fn rotate_local(q: Quat, theta_local: Vec3) -> Quat {
+    let dq = q * Quat::from_xyzw(theta_local.x, theta_local.y, theta_local.z, 0.0);
     Quat::from_xyzw(
         q.x + 0.5 * dq.x,
         q.y + 0.5 * dq.y,
