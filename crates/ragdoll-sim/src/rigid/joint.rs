@@ -112,24 +112,41 @@ pub struct PointPart {
     rb: Vec3,
     /// `p_b − p_a` at `prepare`.
     c: Vec3,
+    /// How an impulse `p` on b turns each body, `Δω_b = I_b⁻¹ (r_b × p) = T_b p` and
+    /// `Δω_a = −T_a p`: `T = I⁻¹ r̂` at `prepare`, so an iteration applies its impulse with
+    /// two matrix–vector products and no cross products.
+    turn_a: Mat3,
+    turn_b: Mat3,
     /// `K⁻¹` at `prepare`, `None` when `K` is singular (both bodies static).
     k_inv: Option<Mat3>,
 }
 
 impl PointPart {
-    /// Evaluates the offsets, the error and `K⁻¹` on the current positions.
+    /// Evaluates the offsets, the error, the turns and `K⁻¹` on the current positions.
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (ra, rb) = f.offsets(s);
         self.ra = ra;
         self.rb = rb;
         self.c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
-        self.k_inv = invert(point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb));
+        let (ta, ka) = point_response(s, f.a, ra);
+        let (tb, kb) = point_response(s, f.b, rb);
+        self.turn_a = ta;
+        self.turn_b = tb;
+        self.k_inv = invert_symmetric(ka + kb);
+    }
+
+    /// Applies the impulse `p` on b and `−p` on a.
+    #[inline]
+    fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3) {
+        s.lin_vel[f.a] -= p * s.inv_mass[f.a];
+        s.ang_vel[f.a] -= self.turn_a * p;
+        s.lin_vel[f.b] += p * s.inv_mass[f.b];
+        s.ang_vel[f.b] += self.turn_b * p;
     }
 
     /// Re-applies last substep's impulse (after [`PointPart::prepare`]).
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        s.apply_impulse(f.a, self.ra, -self.impulse);
-        s.apply_impulse(f.b, self.rb, self.impulse);
+        self.apply(f, s, self.impulse);
     }
 
     /// One soft Gauss–Seidel update; the relax pass (`use_bias` false) first prepares
@@ -145,8 +162,7 @@ impl PointPart {
         let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * self.c))
             - soft.impulse_scale * self.impulse;
         self.impulse += p;
-        s.apply_impulse(f.a, ra, -p);
-        s.apply_impulse(f.b, rb, p);
+        self.apply(f, s, p);
     }
 
     /// Position projection: moves both bodies by `P = −K⁻¹ C` so the anchors meet, the
@@ -172,19 +188,73 @@ impl PointPart {
             }
             return;
         }
-        let k = point_mass_matrix(s, f.a, ra) + point_mass_matrix(s, f.b, rb);
-        let Some(k_inv) = invert(k) else { return };
+        let (_, ka) = point_response(s, f.a, ra);
+        let (_, kb) = point_response(s, f.b, rb);
+        let Some(k_inv) = invert_symmetric(ka + kb) else {
+            return;
+        };
         let p = -(k_inv * c);
         s.apply_position_impulse(f.a, ra, -p);
         s.apply_position_impulse(f.b, rb, p);
     }
 }
 
-/// `m⁻¹ 1 − r̂ I⁻¹ r̂` for one body: the response of a point's velocity to an impulse there.
+/// A symmetric 3×3 matrix by its six entries, `m00, m01, m02, m11, m12, m22`: an
+/// effective mass, symmetric by construction, built and inverted with about half the
+/// products of a general one.
+#[derive(Clone, Copy, Debug)]
+pub struct SymMat3(pub [f32; 6]);
+
+impl std::ops::Add for SymMat3 {
+    type Output = SymMat3;
+
+    /// Entry-wise sum.
+    #[inline]
+    fn add(self, o: SymMat3) -> SymMat3 {
+        SymMat3(std::array::from_fn(|k| self.0[k] + o.0[k]))
+    }
+}
+
+/// A point's response to an impulse on body `i` at world offset `r`: the turn
+/// `T = I⁻¹ r̂` (`Δω = T p`) and the point-mass matrix `m⁻¹ 1 − r̂ I⁻¹ r̂ = m⁻¹ 1 + r̂ᵀ T`,
+/// whose entry `(j, k)` is `ĉ_j · t_k` with `ĉ_j` the columns of `r̂` and `t_k` those of
+/// `T`.
 #[inline]
-pub fn point_mass_matrix(s: &BodyStates, i: usize, r: Vec3) -> Mat3 {
-    let rx = super::integrate::skew(r);
-    Mat3::from_diagonal(Vec3::splat(s.inv_mass[i])) - rx * s.inv_inertia[i] * rx
+pub fn point_response(s: &BodyStates, i: usize, r: Vec3) -> (Mat3, SymMat3) {
+    let c0 = Vec3::new(0.0, r.z, -r.y);
+    let c1 = Vec3::new(-r.z, 0.0, r.x);
+    let c2 = Vec3::new(r.y, -r.x, 0.0);
+    let ii = s.inv_inertia[i];
+    let t = Mat3::from_cols(ii * c0, ii * c1, ii * c2);
+    let m = s.inv_mass[i];
+    let k = SymMat3([
+        m + c0.dot(t.x_axis),
+        c0.dot(t.y_axis),
+        c0.dot(t.z_axis),
+        m + c1.dot(t.y_axis),
+        c1.dot(t.z_axis),
+        m + c2.dot(t.z_axis),
+    ]);
+    (t, k)
+}
+
+/// Inverse of a symmetric effective-mass matrix by its cofactors, `None` when singular
+/// (both bodies static).
+#[inline]
+pub fn invert_symmetric(k: SymMat3) -> Option<Mat3> {
+    let [a, b, c, d, e, f] = k.0;
+    let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
+    let det = a * ca + b * cb + c * cc;
+    if !(det.is_finite() && det.abs() > 1e-20) {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
+    Some(Mat3::from_cols(
+        Vec3::new(ca, cb, cc) * inv,
+        Vec3::new(cb, cd, ce) * inv,
+        Vec3::new(cc, ce, cf) * inv,
+    ))
 }
 
 /// Inverse of a 3×3 effective-mass matrix, `None` when singular (both bodies static).
