@@ -81,6 +81,13 @@ impl BodyStates {
         self.inv_inertia[i] = from.inv_inertia[j];
     }
 
+    /// Whether an impulse can move body `i`: some inverse mass or inertia (zero for the
+    /// static anchor, fixed and sleeping bodies, and bodies the projection pass holds).
+    #[inline]
+    pub fn is_mobile(&self, i: usize) -> bool {
+        self.inv_mass[i] != 0.0 || self.inv_inertia[i] != Mat3::ZERO
+    }
+
     /// Velocity of the material point at world offset `r` from body `i`'s centre of mass.
     #[inline]
     pub fn point_velocity(&self, i: usize, r: Vec3) -> Vec3 {

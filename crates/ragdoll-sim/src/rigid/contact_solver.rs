@@ -449,6 +449,10 @@ impl ContactConstraints {
     pub fn project(&self, s: &mut BodyStates) {
         for pc in &self.pairs {
             let (a, b) = (pc.a, pc.b);
+            // Both bodies held still (see `JointSet::project`): nothing can move.
+            if !(s.is_mobile(a) || s.is_mobile(b)) {
+                continue;
+            }
             let n = pc.normal;
             for p in &self.points[pc.start..pc.start + pc.count] {
                 let sep = current_separation(pc, p, s);

@@ -261,9 +261,18 @@ impl JointSet {
         for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.solve(s, ctx, use_bias) });
     }
 
-    /// One position-projection pass over joints touching an awake body.
+    /// One position-projection pass over joints that can move: touching an awake body
+    /// that the pass has not made immobile ([`super::project`] holds resting bodies as
+    /// static). A joint between two immobile bodies would measure its errors and build
+    /// its effective masses only to find them singular; once a pile starts to settle
+    /// that is most of them.
     pub fn project(&self, s: &mut BodyStates, awake: &[bool]) {
-        for_each_joint_ref!(self, j => if touches_awake(j.frame(), awake) { j.project(s) });
+        for_each_joint_ref!(self, j => {
+            let f = j.frame();
+            if touches_awake(f, awake) && (s.is_mobile(f.a) || s.is_mobile(f.b)) {
+                j.project(s)
+            }
+        });
     }
 
     /// Largest joint gap now (m).
