@@ -249,16 +249,23 @@ impl ContactConstraints {
 
     /// Per substep, once the world inverse inertias are refreshed: each row's
     /// `I⁻¹ (r × d)`, the rolling mass, and the separation the biased iterations share
-    /// (between the velocity and the position integration the bodies do not move).
+    /// (between the velocity and the position integration the bodies do not move). The
+    /// bundled pairs' `I⁻¹ (r × d)` are formed in their lanes (`Bundle::refresh`), so
+    /// here only for the pairs solved one by one.
     pub fn prepare_substep(&mut self, s: &BodyStates) {
-        for pc in &mut self.pairs {
+        for pc in &self.pairs {
+            for p in &mut self.points[pc.start..pc.start + pc.count] {
+                p.separation = current_separation(pc, p, s);
+            }
+        }
+        for &i in &self.single {
+            let pc = &mut self.pairs[i as usize];
             let (ia, ib) = (s.inv_inertia[pc.a], s.inv_inertia[pc.b]);
             for p in &mut self.points[pc.start..pc.start + pc.count] {
                 p.ia_n = ia * p.ja_n;
                 p.ib_n = ib * p.jb_n;
                 p.ia_t = p.ja_t.map(|j| ia * j);
                 p.ib_t = p.jb_t.map(|j| ib * j);
-                p.separation = current_separation(pc, p, s);
             }
             if pc.rolling_arm > 0.0 {
                 let k = ia + ib;
@@ -266,7 +273,7 @@ impl ContactConstraints {
             }
         }
         for bundle in &mut self.bundles {
-            bundle.refresh(&self.points, true);
+            bundle.refresh(&self.points, Some(s));
         }
     }
 
@@ -320,7 +327,7 @@ impl ContactConstraints {
                 }
             }
             for bundle in &mut self.bundles {
-                bundle.refresh(&self.points, false);
+                bundle.refresh(&self.points, None);
             }
         }
         for &i in &self.single {
@@ -433,8 +440,10 @@ impl ContactConstraints {
                     p.normal_impulse = new;
                     s.lin_vel[a] -= pc.normal * (d * pc.inv_mass_a);
                     s.lin_vel[b] += pc.normal * (d * pc.inv_mass_b);
-                    s.ang_vel[a] -= p.ia_n * d;
-                    s.ang_vel[b] += p.ib_n * d;
+                    // The last substep's inertias, still in place (a bundled point's
+                    // `I⁻¹ J` lives in its bundle).
+                    s.ang_vel[a] -= (s.inv_inertia[a] * p.ja_n) * d;
+                    s.ang_vel[b] += (s.inv_inertia[b] * p.jb_n) * d;
                 }
             }
         }

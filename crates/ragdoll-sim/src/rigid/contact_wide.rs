@@ -22,7 +22,7 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 use std::ops::{Add, AddAssign, Mul, Sub, SubAssign};
 use wide::f32x4;
 
@@ -117,6 +117,37 @@ impl SubAssign for Vec3x4 {
     #[inline]
     fn sub_assign(&mut self, o: Vec3x4) {
         *self = *self - o;
+    }
+}
+
+/// Four 3×3 matrices, one per lane, by columns.
+#[derive(Clone, Copy, Debug)]
+struct Mat3x4 {
+    cols: [Vec3x4; 3],
+}
+
+impl Mat3x4 {
+    /// The matrices `f(0) … f(3)` in the four lanes.
+    #[inline]
+    fn from_fn(f: impl Fn(usize) -> Mat3) -> Mat3x4 {
+        let m: [Mat3; LANES] = std::array::from_fn(f);
+        Mat3x4 {
+            cols: [
+                Vec3x4::from_fn(|k| m[k].x_axis),
+                Vec3x4::from_fn(|k| m[k].y_axis),
+                Vec3x4::from_fn(|k| m[k].z_axis),
+            ],
+        }
+    }
+}
+
+impl Mul<Vec3x4> for Mat3x4 {
+    type Output = Vec3x4;
+    /// `x_axis v.x + y_axis v.y + z_axis v.z`, summed in glam's order.
+    #[inline]
+    fn mul(self, v: Vec3x4) -> Vec3x4 {
+        let [c0, c1, c2] = self.cols;
+        c0 * v.x + c1 * v.y + c2 * v.z
     }
 }
 
@@ -219,24 +250,26 @@ impl Bundle {
         (j < self.count[k]).then(|| &points[self.start[k] + j])
     }
 
-    /// Takes the separations from the scalar points and, with `inertia_too`, what
-    /// changes every substep with the inertia (`I⁻¹ J`): after
-    /// `ContactConstraints::prepare_substep`, and before the relax pass (separations
-    /// only).
-    pub(super) fn refresh(&mut self, points: &[PointConstraint], inertia_too: bool) {
+    /// Takes the separations from the scalar points and, given the bodies (`inertia`),
+    /// forms what changes every substep with the inertia, `I⁻¹ J` of every row, in the
+    /// lanes: after `ContactConstraints::prepare_substep`, and before the relax pass
+    /// (separations only). Each lane's product is glam's `Mat3 * Vec3`, column by
+    /// column in the same order, so the lanes hold the scalar solver's bits.
+    pub(super) fn refresh(&mut self, points: &[PointConstraint], inertia: Option<&BodyStates>) {
         let empty = PointConstraint::default();
         for j in 0..self.slots {
             let l: [&PointConstraint; LANES] =
                 std::array::from_fn(|k| self.point(points, k, j).unwrap_or(&empty));
-            let w = &mut self.points[j];
-            w.separation = f4(|k| l[k].separation);
-            if inertia_too {
-                let v3 = |f: fn(&PointConstraint) -> Vec3| Vec3x4::from_fn(|k| f(l[k]));
-                w.ia_n = v3(|p| p.ia_n);
-                w.ib_n = v3(|p| p.ib_n);
-                w.ia_t = [v3(|p| p.ia_t[0]), v3(|p| p.ia_t[1])];
-                w.ib_t = [v3(|p| p.ib_t[0]), v3(|p| p.ib_t[1])];
-            }
+            self.points[j].separation = f4(|k| l[k].separation);
+        }
+        let Some(s) = inertia else { return };
+        let ia = Mat3x4::from_fn(|k| s.inv_inertia[self.a[k]]);
+        let ib = Mat3x4::from_fn(|k| s.inv_inertia[self.b[k]]);
+        for w in &mut self.points[..self.slots] {
+            w.ia_n = ia * w.ja_n;
+            w.ib_n = ib * w.jb_n;
+            w.ia_t = w.ja_t.map(|j| ia * j);
+            w.ib_t = w.jb_t.map(|j| ib * j);
         }
     }
 
