@@ -81,10 +81,11 @@ pub(super) struct PointConstraint {
     /// `r_a × t_k`, `r_b × t_k`.
     pub(super) ja_t: [Vec3; 2],
     pub(super) jb_t: [Vec3; 2],
-    /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia.
+    /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia: set only for the
+    /// pairs solved one by one (a bundle forms its own in its lanes).
     pub(super) ia_n: Vec3,
     pub(super) ib_n: Vec3,
-    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`.
+    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`, likewise.
     pub(super) ia_t: [Vec3; 2],
     pub(super) ib_t: [Vec3; 2],
     /// `1 / (n·K·n)`, with the inertia at the start of the step.
