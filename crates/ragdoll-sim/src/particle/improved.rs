@@ -5,7 +5,8 @@
 //! ([`substeps`]: the scene's substeps × iterations):
 //! 1. integrate every particle (`v += g h`, `x += v h`: Verlet in velocity form);
 //! 2. shape-match each bone to the rigid frame that best fits its particles — the
-//!    six sticks held exactly, with linear and angular momentum kept;
+//!    six sticks held exactly, with linear and angular momentum kept (steps 1–2 in
+//!    closed form, [`Bone::advance`]);
 //! 3. one Gauss–Seidel pass over contacts, joints and limits, each a rigid correction
 //!    of the bone frames weighted by generalised inverse mass (contacts first, so a
 //!    joint is what holds last);
@@ -196,22 +197,14 @@ pub(super) struct Part<'a> {
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
     for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
-        // and shape-match each moving bone to its rigid frame.
+        // and shape-match each moving bone to its rigid frame, in closed form.
         for b in p.bones.iter_mut() {
             b.prev_com = b.com;
             b.prev_rot = b.rot;
             b.dcom = Vec3::ZERO;
-            if b.is_static() {
-                continue;
+            if !b.is_static() {
+                b.advance(h, s.gravity);
             }
-            let mut u = [Vec3::ZERO; 4];
-            for (k, uk) in u.iter_mut().enumerate() {
-                // `Bone::corner_velocity`, its arm kept for the position.
-                let arm = b.rot * b.rest[k];
-                let v = b.lin_vel + b.ang_vel.cross(arm) + s.gravity * h;
-                *uk = arm + v * h;
-            }
-            b.shape_match(&u);
         }
         // relative normal velocity before the solve, for restitution
         for m in p.manifolds {
