@@ -93,6 +93,12 @@ pub(crate) fn solve_friction(
     group_n: f32,
     group_t: f32,
 ) -> f32 {
+    // Nothing to spend (a manifold not pressed yet, or its cone used up): return before
+    // measuring the slip, four rotations of the contact's arms.
+    let allowed = m.mu * group_n - group_t;
+    if allowed <= 0.0 {
+        return 0.0;
+    }
     let a = Some(m.a);
     let pa = bones[m.a].world(c.ra);
     let pb = side_world(bones, m.b, c.rb);
@@ -101,10 +107,6 @@ pub(crate) fn solve_friction(
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
     let sub = tangential(bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb));
     let drift = tangential(pa - pb) - sub - c.touched_at;
-    let allowed = m.mu * group_n - group_t;
-    if allowed <= 0.0 {
-        return 0.0;
-    }
     // Corrections move pa − pb against the slip.
     let against = |d: Vec3| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
     // Static friction takes back the slip and a share of the drift when the cone allows
