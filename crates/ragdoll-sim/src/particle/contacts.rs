@@ -61,8 +61,11 @@ pub(crate) struct ContactPoint {
     /// Tangential offset `pa − pb` of the two points when they last came into touch (at
     /// the start of the first substep of an unbroken run of touching ones): what they
     /// drift from it since is slip static friction may take back
-    /// (`friction::ANCHOR_PULL`); their approach before touching is not.
-    pub touched_at: Vec3,
+    /// (`friction::ANCHOR_PULL`); their approach before touching is not. `None` until
+    /// the point is first pressed in such a run: it is measured then
+    /// (`friction::solve_normal`), not for every speculative point at every substep's
+    /// start.
+    pub touched_at: Option<Vec3>,
 }
 
 impl ContactPoint {
@@ -74,7 +77,7 @@ impl ContactPoint {
             lambda_n: 0.0,
             lambda_t: 0.0,
             vn_before: 0.0,
-            touched_at: Vec3::ZERO,
+            touched_at: None,
         }
     }
 }

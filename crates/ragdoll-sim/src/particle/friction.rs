@@ -45,8 +45,20 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
     let pb = side_world(bones, m.b, c.rb);
     let depth = (pa - pb).dot(m.n);
     if depth > 0.0 {
+        if c.touched_at.is_none() {
+            c.touched_at = Some(start_offset(bones, m, c, pa, pb));
+        }
         c.lambda_n += positional(bones, Some(m.a), m.b, pa, pb, -m.n * depth, 0.0);
     }
+}
+
+/// Tangential offset of a contact's two points at the start of the substep, `pa − pb`
+/// less their motion since (`pa`, `pb` the points now; any time in the substep gives
+/// the same).
+fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3, pb: Vec3) -> Vec3 {
+    let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
+    let d = pa - pb - sub;
+    d - m.n * d.dot(m.n)
 }
 
 /// Share of a contact point's tangential drift since it came into touch
@@ -106,7 +118,10 @@ pub(crate) fn solve_friction(
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
     let sub = tangential(bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb));
-    let drift = tangential(pa - pb) - sub - c.touched_at;
+    // A point not pressed itself (its manifold is) has not drifted.
+    let drift = c
+        .touched_at
+        .map_or(Vec3::ZERO, |t| tangential(pa - pb) - sub - t);
     // Corrections move pa − pb against the slip.
     let against = |d: Vec3| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
     // Static friction takes back the slip and a share of the drift when the cone allows
@@ -134,15 +149,6 @@ pub(crate) fn solve_friction(
     corr.apply(bones, lt);
     c.lambda_t += lt;
     lt
-}
-
-/// Marks where a point that did not touch in the last substep stands, at the start of
-/// this one (`ContactPoint::touched_at`): if it touches now, its drift counts from here.
-/// `pa` and `pb` are the point on each side now.
-pub(crate) fn mark_touch(bones: &[Bone], m: &Manifold, c: &mut ContactPoint, pa: Vec3, pb: Vec3) {
-    let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
-    let d = pa - pb - sub;
-    c.touched_at = d - m.n * d.dot(m.n);
 }
 
 /// Radius of the contact patch a point contact stands for (m): the lever arm of its

@@ -212,7 +212,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 let pa = p.bones[m.a].world(c.ra);
                 let pb = super::bone::side_world(p.bones, m.b, c.rb);
                 if c.lambda_n == 0.0 {
-                    super::friction::mark_touch(p.bones, m, c, pa, pb);
+                    // Not pressed in the last substep: a new run of touching ones may
+                    // start here (`ContactPoint::touched_at`).
+                    c.touched_at = None;
                 }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
