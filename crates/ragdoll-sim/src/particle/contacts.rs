@@ -8,6 +8,7 @@
 //! bones.
 
 use super::bone::{Bone, Side};
+use crate::broadphase::Reused;
 use crate::scene::Ground;
 use glam::Vec3;
 use parry3d::bounding_volume::BoundingVolume;
@@ -167,6 +168,17 @@ pub(crate) fn broad_phase(
     filter: &Filter,
     out: &mut Vec<(usize, usize)>,
 ) {
+    broad_phase_on(&mut Reused::default(), bones, margin, filter, out);
+}
+
+/// [`broad_phase`] on a tree kept from the step's earlier detections ([`Reused`]).
+pub(crate) fn broad_phase_on(
+    tree: &mut Reused,
+    bones: &[Bone],
+    margin: &[f32],
+    filter: &Filter,
+    out: &mut Vec<(usize, usize)>,
+) {
     out.clear();
     let aabbs: Vec<_> = bones
         .iter()
@@ -180,7 +192,7 @@ pub(crate) fn broad_phase(
         })
         .collect();
     let mut pairs = Vec::new();
-    crate::broadphase::overlapping_pairs(&aabbs, &mut pairs);
+    tree.overlapping_pairs(&aabbs, &mut pairs);
     out.extend(
         pairs
             .into_iter()

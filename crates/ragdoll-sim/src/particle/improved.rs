@@ -17,10 +17,11 @@
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
-use super::contacts::{ContactPoint, Manifold, broad_phase, ground_pair, shape_pair};
+use super::contacts::{ContactPoint, Manifold, broad_phase_on, ground_pair, shape_pair};
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
+use crate::broadphase::Reused;
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use glam::Vec3;
@@ -35,7 +36,10 @@ const SPECULATIVE_DISTANCE: f32 = 0.005;
 /// then created within the distance it may close: its points approach at most
 /// `|v_a − v_b| + |ω_a| r_a + |ω_b| r_b`, so limbs falling side by side make none
 /// (a falling stack made a speculative point for every box it held).
-fn detect(w: &mut ParticleWorld, dt: f32) {
+///
+/// `tree` is the broad phase's tree from the step's earlier detections, refitted rather
+/// than built again.
+fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let g = w.settings.gravity.length();
     let reach = g * dt * dt + SPECULATIVE_DISTANCE;
     let spins: Vec<f32> = w
@@ -58,7 +62,7 @@ fn detect(w: &mut ParticleWorld, dt: f32) {
         .map(|(b, spin)| (b.lin_vel.length() + spin) * dt + reach)
         .collect();
     let mut pairs = std::mem::take(&mut w.pairs);
-    broad_phase(&w.bones, &margins, &w.filter, &mut pairs);
+    broad_phase_on(tree, &w.bones, &margins, &w.filter, &mut pairs);
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
@@ -282,6 +286,8 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is
     // set) has nothing to detect or solve: its substeps would leave every bone where
     // it is, so only the sleep timers below advance.
+    // The broad phase's tree, built at the first detection and refitted at the others.
+    let mut tree = Reused::default();
     let mut sub = if w.bones.iter().all(|b| b.is_static()) {
         n_sub
     } else {
@@ -289,11 +295,11 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     };
     while sub < n_sub {
         let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
-        detect(w, rest_of_frame);
+        detect(w, &mut tree, rest_of_frame);
         if wake_touched(w) {
             // The woken figures' own contacts (with the ground, with each other) were
             // skipped while they slept.
-            detect(w, rest_of_frame);
+            detect(w, &mut tree, rest_of_frame);
         }
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
