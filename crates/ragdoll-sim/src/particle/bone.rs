@@ -119,16 +119,6 @@ impl Bone {
         self.rot * (self.inv_inertia_local * (self.rot.inverse() * v))
     }
 
-    /// The quadratic form `vᵀ R I⁻¹ Rᵀ v` (the angular part of a generalised inverse
-    /// mass), as `l · (I⁻¹ ∘ l)` with `l = q⁻¹ v` in the bone frame.
-    pub fn inv_inertia_quad(&self, v: Vec3) -> f32 {
-        if self.is_static() {
-            return 0.0;
-        }
-        let l = self.rot.inverse() * v;
-        l.dot(self.inv_inertia_local * l)
-    }
-
     /// The frame origin now.
     pub fn center(&self) -> Vec3 {
         self.com + self.dcom
@@ -279,15 +269,6 @@ pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
     }
 }
 
-/// Generalised inverse mass of a side for a rotation about unit `n`.
-#[inline]
-pub(crate) fn rot_inv_mass(bones: &[Bone], s: Side, n: Vec3) -> f32 {
-    match s {
-        Some(i) if !bones[i].is_static() => bones[i].inv_inertia_quad(n),
-        _ => 0.0,
-    }
-}
-
 /// One moving side of a correction along a unit direction: the bone, and `I⁻¹ (r × n)`
 /// in its frame. Computed once for the generalised inverse mass, `1/M + (r × n)ᵀ I⁻¹
 /// (r × n)`, and reused for the rotation the correction applies, `R I⁻¹ (r × n) λ`,
@@ -382,7 +363,7 @@ impl Correction {
 
     /// Turning side `a` about unit `n` and `b` against it; no point moves along `n`.
     #[inline]
-    fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3) -> Self {
+    pub fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3) -> Self {
         let (a, wa) = Lever::of(bones, a, None, n);
         let (b, wb) = Lever::of(bones, b, None, n);
         Correction {

@@ -16,7 +16,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{Bone, Correction, Side, positional, rot_inv_mass, side_world};
+use super::bone::{Bone, Correction, Side, positional, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::Vec3;
 
@@ -189,16 +189,13 @@ pub(crate) fn solve_velocity(
         _ => 0.0,
     };
     let spin = twist(bones, a) - twist(bones, m.b);
-    let wr = rot_inv_mass(bones, a, m.n) + rot_inv_mass(bones, m.b, m.n);
-    if wr > 0.0 && spin != 0.0 {
-        let l = spin.signum() * (spin.abs() / wr).min(m.mu * PATCH_RADIUS * c.lambda_n / h);
-        for (s, sign) in [(a, -1.0f32), (m.b, 1.0)] {
-            if let Some(i) = s {
-                let b = &mut bones[i];
-                if !b.is_static() {
-                    b.ang_vel += b.inv_inertia_mul(m.n * (sign * l));
-                }
-            }
+    if spin != 0.0 {
+        // Both levers `I⁻¹ n` formed once, for the inverse mass and the impulse.
+        let turn = Correction::turning(bones, a, m.b, m.n);
+        if turn.w > 0.0 {
+            let cap = m.mu * PATCH_RADIUS * c.lambda_n / h;
+            let l = spin.signum() * (spin.abs() / turn.w).min(cap);
+            turn.apply_velocity(bones, -l);
         }
     }
 }
