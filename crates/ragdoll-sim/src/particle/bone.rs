@@ -14,7 +14,7 @@
 //! and I exactly this is the limit of infinitely stiff sticks, reached in one step.
 
 use crate::scene::{BodyCollider, Pose};
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Quat, Vec3, Vec3A};
 
 /// The six edges of a tetrahedron, as pairs of corner indices.
 pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
@@ -238,15 +238,19 @@ pub(crate) fn turn_lag(rest: &[Vec3; 4]) -> Vec3 {
 /// rotation vector `turn` (see [`Bone::advance`]), `m` the bone's [`Bone::turn_lag`].
 fn matched_turn(q: Quat, turn: Vec3, m: Vec3) -> Quat {
     let full = q.inverse() * turn;
-    let mut e = full;
+    // In SIMD lanes: the products are glam's `Vec3` ones, lane by lane, and the squared
+    // length adds them in `Vec3::length_squared`'s order, so the bits are the same.
+    let (m, keep) = (Vec3A::from(m), Vec3A::ONE - Vec3A::from(m));
+    let mut e = Vec3A::from(full);
     for _ in 0..EXTRACT_ITERATIONS {
-        let step = (Vec3::ONE - m) * e;
+        let step = keep * e;
         e *= m;
-        if step.length_squared() < EXTRACT_TOLERANCE * EXTRACT_TOLERANCE {
+        let sq = step * step;
+        if sq.x + sq.y + sq.z < EXTRACT_TOLERANCE * EXTRACT_TOLERANCE {
             break;
         }
     }
-    let theta = full - e;
+    let theta = full - Vec3::from(e);
     (q + q * Quat::from_xyzw(theta.x, theta.y, theta.z, 0.0) * 0.5).normalize()
 }
 
