@@ -53,10 +53,6 @@ pub(crate) struct Bone {
     pub mass: f32,
     /// Inverse inertia in the bone frame (diagonal: the frame is principal).
     pub inv_inertia_local: Vec3,
-    /// Improved mode: per bone axis, the share of a turn that shape matching leaves to
-    /// its next iteration, `m_k = D_kk / tr D` with `D = Σ rest_j rest_jᵀ` (see
-    /// [`Bone::advance`]); zero in paper mode, which does not shape-match.
-    pub turn_lag: Vec3,
     /// Fixed bones never move.
     pub fixed: bool,
     /// Asleep bones are frozen until something wakes their island.
@@ -196,7 +192,7 @@ impl Bone {
     /// frame turned once, `q ← q + ½ q [θ, 0]` normalised.
     pub fn advance(&mut self, h: f32, gravity: Vec3) {
         self.dcom = (self.lin_vel + gravity * h) * h;
-        self.rot = matched_turn(self.rot, self.ang_vel * h, self.turn_lag);
+        self.rot = matched_turn(self.rot, self.ang_vel * h, turn_lag(&self.rest));
     }
 
     /// The paper's frame (section 3.1.2): origin at particle 0, X towards particle 1,
@@ -226,8 +222,10 @@ pub(crate) fn gram_schmidt(e1: Vec3, e2: Vec3) -> (Quat, bool) {
     (Quat::from_mat3(&Mat3::from_cols(x, y, z)).normalize(), true)
 }
 
-/// The shares `m_k = D_kk / tr D`, `D = Σ rest_j rest_jᵀ`, of [`Bone::turn_lag`] (zero
-/// for a bone without extent).
+/// Per bone axis, the share of a turn that shape matching leaves to its next iteration
+/// (see [`Bone::advance`]): `m_k = D_kk / tr D`, `D = Σ rest_j rest_jᵀ` (zero for a bone
+/// without extent). Evaluated where it is used rather than stored: 12 bytes a bone
+/// against a few products per substep.
 pub(crate) fn turn_lag(rest: &[Vec3; 4]) -> Vec3 {
     let d = rest.iter().fold(Vec3::ZERO, |acc, r| acc + *r * *r);
     let tr = d.x + d.y + d.z;
@@ -235,7 +233,7 @@ pub(crate) fn turn_lag(rest: &[Vec3; 4]) -> Vec3 {
 }
 
 /// The frame `q` turned as shape matching turns it when its particles turn by the world
-/// rotation vector `turn` (see [`Bone::advance`]), `m` the bone's [`Bone::turn_lag`].
+/// rotation vector `turn` (see [`Bone::advance`]), `m` the bone's [`turn_lag`].
 fn matched_turn(q: Quat, turn: Vec3, m: Vec3) -> Quat {
     let full = q.inverse() * turn;
     // In SIMD lanes: the products are glam's `Vec3` ones, lane by lane, and the squared

@@ -170,7 +170,6 @@ impl ParticleWorld {
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             mass,
             inv_inertia_local: Vec3::ZERO,
-            turn_lag: Vec3::ZERO,
             fixed: desc.is_fixed(),
             asleep: false,
             sleep_time: 0.0,
@@ -205,7 +204,6 @@ impl ParticleWorld {
         bone.inv_inertia_local = p
             .principal_inertia
             .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
-        bone.turn_lag = bone::turn_lag(&p.rest);
         let s = &self.settings;
         let (dt, g) = (s.timestep, s.gravity);
         let movable = !desc.is_fixed();
