@@ -193,8 +193,9 @@ impl Bone {
     /// which keeps a tumbling bone's angular momentum, and which is added here. Running
     /// the iteration itself cost 5–7 rotation matrices, cross products and sines per bone
     /// per substep; this is the same turn to second order in `h |ω|` on the axes it
-    /// converges on (about 0.2 % of the turn at `h |ω|` = 0.03), from three products
-    /// per iteration, with the frame turned once, `q ← q + ½ q [θ, 0]` normalised (the
+    /// converges on (within 0.03 % of the turn at `h |ω|` = 0.03 on a chest box, 0.1 %
+    /// on a limb's capped twist: the unit test below), from three products per
+    /// iteration, with the frame turned once, `q ← q + ½ q [θ, 0]` normalised (the
     /// turn `R (1 − M^N) Rᵀ h ω` plus that term).
     pub fn advance(&mut self, h: f32, gravity: Vec3) {
         self.dcom = (self.lin_vel + gravity * h) * h;

@@ -6,7 +6,7 @@
 //! 1. integrate every particle (`v += g h`, `x += v h`: Verlet in velocity form);
 //! 2. shape-match each bone to the rigid frame that best fits its particles — the
 //!    six sticks held exactly, with linear and angular momentum kept (steps 1–2 in
-//!    closed form, [`Bone::advance`]);
+//!    closed form, [`Bone::advance`], which keeps them to second order in `h |ω|`);
 //! 3. one Gauss–Seidel pass over contacts, joints and limits, each a rigid correction
 //!    of the bone frames weighted by generalised inverse mass (contacts first, so a
 //!    joint is what holds last);
