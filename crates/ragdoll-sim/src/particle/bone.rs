@@ -183,12 +183,12 @@ impl Bone {
     /// still to make, `e` in the bone frame, starts at `h ω` and shrinks as `e ← M e`
     /// with `M = D / tr D` while each iteration turns the frame by `(1 − M) e`; the
     /// iteration stops once a turn is below [`EXTRACT_TOLERANCE`], or after 20. So the
-    /// bone turns by `(1 − M^N) h ω` (in its frame), not `h ω`. About an axis of small inertia the share
-    /// `m_k = 1 − 2 I_k / tr I` is near 1 (0.9 about a long limb's own axis) and the turn
-    /// lags: a twist of a long bone is damped, most when slow (few iterations run), which
-    /// is the damping the resting figures rely on (`m` about a limb's own axis is 0.73
-    /// for the capsule human's, 0.90 for the box human's; at 20 substeps a frame a box
-    /// limb keeps about a tenth of a twist from frame to frame). To second order the
+    /// bone turns by `(1 − M^N) h ω` (in its frame), not `h ω`. About an axis of small
+    /// inertia the share `m_k = 1 − 2 I_k / tr I` is near 1 (0.73 about a capsule
+    /// human's limb, 0.90 about a box human's) and the turn lags: a twist of a long bone
+    /// is damped, most when slow (few iterations run), which is the damping the resting
+    /// figures rely on (at 20 substeps a frame a box limb keeps about a tenth of a twist
+    /// from frame to frame). To second order the
     /// iteration also turns by `½ (1 − M)⁻¹ (ê × M ê)`, `ê = h ω` in the bone frame,
     /// which keeps a tumbling bone's angular momentum, and which is added here. Running
     /// the iteration itself cost 5–7 rotation matrices, cross products and sines per bone
@@ -260,12 +260,10 @@ fn matched_turn(q: Quat, turn: Vec3, m: Vec3) -> Quat {
     // angular momentum; first order alone lets it drift (a chest box tumbling at 10 rad/s:
     // 0.08 rad in a second, against 8e-4 rad with this term, as the iteration kept it).
     // Each component is at most `½ |ê_j ê_k|`, `1 − m_i = m_j + m_k ≥ |m_k − m_j|`.
-    let m3 = Vec3::from(m);
-    let gyro = full.cross(m3 * full);
-    let keep3 = Vec3::ONE - m3;
-    let second = Vec3::select(keep3.cmpgt(Vec3::ZERO), 0.5 * gyro / keep3, Vec3::ZERO);
-    let theta = full - Vec3::from(e) + second;
-    (q + q * Quat::from_xyzw(theta.x, theta.y, theta.z, 0.0) * 0.5).normalize()
+    let (m, keep) = (Vec3::from(m), Vec3::from(keep));
+    let gyro = full.cross(m * full);
+    let second = Vec3::select(keep.cmpgt(Vec3::ZERO), 0.5 * gyro / keep, Vec3::ZERO);
+    rotate_local(q, full - Vec3::from(e) + second)
 }
 
 /// Turn (rad) below which Müller et al.'s extraction has converged and stops: a few f32

@@ -283,11 +283,11 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         .extend(w.bones.iter().map(|b| (b.com, b.rot)));
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
+    // The broad phase's tree, built at the first detection and refitted at the others.
+    let mut tree = Reused::default();
     // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is
     // set) has nothing to detect or solve: its substeps would leave every bone where
     // it is, so only the sleep timers below advance.
-    // The broad phase's tree, built at the first detection and refitted at the others.
-    let mut tree = Reused::default();
     let mut sub = if w.bones.iter().all(|b| b.is_static()) {
         n_sub
     } else {
