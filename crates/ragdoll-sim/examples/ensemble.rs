@@ -15,7 +15,7 @@
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::JointKind;
+use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
 use std::path::PathBuf;
@@ -33,29 +33,9 @@ fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
         variant,
         ..Default::default()
     };
-    load(&path, &opts).map(|s| s.desc).map_err(|e| e.to_string())
-}
-
-/// `s` with every body and every joint anchor moved by `d`.
-fn shifted(mut s: SceneDesc, d: Vec3) -> SceneDesc {
-    for b in &mut s.bodies {
-        b.pose.position += d;
-    }
-    for c in &mut s.constraints {
-        match &mut c.kind {
-            JointKind::BallAndSocket { anchor, .. }
-            | JointKind::Universal { anchor, .. }
-            | JointKind::Hinge { anchor, .. } => *anchor += d,
-            JointKind::Spring {
-                anchor1, anchor2, ..
-            } => {
-                *anchor1 += d;
-                *anchor2 += d;
-            }
-            JointKind::Slider { .. } | JointKind::Fixed => {}
-        }
-    }
-    s
+    load(&path, &opts)
+        .map(|s| s.desc)
+        .map_err(|e| e.to_string())
 }
 
 /// DESIGN.md's metrics of one start, and the largest rise of the state's own energy
@@ -104,7 +84,9 @@ fn main() -> ExitCode {
         for mm in 0..24 {
             let mut d = Vec3::ZERO;
             d[axis] = mm as f32 * 1e-3;
-            let (st, state_gain) = match run(&shifted(base.clone(), d)) {
+            let mut start = base.clone();
+            start.transform(&Pose::from_position(d));
+            let (st, state_gain) = match run(&start) {
                 Ok(r) => r,
                 Err(e) => {
                     eprintln!("error: {label} {mm} mm: {e}");

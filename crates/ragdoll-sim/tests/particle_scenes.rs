@@ -8,7 +8,7 @@
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::JointKind;
+use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::snapshot::{RenderSnapshot, StickRole};
 use ragdoll_sim::{Method, SceneDesc};
@@ -192,24 +192,7 @@ fn paper_finding_articulated_figures_gain_energy_in_paper_mode_only() {
 
 /// `s` with every body and joint anchor raised by `dy` metres.
 fn raised(mut s: SceneDesc, dy: f32) -> SceneDesc {
-    let up = Vec3::new(0.0, dy, 0.0);
-    for b in &mut s.bodies {
-        b.pose.position += up;
-    }
-    for c in &mut s.constraints {
-        match &mut c.kind {
-            JointKind::BallAndSocket { anchor, .. }
-            | JointKind::Universal { anchor, .. }
-            | JointKind::Hinge { anchor, .. } => *anchor += up,
-            JointKind::Spring {
-                anchor1, anchor2, ..
-            } => {
-                *anchor1 += up;
-                *anchor2 += up;
-            }
-            JointKind::Slider { .. } | JointKind::Fixed => {}
-        }
-    }
+    s.transform(&Pose::from_position(Vec3::new(0.0, dy, 0.0)));
     s
 }
 

@@ -4,12 +4,14 @@
 //! - [`mass`]: mass properties from shapes, shared by both methods.
 //! - [`af`]: the Doom 3 articulated-figure reader with our extensions.
 //! - [`md5mesh`]: the joints section of an `.md5mesh` bind pose for `joint("name")`.
+//! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform.
 
 pub mod af;
 pub mod collider;
 pub mod desc;
 pub mod mass;
 pub mod md5mesh;
+mod transform;
 mod validate;
 
 pub use collider::{BodyCollider, Collider};

@@ -7,7 +7,7 @@ use super::constraint::read_constraint;
 use super::ctx::{Conv, Ctx, Defaults, R, angles_to_quat, unknown_key};
 use super::lexer::Pos;
 use super::parser::{Block, Entry, Value};
-use super::place::{place_body, place_joint, replicate_figure};
+use super::place::replicate_figure;
 use super::{AfError, AfOptions, AfScene};
 use crate::scene::{
     BodyId, CameraDesc, Friction, Pose, SceneDesc, SceneError, Settings, VariantInfo, validate,
@@ -170,12 +170,7 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
     validate(&desc).map_err(locate)?;
     desc.resolve_masses().map_err(locate)?;
     if transform != Pose::IDENTITY {
-        for body in &mut desc.bodies {
-            place_body(body, &transform);
-        }
-        for c in &mut desc.constraints {
-            place_joint(&mut c.kind, &transform);
-        }
+        desc.transform(&transform);
     }
     let count = opts
         .count

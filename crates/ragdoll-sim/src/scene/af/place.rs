@@ -1,68 +1,9 @@
-//! Moving the built figure: the `transform` block and the `replicate` grid of copies.
+//! The `replicate` grid of copies of the built figure (the `transform` block moves it
+//! with [`SceneDesc::transform`]).
 
 use super::build::Grid;
-use crate::scene::{BodyDesc, BodyId, BodyRef, JointKind, Pose, SceneDesc, SwingLimit};
+use crate::scene::{BodyId, BodyRef, Pose, SceneDesc};
 use glam::{Quat, Vec3};
-
-/// Moves a body by a rigid transform of the world.
-pub(super) fn place_body(b: &mut BodyDesc, t: &Pose) {
-    b.pose = t.mul_pose(&b.pose);
-    b.linear_velocity = t.rotation * b.linear_velocity;
-    b.angular_velocity = t.rotation * b.angular_velocity;
-}
-
-/// Moves a joint's world-space anchors and axes by a rigid transform.
-pub(super) fn place_joint(k: &mut JointKind, t: &Pose) {
-    let r = t.rotation;
-    let swing = |s: &mut SwingLimit| match s {
-        SwingLimit::Cone { axis, shaft, .. } | SwingLimit::Pyramid { axis, shaft, .. } => {
-            *axis = r * *axis;
-            *shaft = r * *shaft;
-        }
-    };
-    match k {
-        JointKind::BallAndSocket {
-            anchor,
-            swing: s,
-            twist,
-            ..
-        } => {
-            *anchor = t.transform_point(*anchor);
-            if let Some(s) = s {
-                swing(s);
-            }
-            if let Some(tw) = twist {
-                tw.axis = r * tw.axis;
-            }
-        }
-        JointKind::Universal {
-            anchor,
-            shaft1,
-            shaft2,
-            swing: s,
-            ..
-        } => {
-            *anchor = t.transform_point(*anchor);
-            *shaft1 = r * *shaft1;
-            *shaft2 = r * *shaft2;
-            if let Some(s) = s {
-                swing(s);
-            }
-        }
-        JointKind::Hinge { anchor, axis, .. } => {
-            *anchor = t.transform_point(*anchor);
-            *axis = r * *axis;
-        }
-        JointKind::Slider { axis } => *axis = r * *axis,
-        JointKind::Fixed => {}
-        JointKind::Spring {
-            anchor1, anchor2, ..
-        } => {
-            *anchor1 = t.transform_point(*anchor1);
-            *anchor2 = t.transform_point(*anchor2);
-        }
-    }
-}
 
 /// Replaces the figure by `count` copies in a grid: columns along X, rows along Z,
 /// layers up Y, centred on the figure's place in X and Z; copy `i` names its bodies and
@@ -129,7 +70,7 @@ pub(super) fn replicate_figure(desc: &mut SceneDesc, g: &Grid, count: u32) {
         for b in &bodies {
             let mut b = b.clone();
             b.name = suffix(&b.name);
-            place_body(&mut b, &t);
+            b.transform(&t);
             desc.bodies.push(b);
         }
         for c in &constraints {
@@ -139,7 +80,7 @@ pub(super) fn replicate_figure(desc: &mut SceneDesc, g: &Grid, count: u32) {
             if let BodyRef::Body(b2) = c.body2 {
                 c.body2 = BodyRef::Body(BodyId(base.0 + b2.0));
             }
-            place_joint(&mut c.kind, &t);
+            c.kind.transform(&t);
             desc.constraints.push(c);
         }
     }
