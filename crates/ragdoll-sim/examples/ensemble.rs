@@ -2,7 +2,7 @@
 //! anchor shifted by 0–23 mm along x, y and z in turn, 10 simulated seconds each.
 //!
 //! ```text
-//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each]
+//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM]
 //! ```
 //!
 //! One start's figures are a matter of rounding in a chaotic scene (the human's sleep
@@ -10,7 +10,8 @@
 //! over the ensemble: the largest rise of the state's own energy
 //! (`ParticleWorld::state_energy`) and of DESIGN.md's frame-difference measure, both as
 //! fractions of the energy scale, how many starts fall asleep and the largest joint gap,
-//! limit excess and penetration. `--each` prints every start too.
+//! limit excess and penetration. `--each` prints every start too; `--from MM` shifts by
+//! MM … MM + 23 mm instead, another 72 starts.
 
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
@@ -60,7 +61,19 @@ fn run(s: &SceneDesc) -> Result<(MethodStats, f64), String> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let each = args.iter().any(|a| a == "--each");
-    let mut plain = args.iter().filter(|a| !a.starts_with("--"));
+    let from = match args.iter().position(|a| a == "--from").map(|i| args.get(i + 1)) {
+        None => 0,
+        Some(Some(v)) if v.parse::<u32>().is_ok() => v.parse::<u32>().unwrap_or(0),
+        Some(_) => {
+            eprintln!("error: --from takes a whole number of millimetres");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut plain = args
+        .iter()
+        .enumerate()
+        .filter(|&(i, a)| !a.starts_with("--") && (i == 0 || args[i - 1] != "--from"))
+        .map(|(_, a)| a);
     let name = plain.next().map_or("hinge-chain", String::as_str);
     let variant = match plain.next().map(|v| v.parse::<u32>()) {
         None => 1,
@@ -81,7 +94,7 @@ fn main() -> ExitCode {
     let (mut worst_frame, mut gap, mut limit, mut pen) = (0.0f64, 0.0f32, 0.0f32, 0.0f32);
     let (mut asleep, mut asleep_sum) = (0, 0.0);
     for (axis, label) in ["x", "y", "z"].iter().enumerate() {
-        for mm in 0..24 {
+        for mm in from..from + 24 {
             let mut d = Vec3::ZERO;
             d[axis] = mm as f32 * 1e-3;
             let mut start = base.clone();
