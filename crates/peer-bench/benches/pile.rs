@@ -5,12 +5,20 @@
 //! cargo bench -p peer-bench --bench pile                  # 1, 10, 100, 270, 1000 humans
 //! cargo bench -p peer-bench --bench pile -- 100 270 --frames 300
 //! cargo bench -p peer-bench --bench pile -- 100 --timeline   # and CPU ms per second
+//! cargo bench -p peer-bench --bench pile -- 100 270 --rounds 5
 //! ```
 //!
 //! All three run single-threaded (Rapier without its `parallel` feature), the same
 //! scene description, timestep and solver budget; see `rapier_scene.rs` for how the
 //! scene is carried over. Goals (issue 6): our multibody at or below Rapier's time, the
 //! particle method at half of it.
+//!
+//! `--rounds N` runs the three engines in turn N times and reports each engine's median
+//! mean and the median of the rounds' ratios, with their range: this machine is shared,
+//! and the CPU time of the same run of the same binary moves by up to 1.7× over an
+//! hour (Rapier's 100-human pile: 0.58 and 1.00 ms a frame), so one round's ratio can be
+//! off by the drift between its engines' turns; engines taken in turn within each round
+//! see the same drift.
 
 mod rapier_scene;
 
@@ -61,6 +69,23 @@ fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec
     )
 }
 
+/// One round: each engine's run of the pile, in turn.
+struct Round {
+    rapier: FrameCost,
+    multibody: Result<FrameCost, String>,
+    particle: Result<FrameCost, String>,
+}
+
+/// Which of our engines' runs of a round.
+type Pick = fn(&Round) -> &Result<FrameCost, String>;
+
+/// The run with the median mean CPU time of several (the lower middle one of an even
+/// count), so that its other figures (median frame, end state) are those of a real run.
+fn median_cost(mut runs: Vec<FrameCost>) -> FrameCost {
+    runs.sort_by(|a, b| a.mean_ms.total_cmp(&b.mean_ms));
+    runs[(runs.len() - 1) / 2]
+}
+
 /// CPU milliseconds each engine spends in each simulated second of the pile (`frames`
 /// frames at 1/60 s): where a mean per frame comes from, active phase or rest.
 fn timeline(scene: &ragdoll_sim::SceneDesc, frames: usize) -> Result<Vec<[f64; 3]>, String> {
@@ -96,12 +121,19 @@ fn main() {
     let mut humans: Vec<u32> = Vec::new();
     let mut frames = scale::FRAMES;
     let mut show_timeline = false;
+    let mut rounds = 1usize;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         if a == "--timeline" {
             show_timeline = true;
         } else if a == "--frames" {
             frames = args.next().and_then(|f| f.parse().ok()).unwrap_or(frames);
+        } else if a == "--rounds" {
+            rounds = args
+                .next()
+                .and_then(|f| f.parse().ok())
+                .unwrap_or(rounds)
+                .max(1);
         } else if let Ok(n) = a.parse() {
             humans.push(n);
         }
@@ -109,8 +141,13 @@ fn main() {
     if humans.is_empty() {
         humans = scale::HUMANS.to_vec();
     }
+    let medians = if rounds > 1 {
+        format!(", each the median of {rounds} rounds")
+    } else {
+        String::new()
+    };
     println!(
-        "Pile of humans, {frames} frames at 1/60 s, one thread; ms per frame (mean CPU / median wall-clock)"
+        "Pile of humans, {frames} frames at 1/60 s, one thread; ms per frame (mean CPU / median wall-clock){medians}"
     );
     println!(
         "{:>6} {:>6} {:>17} {:>17} {:>6} {:>17} {:>6}",
@@ -125,27 +162,64 @@ fn main() {
             }
         };
         let bones = scene.dynamic_body_count();
-        let (rapier, approx) = rapier_cost(&scene, frames);
         // On a one-thread pool: our methods share islands out over the pool they run in,
         // and Rapier here runs without its `parallel` feature.
         let ours = |f: Flavor| scale::measure_on(1, f, &scene, frames).map_err(|e| e.to_string());
+        let mut runs: Vec<Round> = Vec::with_capacity(rounds);
+        let mut approx = Vec::new();
+        for _ in 0..rounds {
+            let (rapier, a) = rapier_cost(&scene, frames);
+            approx = a;
+            runs.push(Round {
+                rapier,
+                multibody: ours(Flavor::Multibody),
+                particle: ours(Flavor::ParticleImproved),
+            });
+        }
+        let rapier = median_cost(runs.iter().map(|r| r.rapier).collect());
+        let of = |pick: Pick| {
+            let costs: Result<Vec<FrameCost>, String> =
+                runs.iter().map(|r| pick(r).clone()).collect();
+            costs.map(median_cost)
+        };
+        let ratios = |pick: Pick| {
+            let mut r: Vec<f64> = runs
+                .iter()
+                .filter_map(|run| {
+                    pick(run)
+                        .as_ref()
+                        .ok()
+                        .map(|c| c.mean_ms / run.rapier.mean_ms)
+                })
+                .collect();
+            let (lo, hi) = r
+                .iter()
+                .fold((f64::MAX, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+            (median(&mut r), lo, hi)
+        };
         let cell = |c: &FrameCost| {
             let s = format!("{:.3} / {:.3}", c.mean_ms, c.median_ms);
             if c.finite { s } else { format!("{s}!") }
         };
-        let cells = |r: Result<FrameCost, String>| match r {
-            Ok(c) => (cell(&c), format!("{:.2}", c.mean_ms / rapier.mean_ms)),
+        let cells = |r: Result<FrameCost, String>, ratio: (f64, f64, f64)| match r {
+            Ok(c) => (cell(&c), format!("{:.2}", ratio.0)),
             Err(e) => (format!("error: {e}"), "-".into()),
         };
-        let mb_run = ours(Flavor::Multibody);
-        let pa_run = ours(Flavor::ParticleImproved);
+        let (mb_ratios, pa_ratios) = (ratios(|r| &r.multibody), ratios(|r| &r.particle));
+        let (mb_run, pa_run) = (of(|r| &r.multibody), of(|r| &r.particle));
         let (mb_cost, pa_cost) = (mb_run.clone().ok(), pa_run.clone().ok());
-        let (mb, mb_ratio) = cells(mb_run);
-        let (pa, pa_ratio) = cells(pa_run);
+        let (mb, mb_ratio) = cells(mb_run, mb_ratios);
+        let (pa, pa_ratio) = cells(pa_run, pa_ratios);
         println!(
             "{n:>6} {bones:>6} {:>17} {mb:>17} {mb_ratio:>6} {pa:>17} {pa_ratio:>6}",
             cell(&rapier)
         );
+        if rounds > 1 {
+            println!(
+                "  ratios over {rounds} rounds: multibody {:.2}-{:.2}, particle {:.2}-{:.2}",
+                mb_ratios.1, mb_ratios.2, pa_ratios.1, pa_ratios.2
+            );
+        }
         let state = |name: &str, c: Option<FrameCost>| {
             c.map(|c| {
                 format!(
@@ -180,6 +254,11 @@ fn main() {
         }
     }
     println!(
-        "ratio = our mean CPU ms / Rapier's mean CPU ms (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end"
+        "ratio = our mean CPU ms / Rapier's mean CPU ms{} (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end",
+        if rounds > 1 {
+            ", the median of the rounds' ratios"
+        } else {
+            ""
+        }
     );
 }

@@ -61,7 +61,11 @@ fn run(s: &SceneDesc) -> Result<(MethodStats, f64), String> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let each = args.iter().any(|a| a == "--each");
-    let from = match args.iter().position(|a| a == "--from").map(|i| args.get(i + 1)) {
+    let from = match args
+        .iter()
+        .position(|a| a == "--from")
+        .map(|i| args.get(i + 1))
+    {
         None => 0,
         Some(Some(v)) if v.parse::<u32>().is_ok() => v.parse::<u32>().unwrap_or(0),
         Some(_) => {
