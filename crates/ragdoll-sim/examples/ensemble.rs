@@ -14,7 +14,7 @@
 //! MM … MM + 23 mm instead, another 72 starts.
 
 use ragdoll_sim::glam::Vec3;
-use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
+use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::af::{AfOptions, load};
@@ -44,17 +44,16 @@ fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
 fn run(s: &SceneDesc) -> Result<(MethodStats, f64), String> {
     let mut w = ParticleWorld::new(s, ParticleSolver::Improved).map_err(|e| e.to_string())?;
     let mut rec = MetricsRecorder::new(s).map_err(|e| e.to_string())?;
+    let mut state = EnergyRise::default();
     rec.record(0.0, &w.sample());
-    let (mut low, mut rise) = (w.state_energy(), 0.0f64);
+    state.record(w.state_energy());
     for _ in 0..FRAMES {
         w.step();
         rec.record(w.time(), &w.sample());
-        let e = w.state_energy();
-        low = low.min(e);
-        rise = rise.max(e - low);
+        state.record(w.state_energy());
     }
     let stats = rec.stats();
-    let state_gain = rise / stats.energy_scale_j;
+    let state_gain = state.rise() / stats.energy_scale_j;
     Ok((stats, state_gain))
 }
 

@@ -73,12 +73,41 @@ pub struct MethodStats {
     pub frames: usize,
 }
 
+/// The largest rise of an energy above its running minimum so far,
+/// `max_t (E(t) − min_{s≤t} E(s))` (J): energy may leave a closed scene, never enter it.
+#[derive(Clone, Copy, Debug)]
+pub struct EnergyRise {
+    running_min: f64,
+    rise: f64,
+}
+
+impl Default for EnergyRise {
+    fn default() -> Self {
+        EnergyRise {
+            running_min: f64::INFINITY,
+            rise: 0.0,
+        }
+    }
+}
+
+impl EnergyRise {
+    /// Records the energy `e` (J) at the next time.
+    pub fn record(&mut self, e: f64) {
+        self.running_min = self.running_min.min(e);
+        self.rise = self.rise.max(e - self.running_min);
+    }
+
+    /// The largest rise so far (J).
+    pub fn rise(&self) -> f64 {
+        self.rise
+    }
+}
+
 /// Accumulates samples into [`MethodStats`].
 #[derive(Clone, Debug)]
 pub struct MetricsRecorder {
     scale: f64,
-    running_min: f64,
-    gain: f64,
+    gain: EnergyRise,
     last_kinetic: f64,
     max_pen: f32,
     max_gap: f32,
@@ -94,8 +123,7 @@ impl MetricsRecorder {
     pub fn new(scene: &SceneDesc) -> Result<Self, SceneError> {
         Ok(MetricsRecorder {
             scale: energy_scale_j(scene)?,
-            running_min: f64::INFINITY,
-            gain: 0.0,
+            gain: EnergyRise::default(),
             last_kinetic: 0.0,
             max_pen: 0.0,
             max_gap: 0.0,
@@ -121,8 +149,7 @@ impl MetricsRecorder {
             return;
         }
         // energy_gain = max_t (E(t) - min_{s<=t} E(s)) / scale
-        self.running_min = self.running_min.min(s.energy);
-        self.gain = self.gain.max(s.energy - self.running_min);
+        self.gain.record(s.energy);
         self.last_kinetic = s.kinetic;
         self.max_pen = self.max_pen.max(s.max_penetration);
         self.max_gap = self.max_gap.max(s.max_joint_gap);
@@ -139,7 +166,7 @@ impl MetricsRecorder {
     pub fn stats(&self) -> MethodStats {
         MethodStats {
             energy_scale_j: self.scale,
-            energy_gain: self.gain / self.scale,
+            energy_gain: self.gain.rise() / self.scale,
             final_kinetic: self.last_kinetic / self.scale,
             max_penetration_m: self.max_pen,
             max_joint_gap_m: self.max_gap,

@@ -6,7 +6,7 @@
 //! about two seconds of release-mode CPU in all.
 
 use ragdoll_sim::glam::Vec3;
-use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
+use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::af::{AfOptions, load};
@@ -44,18 +44,17 @@ fn scene(name: &str, variant: u32) -> SceneDesc {
 fn run(s: &SceneDesc, solver: ParticleSolver, seconds: f64) -> (MethodStats, f64, ParticleWorld) {
     let mut w = ParticleWorld::new(s, solver).unwrap_or_else(|e| panic!("{}: {e}", s.name));
     let mut rec = MetricsRecorder::new(s).unwrap();
+    let mut state = EnergyRise::default();
     rec.record(0.0, &w.sample());
-    let (mut low, mut rise) = (w.state_energy(), 0.0f64);
+    state.record(w.state_energy());
     let frames = (seconds / s.settings.timestep as f64).round() as usize;
     for _ in 0..frames {
         w.step();
         rec.record(w.time(), &w.sample());
-        let e = w.state_energy();
-        low = low.min(e);
-        rise = rise.max(e - low);
+        state.record(w.state_energy());
     }
     let stats = rec.stats();
-    let state_gain = rise / stats.energy_scale_j;
+    let state_gain = state.rise() / stats.energy_scale_j;
     (stats, state_gain, w)
 }
 
