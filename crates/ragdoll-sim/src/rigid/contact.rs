@@ -25,8 +25,24 @@ use parry3d::query::{
 use parry3d::shape::{Shape as ParryShape, SharedShape};
 use rayon::prelude::*;
 
-/// Distance within which contacts are created before touching (speculative margin, m).
-pub const SPECULATIVE_DISTANCE: f32 = 0.02;
+/// Distance within which contacts are created before touching, beyond what a pair can
+/// close over the step (m).
+///
+/// Box2D v3 creates contacts within a fixed 2 cm (four linear slops) and leaves faster
+/// approaches to continuous collision. Here each pair's margin already grows by how far
+/// its points can approach over the step at the step's start velocities, `(|v_a − v_b| +
+/// |ω_a| r_a + |ω_b| r_b) dt` ([`Contacts::update`]), so the constant only covers what
+/// that misses: gravity's `g dt²` (added with it, [`speculative_margin`]) and velocity
+/// the step's other constraints give a body. The particle method uses the same 5 mm.
+/// Measured against 2 cm: scenes 1–9 the same to the bit but for the spider's first
+/// sleep, the 100-human pile's step 6.5 % fewer instructions (fewer speculative rows).
+pub const SPECULATIVE_DISTANCE: f32 = 0.005;
+
+/// The speculative margin of a step of `dt` under gravity `g` (m/s²): what gravity
+/// alone closes in the step, `g dt²`, and [`SPECULATIVE_DISTANCE`].
+pub fn speculative_margin(g: f32, dt: f32) -> f32 {
+    g * dt * dt + SPECULATIVE_DISTANCE
+}
 /// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
 pub const LINEAR_SLOP: f32 = 0.0005;
 /// Rolling resistance coefficient (Box2D v3's `rollingResistance`): a contact of a round
@@ -232,8 +248,10 @@ pub fn may_collide(info: &[BodyInfo], a: usize, b: usize) -> bool {
 impl Contacts {
     /// Runs broad and narrow phase for the current pose and prepares the solver data.
     /// `awake[i]` tells which bodies move; pairs between resting bodies keep their
-    /// cached state untouched. `dt` widens the margins for fast bodies.
-    pub fn update(&mut self, s: &BodyStates, info: &[BodyInfo], awake: &[bool], dt: f32) {
+    /// cached state untouched. `dt` widens the margins for fast bodies, `g` (the
+    /// gravity's magnitude, m/s²) for falling ones ([`speculative_margin`]).
+    pub fn update(&mut self, s: &BodyStates, info: &[BodyInfo], awake: &[bool], dt: f32, g: f32) {
+        let margin = speculative_margin(g, dt);
         let n = info.len();
         let anchor = n as u32;
         // Broad phase on AABBs loosened by the speculative margin and this step's motion.
@@ -244,8 +262,7 @@ impl Contacts {
                 .collider(&self.hulls)
                 .shape()
                 .compute_aabb(&shape_pose(s, info, i));
-            self.aabbs
-                .push(aabb.loosened(SPECULATIVE_DISTANCE + motion));
+            self.aabbs.push(aabb.loosened(margin + motion));
         }
         self.candidates.clear();
         crate::broadphase::overlapping_pairs(&self.aabbs, &mut self.candidates);
@@ -372,7 +389,7 @@ impl Contacts {
             } else {
                 (s.lin_vel[a] - s.lin_vel[b]).length() + spin(a) + spin(b)
             };
-            let prediction = SPECULATIVE_DISTANCE + approach * dt;
+            let prediction = margin + approach * dt;
             let pos12 = pose_a.inv_mul(&pose_b);
             let (old, n_old) = pair.old_impulses();
             pair.collide(&pos12, collider_a.shape(), collider_b.shape(), prediction);

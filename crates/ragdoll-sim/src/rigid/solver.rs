@@ -64,6 +64,7 @@ pub fn step(
 ) {
     let n = info.len();
     let dt = settings.timestep;
+    let g = settings.gravity.length();
     refresh_awake(s, info, islands, awake, dynamic);
     // A world at rest has nothing to do: nothing awake can touch a sleeping island to
     // wake it (a grab or a new body wakes what it needs before the step), every solver
@@ -74,7 +75,7 @@ pub fn step(
         return;
     }
     update_inertia(s, motion, awake);
-    contacts.update(s, info, awake, dt);
+    contacts.update(s, info, awake, dt, g);
 
     // Islands from joints and touching contacts between dynamic bodies; a link from an
     // awake body to a sleeping one wakes the sleeping island.
@@ -99,7 +100,7 @@ pub fn step(
     if islands.apply_wakes() {
         refresh_awake(s, info, islands, awake, dynamic);
         update_inertia(s, motion, awake);
-        contacts.update(s, info, awake, dt);
+        contacts.update(s, info, awake, dt, g);
     }
 
     let substeps = settings.multibody_substep_count().max(1);
