@@ -1,8 +1,9 @@
-//! A scene's particle method (improved) from 72 nearby starts: every body and joint
-//! anchor shifted by 0–23 mm along x, y and z in turn, 10 simulated seconds each.
+//! A scene's particle method (improved), or its multibody method, from 72 nearby starts:
+//! every body and joint anchor shifted by 0–23 mm along x, y and z in turn, 10 simulated
+//! seconds each.
 //!
 //! ```text
-//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM]
+//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM] [--multibody]
 //! ```
 //!
 //! One start's figures are a matter of rounding in a chaotic scene (the human's sleep
@@ -11,11 +12,13 @@
 //! (`ParticleWorld::state_energy`) and of DESIGN.md's frame-difference measure, both as
 //! fractions of the energy scale, how many starts fall asleep and the largest joint gap,
 //! limit excess and penetration. `--each` prints every start too; `--from MM` shifts by
-//! MM … MM + 23 mm instead, another 72 starts.
+//! MM … MM + 23 mm instead, another 72 starts; `--multibody` runs the multibody method
+//! instead, whose state energy is the sample's (its velocities are the state's own).
 
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
@@ -41,16 +44,31 @@ fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
 
 /// DESIGN.md's metrics of one start, and the largest rise of the state's own energy
 /// above its running minimum as a fraction of the energy scale.
-fn run(s: &SceneDesc) -> Result<(MethodStats, f64), String> {
-    let mut w = ParticleWorld::new(s, ParticleSolver::Improved).map_err(|e| e.to_string())?;
+fn run(s: &SceneDesc, multibody: bool) -> Result<(MethodStats, f64), String> {
+    if multibody {
+        // Its sample's energy is the state's: the velocities are the bodies' own.
+        let w = MultibodyWorld::new(s).map_err(|e| e.to_string())?;
+        measure(w, s, |w| w.sample().energy)
+    } else {
+        let w = ParticleWorld::new(s, ParticleSolver::Improved).map_err(|e| e.to_string())?;
+        measure(w, s, ParticleWorld::state_energy)
+    }
+}
+
+/// Steps `w` for [`FRAMES`] frames, recording DESIGN.md's metrics and `state_energy`.
+fn measure<M: Method>(
+    mut w: M,
+    s: &SceneDesc,
+    state_energy: impl Fn(&M) -> f64,
+) -> Result<(MethodStats, f64), String> {
     let mut rec = MetricsRecorder::new(s).map_err(|e| e.to_string())?;
     let mut state = EnergyRise::default();
     rec.record(0.0, &w.sample());
-    state.record(w.state_energy());
+    state.record(state_energy(&w));
     for _ in 0..FRAMES {
         w.step();
         rec.record(w.time(), &w.sample());
-        state.record(w.state_energy());
+        state.record(state_energy(&w));
     }
     let stats = rec.stats();
     let state_gain = state.rise() / stats.energy_scale_j;
@@ -60,6 +78,7 @@ fn run(s: &SceneDesc) -> Result<(MethodStats, f64), String> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let each = args.iter().any(|a| a == "--each");
+    let multibody = args.iter().any(|a| a == "--multibody");
     let from = match args
         .iter()
         .position(|a| a == "--from")
@@ -102,7 +121,7 @@ fn main() -> ExitCode {
             d[axis] = mm as f32 * 1e-3;
             let mut start = base.clone();
             start.transform(&Pose::from_position(d));
-            let (st, state_gain) = match run(&start) {
+            let (st, state_gain) = match run(&start, multibody) {
                 Ok(r) => r,
                 Err(e) => {
                     eprintln!("error: {label} {mm} mm: {e}");
@@ -129,8 +148,9 @@ fn main() -> ExitCode {
         }
     }
     println!(
-        "{name} v{variant}, 72 starts: energy rise (state) {:.4} at {}, (frame measure) {worst_frame:.4}; \
+        "{name} v{variant} ({}), 72 starts: energy rise (state) {:.4} at {}, (frame measure) {worst_frame:.4}; \
          asleep in {asleep}/72 (mean {:.2} s); joint gap {gap:.4} m, limit {limit:.2} deg, penetration {pen:.4} m",
+        if multibody { "multibody" } else { "particle" },
         worst_state.0,
         worst_state.1,
         asleep_sum / f64::from(asleep.max(1)),
