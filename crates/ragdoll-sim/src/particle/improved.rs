@@ -21,13 +21,10 @@ use super::contacts::{ContactPoint, Manifold, broad_phase_on, ground_pair, shape
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
-use crate::broadphase::Reused;
+use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use glam::Vec3;
-
-/// Distance within which contacts are created before touching (speculative, m).
-const SPECULATIVE_DISTANCE: f32 = 0.005;
 
 /// Collision detection for the rest of the frame, `dt`.
 ///
@@ -41,7 +38,7 @@ const SPECULATIVE_DISTANCE: f32 = 0.005;
 /// than built again.
 fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let g = w.settings.gravity.length();
-    let reach = g * dt * dt + SPECULATIVE_DISTANCE;
+    let reach = speculative_margin(g, dt);
     let spins: Vec<f32> = w
         .bones
         .iter()

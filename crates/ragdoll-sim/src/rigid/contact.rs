@@ -14,6 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
+use crate::broadphase::speculative_margin;
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -25,24 +26,6 @@ use parry3d::query::{
 use parry3d::shape::{Shape as ParryShape, SharedShape};
 use rayon::prelude::*;
 
-/// Distance within which contacts are created before touching, beyond what a pair can
-/// close over the step (m).
-///
-/// Box2D v3 creates contacts within a fixed 2 cm (four linear slops) and leaves faster
-/// approaches to continuous collision. Here each pair's margin already grows by how far
-/// its points can approach over the step at the step's start velocities, `(|v_a − v_b| +
-/// |ω_a| r_a + |ω_b| r_b) dt` ([`Contacts::update`]), so the constant only covers what
-/// that misses: gravity's `g dt²` (added with it, [`speculative_margin`]) and velocity
-/// the step's other constraints give a body. The particle method uses the same 5 mm.
-/// Measured against 2 cm: scenes 1–9 the same to the bit but for the spider's first
-/// sleep, the 100-human pile's step 6.5 % fewer instructions (fewer speculative rows).
-pub const SPECULATIVE_DISTANCE: f32 = 0.005;
-
-/// The speculative margin of a step of `dt` under gravity `g` (m/s²): what gravity
-/// alone closes in the step, `g dt²`, and [`SPECULATIVE_DISTANCE`].
-pub fn speculative_margin(g: f32, dt: f32) -> f32 {
-    g * dt * dt + SPECULATIVE_DISTANCE
-}
 /// Penetration allowed at rest (m): keeps resting contacts from jittering in and out.
 pub const LINEAR_SLOP: f32 = 0.0005;
 /// Rolling resistance coefficient (Box2D v3's `rollingResistance`): a contact of a round
