@@ -96,6 +96,25 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     w.pairs = pairs;
 }
 
+/// A frame of a world at rest: every bone fixed or asleep, nothing held (a grab wakes
+/// its bone when it is set). Nothing is detected or solved, since the substeps would
+/// leave every bone where it is, and the frame's start poses are the poses. What
+/// [`sleeping::update`] would do is only the timers: every sleeping bone counts as slow
+/// and still, and its island, unchanged since the last detection (none runs while
+/// everything sleeps), stays asleep, since its timers only grow — so the island search
+/// over every joint and contact (a resting pile of 1000 humans: 0.3 ms a frame) is
+/// skipped. The same bits as the full update.
+fn rest(w: &mut ParticleWorld) {
+    let dt = w.settings.timestep;
+    w.frame_starts.clear();
+    w.frame_starts
+        .extend(w.bones.iter().map(|b| (b.com, b.rot)));
+    for b in w.bones.iter_mut().filter(|b| !b.fixed) {
+        b.sleep_time += dt;
+        b.still_time += dt;
+    }
+}
+
 /// Wakes every sleeping figure a moving bone touches, before the substeps that would
 /// otherwise meet it as a static wall: a shot hitting a resting box would stop dead
 /// against it and the box, woken only at the end of the frame, would never feel the
@@ -271,6 +290,10 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 /// and contacts, static bones only read — cannot touch each other and their substeps
 /// run on all of rayon's threads (`islands`). A single thread steps the world in place.
 pub(crate) fn step(w: &mut ParticleWorld) {
+    if w.grab.is_none() && w.bones.iter().all(|b| b.is_static()) {
+        rest(w);
+        return;
+    }
     let s = w.settings.clone();
     let dt = s.timestep;
     let n_sub = substeps(&s);
@@ -282,14 +305,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let threads = rayon::current_num_threads();
     // The broad phase's tree, built at the first detection and refitted at the others.
     let mut tree = Reused::default();
-    // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is
-    // set) has nothing to detect or solve: its substeps would leave every bone where
-    // it is, so only the sleep timers below advance.
-    let mut sub = if w.bones.iter().all(|b| b.is_static()) {
-        n_sub
-    } else {
-        0
-    };
+    let mut sub = 0;
     while sub < n_sub {
         let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
         detect(w, &mut tree, rest_of_frame);
