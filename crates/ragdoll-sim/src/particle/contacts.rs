@@ -128,6 +128,19 @@ impl ContactSet {
         }
         self.points.push(point);
     }
+
+    /// Appends another set's manifolds and points after this one's, its points'
+    /// ranges moved by where they land: the same set as pushing them here in turn.
+    pub fn append(&mut self, other: &ContactSet) {
+        let offset = self.points.len() as u32;
+        self.manifolds
+            .extend(other.manifolds.iter().map(|m| Manifold {
+                start: m.start + offset,
+                end: m.end + offset,
+                ..*m
+            }));
+        self.points.extend_from_slice(&other.points);
+    }
 }
 
 /// Pairs that never collide, precomputed from the scene.
@@ -300,5 +313,44 @@ mod tests {
         assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
         assert_eq!((set.manifolds[2].a, set.manifolds[2].b), (2, None));
         assert_eq!(set.manifolds[2].mu, 0.3);
+    }
+
+    /// Sets filled apart and appended in order are the set filled in one go: the
+    /// parallel narrow phase relies on it.
+    #[test]
+    fn appended_sets_are_the_set_pushed_in_turn() {
+        let pairs = [(0, Some(1)), (1, Some(2)), (2, None), (3, None)];
+        let push = |set: &mut ContactSet, k: usize| {
+            let first = set.manifolds.len();
+            for p in 0..k + 1 {
+                let n = if p == 2 { Vec3::X } else { Vec3::Y };
+                set.push(
+                    first,
+                    pairs[k],
+                    n,
+                    (0.5, 0.1),
+                    point(p as f32 + 10.0 * k as f32),
+                );
+            }
+        };
+        let mut whole = ContactSet::default();
+        (0..4).for_each(|k| push(&mut whole, k));
+        let (mut left, mut right) = (ContactSet::default(), ContactSet::default());
+        (0..2).for_each(|k| push(&mut left, k));
+        (2..4).for_each(|k| push(&mut right, k));
+        let mut joined = ContactSet::default();
+        joined.append(&left);
+        joined.append(&right);
+        let key = |s: &ContactSet| {
+            let m: Vec<_> = s
+                .manifolds
+                .iter()
+                .map(|m| (m.a, m.b, m.n, m.range()))
+                .collect();
+            let p: Vec<_> = s.points.iter().map(|c| c.ra).collect();
+            (m, p)
+        };
+        assert_eq!(key(&joined), key(&whole));
+        assert_eq!(whole.manifolds.len(), 7);
     }
 }

@@ -17,7 +17,9 @@
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
-use super::contacts::{ContactPoint, Manifold, broad_phase_on, ground_pair, shape_pair};
+use super::contacts::{
+    ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, shape_pair,
+};
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
@@ -25,6 +27,8 @@ use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use glam::Vec3;
+use parry3d::query::ContactManifold;
+use rayon::prelude::*;
 
 /// Collision detection for the rest of the frame, `dt`.
 ///
@@ -63,37 +67,89 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
-    for &(i, j) in &pairs {
-        let approach = (bones[i].lin_vel - bones[j].lin_vel).length() + spins[i] + spins[j];
-        let prediction = approach * dt + 2.0 * reach;
-        let mu = (bones[i].friction * bones[j].friction).sqrt();
-        let e = bones[i].restitution.max(bones[j].restitution);
-        let first = contacts.manifolds.len();
-        shape_pair(bones, i, j, prediction, &mut w.manifolds, |pa, pb, n, _| {
-            let point = ContactPoint::new(
-                bones[i].rot.inverse() * (pa - bones[i].center()),
-                bones[j].rot.inverse() * (pb - bones[j].center()),
-            );
-            contacts.push(first, (i, Some(j)), n, (mu, e), point);
-        });
-    }
-    if let Some(ground) = w.settings.ground {
-        for (i, b) in bones.iter().enumerate() {
-            if b.is_static() {
-                continue;
-            }
-            let mu = (b.friction * ground.friction).sqrt();
-            let e = b.restitution.max(ground.restitution);
-            let g: &Ground = &ground;
-            let first = contacts.manifolds.len();
-            ground_pair(bones, i, g, margins[i], &mut w.manifolds, |pa, pb, n, _| {
-                let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
-                contacts.push(first, (i, None), n, (mu, e), point);
+    narrow_phase(
+        &pairs,
+        &mut w.manifolds,
+        &mut contacts,
+        |&(i, j), scratch, set| {
+            let approach = (bones[i].lin_vel - bones[j].lin_vel).length() + spins[i] + spins[j];
+            let prediction = approach * dt + 2.0 * reach;
+            let mu = (bones[i].friction * bones[j].friction).sqrt();
+            let e = bones[i].restitution.max(bones[j].restitution);
+            let first = set.manifolds.len();
+            shape_pair(bones, i, j, prediction, scratch, |pa, pb, n, _| {
+                let point = ContactPoint::new(
+                    bones[i].rot.inverse() * (pa - bones[i].center()),
+                    bones[j].rot.inverse() * (pb - bones[j].center()),
+                );
+                set.push(first, (i, Some(j)), n, (mu, e), point);
             });
-        }
+        },
+    );
+    if let Some(ground) = w.settings.ground {
+        let g: &Ground = &ground;
+        let moving: Vec<usize> = (0..bones.len())
+            .filter(|&i| !bones[i].is_static())
+            .collect();
+        narrow_phase(
+            &moving,
+            &mut w.manifolds,
+            &mut contacts,
+            |&i, scratch, set| {
+                let b = &bones[i];
+                let mu = (b.friction * ground.friction).sqrt();
+                let e = b.restitution.max(ground.restitution);
+                let first = set.manifolds.len();
+                ground_pair(bones, i, g, margins[i], scratch, |pa, pb, n, _| {
+                    let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
+                    set.push(first, (i, None), n, (mu, e), point);
+                });
+            },
+        );
     }
     w.contacts = contacts;
     w.pairs = pairs;
+}
+
+/// Pairs (or bones, for the ground) per task of the parallel narrow phase, and the
+/// fewest for which it runs on the pool at all: a task must outweigh waking a thread.
+const NARROW_PHASE_CHUNK: usize = 64;
+
+/// The narrow phase: `collide(item, scratch, set)` appends each item's manifolds to a
+/// contact set, item after item. On a pool of several threads, with enough items, runs
+/// of [`NARROW_PHASE_CHUNK`] items are collided on all threads into sets of their own,
+/// then appended to `out` in item order: each pair's manifolds and points land where the
+/// serial loop puts them, so the contacts are the same bits on any number of threads
+/// (the points of a set are renumbered by where it lands, `ContactSet::append`). Parry's
+/// manifold query is stateless here (`scratch` only holds its output), so runs share
+/// nothing. Collision detection runs four times a frame and was the largest serial part
+/// of a frame on two threads.
+fn narrow_phase<T: Sync>(
+    items: &[T],
+    scratch: &mut Vec<ContactManifold<(), ()>>,
+    out: &mut ContactSet,
+    collide: impl Fn(&T, &mut Vec<ContactManifold<(), ()>>, &mut ContactSet) + Sync,
+) {
+    if rayon::current_num_threads() == 1 || items.len() < 2 * NARROW_PHASE_CHUNK {
+        for item in items {
+            collide(item, scratch, out);
+        }
+        return;
+    }
+    let sets: Vec<ContactSet> = items
+        .par_chunks(NARROW_PHASE_CHUNK)
+        .map(|run| {
+            let mut set = ContactSet::default();
+            let mut scratch = Vec::new();
+            for item in run {
+                collide(item, &mut scratch, &mut set);
+            }
+            set
+        })
+        .collect();
+    for set in &sets {
+        out.append(set);
+    }
 }
 
 /// A frame of a world at rest: every bone fixed or asleep, nothing held (a grab wakes
