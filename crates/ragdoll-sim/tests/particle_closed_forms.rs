@@ -1,6 +1,6 @@
 //! The particle method against closed forms (improved mode unless said otherwise):
 //! free fall, a box on a slope below and above the friction angle, a hinge pendulum's
-//! period; plus determinism, robustness and bad input. Scenes are built in code.
+//! period, a restitution bounce; plus determinism, robustness and bad input. Scenes are built in code.
 
 use ragdoll_sim::Method;
 use ragdoll_sim::glam::{Quat, Vec3};
@@ -63,6 +63,43 @@ fn free_fall_matches_parabola() {
             err <= 1e-3 * travelled,
             "{solver:?}: error {err} m over {travelled} m"
         );
+    }
+}
+
+/// Dropped from `h` with restitution `e` a box rebounds to `e² h` (±10 %); with `e = 0`
+/// it does not bounce at all. The velocity pass sets a pressed point's normal velocity to
+/// `−e v_n`, `v_n` the approach before the substep's solve, which is only evaluated on
+/// manifolds that bounce.
+#[test]
+fn restitution_bounce_height() {
+    let (h0, half) = (1.0f32, 0.1f32);
+    for e in [0.7f32, 0.0] {
+        let mut b = boxed("b", Vec3::splat(half), Vec3::new(0.0, half + h0, 0.0), 1.0);
+        b.restitution = e;
+        let s = scene(vec![b], vec![], Some(Ground::default()));
+        let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+        let (mut bounced, mut apex, mut up) = (false, 0.0f32, f32::MIN);
+        for _ in 0..150 {
+            w.step();
+            let mut out = Vec::new();
+            w.body_states(&mut out);
+            let (y, vy) = (out[0].com.y - half, out[0].linear_velocity.y);
+            up = up.max(vy);
+            bounced |= vy > 0.5;
+            if bounced {
+                apex = apex.max(y);
+            }
+        }
+        if e > 0.0 {
+            let expected = e * e * h0;
+            assert!(bounced, "e = {e}: never bounced");
+            assert!(
+                (apex - expected).abs() <= 0.1 * expected,
+                "e = {e}: apex {apex}, expected {expected}"
+            );
+        } else {
+            assert!(up < 0.05, "e = 0 bounced at {up} m/s");
+        }
     }
 }
 
