@@ -1,6 +1,7 @@
 //! The particle method against closed forms (improved mode unless said otherwise):
 //! free fall, a box on a slope below and above the friction angle, a hinge pendulum's
-//! period, a restitution bounce; plus determinism, robustness and bad input. Scenes are built in code.
+//! period, a restitution bounce; plus determinism, robustness and bad input. Scenes are
+//! built in code.
 
 use ragdoll_sim::Method;
 use ragdoll_sim::glam::{Quat, Vec3};
