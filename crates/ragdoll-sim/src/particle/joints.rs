@@ -147,6 +147,7 @@ fn angle_limit(f: &RestFrames, a: Side, b: Side, axis: Vec3, min: f32, max: f32)
         rest_rel: f.rot(b).inverse() * f.rot(a),
         min,
         max,
+        inside: AngleLimit::inside_bounds(min, max),
     }
 }
 
