@@ -7,7 +7,7 @@
 //! world (`body2 "world"`) and the ground, so constraint code never branches on it.
 
 use crate::scene::{BodyDesc, Collider, MassProps, Shape};
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3};
 use parry3d::shape::SharedShape;
 
 /// Hot per-body state, one entry per body plus the trailing static anchor.
@@ -23,8 +23,11 @@ pub struct BodyStates {
     pub ang_vel: Vec<Vec3>,
     /// Inverse mass; 0 for fixed, sleeping and the static anchor.
     pub inv_mass: Vec<f32>,
-    /// World-space inverse inertia `R I⁻¹ Rᵀ`, refreshed every substep.
-    pub inv_inertia: Vec<Mat3>,
+    /// World-space inverse inertia `R I⁻¹ Rᵀ`, refreshed every substep. Stored with
+    /// 16-byte columns (`Mat3A`): every product with it is done in SIMD lanes, and a
+    /// `Mat3` of 12-byte columns is widened column by column at each product (the same
+    /// lanes, the same bits). 12 bytes a body.
+    pub inv_inertia: Vec<Mat3A>,
 }
 
 impl BodyStates {
@@ -58,7 +61,7 @@ impl BodyStates {
         self.lin_vel.push(v);
         self.ang_vel.push(w);
         self.inv_mass.push(0.0);
-        self.inv_inertia.push(Mat3::ZERO);
+        self.inv_inertia.push(Mat3A::ZERO);
     }
 
     /// Appends a copy of body `i` of `from` (state, inverse mass and inertia).
@@ -85,7 +88,7 @@ impl BodyStates {
     /// static anchor, fixed and sleeping bodies, and bodies the projection pass holds).
     #[inline]
     pub fn is_mobile(&self, i: usize) -> bool {
-        self.inv_mass[i] != 0.0 || self.inv_inertia[i] != Mat3::ZERO
+        self.inv_mass[i] != 0.0 || self.inv_inertia[i] != Mat3A::ZERO
     }
 
     /// Velocity of the material point at world offset `r` from body `i`'s centre of mass.
@@ -146,7 +149,7 @@ pub struct SolverBody {
     /// Inverse mass as the solver sees it (zero when static or asleep).
     pub inv_mass: f32,
     /// World inverse inertia as the solver sees it.
-    pub inv_inertia: Mat3,
+    pub inv_inertia: Mat3A,
 }
 
 impl SolverBody {

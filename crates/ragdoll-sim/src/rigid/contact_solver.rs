@@ -270,7 +270,7 @@ impl ContactConstraints {
             }
             if pc.rolling_arm > 0.0 {
                 let k = ia + ib;
-                pc.rolling_mass = (k.determinant().abs() > 1e-20).then(|| k.inverse());
+                pc.rolling_mass = (k.determinant().abs() > 1e-20).then(|| Mat3::from(k.inverse()));
             }
         }
         for bundle in &mut self.bundles {

@@ -263,8 +263,8 @@ impl Bundle {
             self.points[j].separation = f4(|k| l[k].separation);
         }
         let Some(s) = inertia else { return };
-        let ia = Mat3x4::from_fn(|k| s.inv_inertia[self.a[k]]);
-        let ib = Mat3x4::from_fn(|k| s.inv_inertia[self.b[k]]);
+        let ia = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]]));
+        let ib = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]]));
         for w in &mut self.points[..self.slots] {
             w.ia_n = ia * w.ja_n;
             w.ib_n = ib * w.jb_n;

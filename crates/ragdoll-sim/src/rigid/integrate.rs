@@ -6,18 +6,18 @@
 //! "Numerical methods".
 
 use super::body::{BodyStates, Motions};
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3};
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
 /// constraints use it. Sleeping and fixed bodies keep zero.
 pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[bool]) {
     for (i, m) in motion.bodies.iter().enumerate() {
         if !awake[i] {
-            states.inv_inertia[i] = Mat3::ZERO;
+            states.inv_inertia[i] = Mat3A::ZERO;
             continue;
         }
-        let r = Mat3::from_quat(states.rot[i]);
-        states.inv_inertia[i] = r * m.inv_inertia_local(motion.full) * r.transpose();
+        let r = Mat3A::from_quat(states.rot[i]);
+        states.inv_inertia[i] = r * Mat3A::from(m.inv_inertia_local(motion.full)) * r.transpose();
     }
 }
 

@@ -13,7 +13,7 @@
 use super::body::BodyStates;
 use super::project::{ANGULAR_SLOP, JOINT_SLOP, MAX_ANGULAR_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::{Softness, Spring, StepContext};
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3};
 
 /// The two bodies of a joint and the joint anchor fixed in each.
 #[derive(Clone, Copy, Debug)]
@@ -63,7 +63,7 @@ impl JointFrame {
 
     /// Sum of the two world inverse inertias (the angular effective-mass matrix).
     #[inline]
-    pub fn inv_inertia_sum(&self, s: &BodyStates) -> Mat3 {
+    pub fn inv_inertia_sum(&self, s: &BodyStates) -> Mat3A {
         s.inv_inertia[self.a] + s.inv_inertia[self.b]
     }
 
@@ -114,11 +114,12 @@ pub struct PointPart {
     c: Vec3,
     /// How an impulse `p` on b turns each body, `Δω_b = I_b⁻¹ (r_b × p) = T_b p` and
     /// `Δω_a = −T_a p`: `T = I⁻¹ r̂` at `prepare`, so an iteration applies its impulse with
-    /// two matrix–vector products and no cross products.
-    turn_a: Mat3,
-    turn_b: Mat3,
+    /// two matrix–vector products and no cross products. Both, and `K⁻¹`, with 16-byte
+    /// columns as [`BodyStates::inv_inertia`], for products in SIMD lanes.
+    turn_a: Mat3A,
+    turn_b: Mat3A,
     /// `K⁻¹` at `prepare`, `None` when `K` is singular (both bodies static).
-    k_inv: Option<Mat3>,
+    k_inv: Option<Mat3A>,
 }
 
 impl PointPart {
@@ -130,9 +131,9 @@ impl PointPart {
         self.c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
         let (ta, ka) = point_response(s, f.a, ra);
         let (tb, kb) = point_response(s, f.b, rb);
-        self.turn_a = ta;
-        self.turn_b = tb;
-        self.k_inv = invert_symmetric(ka + kb);
+        self.turn_a = Mat3A::from(ta);
+        self.turn_b = Mat3A::from(tb);
+        self.k_inv = invert_symmetric(ka + kb).map(Mat3A::from);
     }
 
     /// Applies the impulse `p` on b and `−p` on a.
@@ -259,7 +260,7 @@ pub fn invert_symmetric(k: SymMat3) -> Option<Mat3> {
 
 /// Inverse of a 3×3 effective-mass matrix, `None` when singular (both bodies static).
 #[inline]
-pub fn invert(k: Mat3) -> Option<Mat3> {
+pub fn invert(k: Mat3A) -> Option<Mat3A> {
     let det = k.determinant();
     (det.is_finite() && det.abs() > 1e-20).then(|| k.inverse())
 }

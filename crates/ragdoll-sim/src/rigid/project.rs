@@ -26,7 +26,7 @@ use super::body::BodyStates;
 use super::contact_solver::ContactConstraints;
 use super::joint_set::JointSet;
 use crate::scene::SleepSettings;
-use glam::Mat3;
+use glam::Mat3A;
 
 /// Gauss–Seidel passes over all constraints per step.
 pub const POSITION_ITERATIONS: usize = 4;
@@ -56,7 +56,7 @@ pub fn project_positions(
     sleep: &SleepSettings,
 ) {
     // Resting bodies: static for the pass (zero inverse mass), restored after it.
-    let mut held: Vec<(usize, f32, Mat3)> = Vec::new();
+    let mut held: Vec<(usize, f32, Mat3A)> = Vec::new();
     for (i, &aw) in awake.iter().enumerate() {
         if aw
             && s.lin_vel[i].length() <= sleep.linear_velocity
@@ -64,7 +64,7 @@ pub fn project_positions(
         {
             held.push((i, s.inv_mass[i], s.inv_inertia[i]));
             s.inv_mass[i] = 0.0;
-            s.inv_inertia[i] = Mat3::ZERO;
+            s.inv_inertia[i] = Mat3A::ZERO;
         }
     }
     for _ in 0..POSITION_ITERATIONS {

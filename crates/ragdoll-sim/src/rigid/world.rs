@@ -413,7 +413,7 @@ impl Method for MultibodyWorld {
         s.lin_vel.insert(i, desc.linear_velocity);
         s.ang_vel.insert(i, desc.angular_velocity);
         s.inv_mass.insert(i, 0.0);
-        s.inv_inertia.insert(i, glam::Mat3::ZERO);
+        s.inv_inertia.insert(i, glam::Mat3A::ZERO);
         self.dynamic.push(!desc.is_fixed());
         self.awake.insert(i, false);
         self.islands.push(&self.states, i);
