@@ -32,16 +32,15 @@ pub(crate) struct Bone {
     pub stick_rest: [f32; 6],
     /// Bone frame: origin (the centre of mass in improved mode) at the start of the
     /// substep; the frame's origin is `com + dcom`.
-    pub com: Vec3,
+    pub com: Vec3A,
     /// Displacement of the origin during the current substep. Kept apart from `com` so
     /// that velocities, `dcom / h`, come from small numbers: differences of f32
     /// positions 50 m from the origin would round to a biased 1e-3 m/s per substep.
-    pub dcom: Vec3,
+    pub dcom: Vec3A,
     /// Bone frame: orientation.
     pub rot: Quat,
-    /// Frame at the start of the current substep (for static friction).
-    pub prev_com: Vec3,
-    /// Orientation at the start of the current substep.
+    /// Orientation at the start of the current substep (a contact's slip over the substep,
+    /// `Bone::displacement`; its origin's motion is `dcom`).
     pub prev_rot: Quat,
     /// The shape frame expressed in the bone frame.
     pub shape_in_bone: Pose,
@@ -52,7 +51,7 @@ pub(crate) struct Bone {
     /// Total mass (kg).
     pub mass: f32,
     /// Inverse inertia in the bone frame (diagonal: the frame is principal).
-    pub inv_inertia_local: Vec3,
+    pub inv_inertia_local: Vec3A,
     /// Fixed bones never move.
     pub fixed: bool,
     /// Asleep bones are frozen until something wakes their island.
@@ -64,9 +63,9 @@ pub(crate) struct Bone {
     /// Seconds the bone has stayed within the no-move bounds of `still_anchor`.
     pub still_time: f32,
     /// Linear velocity of the frame origin (m/s), from the particles.
-    pub lin_vel: Vec3,
+    pub lin_vel: Vec3A,
     /// Angular velocity (rad/s, world), from the particles.
-    pub ang_vel: Vec3,
+    pub ang_vel: Vec3A,
     /// Contact friction μ and restitution of the body.
     pub friction: f32,
     /// Restitution.
@@ -108,21 +107,22 @@ impl Bone {
     /// frame: `I⁻¹` is diagonal there, so this is two quaternion rotations and three
     /// products instead of forming the 3×3 world tensor on every correction (the
     /// solver's hottest path: every positional correction needs it twice per side).
-    pub fn inv_inertia_mul(&self, v: Vec3) -> Vec3 {
+    pub fn inv_inertia_mul(&self, v: Vec3A) -> Vec3A {
         if self.is_static() {
-            return Vec3::ZERO;
+            return Vec3A::ZERO;
         }
         self.rot * (self.inv_inertia_local * (self.rot.inverse() * v))
     }
 
     /// The frame origin now.
     pub fn center(&self) -> Vec3 {
-        self.com + self.dcom
+        Vec3::from(self.com + self.dcom)
     }
 
     /// Motion of a bone-frame point during the current substep.
     pub fn displacement(&self, local: Vec3) -> Vec3 {
-        self.dcom + (self.rot * local - self.prev_rot * local)
+        let local = Vec3A::from(local);
+        Vec3::from(self.dcom + (self.rot * local - self.prev_rot * local))
     }
 
     /// World pose of the shape frame.
@@ -142,7 +142,7 @@ impl Bone {
 
     /// World position of a point given in the bone frame.
     pub fn world(&self, local: Vec3) -> Vec3 {
-        self.com + (self.dcom + self.rot * local)
+        Vec3::from(self.com + (self.dcom + self.rot * Vec3A::from(local)))
     }
 
     /// Improved mode: particle `k`, rigidly placed in the frame. Between substeps this is
@@ -154,7 +154,7 @@ impl Bone {
     /// Improved mode: the velocity of particle `k` as the next substep starts from it,
     /// the frame's rigid motion `v + ω × (R rest_k)`.
     pub fn corner_velocity(&self, k: usize) -> Vec3 {
-        self.lin_vel + self.ang_vel.cross(self.rot * self.rest[k])
+        Vec3::from(self.lin_vel + self.ang_vel.cross(self.rot * Vec3A::from(self.rest[k])))
     }
 
     /// Largest relative stick-length error of the bone whose particles are `corners`.
@@ -198,8 +198,8 @@ impl Bone {
     /// iteration, with the frame turned once, `q ← q + ½ q [θ, 0]` normalised (the
     /// turn `R (1 − M^N) Rᵀ h ω` plus that term).
     pub fn advance(&mut self, h: f32, gravity: Vec3) {
-        self.dcom = (self.lin_vel + gravity * h) * h;
-        self.rot = matched_turn(self.rot, self.ang_vel * h, turn_lag(&self.rest));
+        self.dcom = (self.lin_vel + Vec3A::from(gravity) * h) * h;
+        self.rot = matched_turn(self.rot, Vec3::from(self.ang_vel * h), turn_lag(&self.rest));
     }
 
     /// The paper's frame (section 3.1.2): origin at particle 0, X towards particle 1,
@@ -213,7 +213,7 @@ impl Bone {
         if ok {
             self.rot = r;
         }
-        self.com = p0;
+        self.com = Vec3A::from(p0);
     }
 }
 
@@ -263,7 +263,7 @@ fn matched_turn(q: Quat, turn: Vec3, m: Vec3) -> Quat {
     let (m, keep) = (Vec3::from(m), Vec3::from(keep));
     let gyro = full.cross(m * full);
     let second = Vec3::select(keep.cmpgt(Vec3::ZERO), 0.5 * gyro / keep, Vec3::ZERO);
-    rotate_local(q, full - Vec3::from(e) + second)
+    rotate_local(q, Vec3A::from(full - Vec3::from(e) + second))
 }
 
 /// Turn (rad) below which Müller et al.'s extraction has converged and stops: a few f32
@@ -293,7 +293,7 @@ pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
 struct Lever {
     bone: usize,
     /// `I⁻¹ (r × n)` (or `I⁻¹ n` for a pure rotation) in the bone frame.
-    turn: Vec3,
+    turn: Vec3A,
 }
 
 impl Lever {
@@ -309,8 +309,9 @@ impl Lever {
         if b.is_static() {
             return (None, 0.0);
         }
+        let n = Vec3A::from(n);
         let (axis, linear) = match p {
-            Some(p) => ((p - b.center()).cross(n), b.inv_mass()),
+            Some(p) => ((Vec3A::from(p) - (b.com + b.dcom)).cross(n), b.inv_mass()),
             None => (n, 0.0),
         };
         let local = b.rot.inverse() * axis;
@@ -321,7 +322,7 @@ impl Lever {
     /// Applies the velocity impulse `λ` along the lever's direction: the centre's
     /// velocity changes by `n λ / M` (`linear`) and the angular one by `R turn λ`.
     #[inline]
-    fn apply_velocity(self, bones: &mut [Bone], linear: Vec3, lambda: f32) {
+    fn apply_velocity(self, bones: &mut [Bone], linear: Vec3A, lambda: f32) {
         let b = &mut bones[self.bone];
         b.lin_vel += linear * b.inv_mass();
         b.ang_vel += b.rot * (self.turn * lambda);
@@ -330,7 +331,7 @@ impl Lever {
     /// Applies the correction `λ` along the lever's direction: the centre moves by
     /// `n λ / M` (`linear`, zero for a pure rotation) and the frame turns by `R turn λ`.
     #[inline]
-    fn apply(self, bones: &mut [Bone], linear: Vec3, lambda: f32) {
+    fn apply(self, bones: &mut [Bone], linear: Vec3A, lambda: f32) {
         let b = &mut bones[self.bone];
         b.dcom += linear * b.inv_mass();
         b.rot = rotate_local(b.rot, self.turn * lambda);
@@ -341,7 +342,7 @@ impl Lever {
 /// (world), given in the body frame as `θ_local = q⁻¹ θ q`. Since `[θ, 0] q = q [θ_local,
 /// 0]`, this is `q + ½ q [θ_local, 0]`: no rotation of θ into the world first, which
 /// every correction of the solver would otherwise pay.
-pub(crate) fn rotate_local(q: Quat, theta_local: Vec3) -> Quat {
+pub(crate) fn rotate_local(q: Quat, theta_local: Vec3A) -> Quat {
     let dq = q * Quat::from_xyzw(theta_local.x, theta_local.y, theta_local.z, 0.0);
     Quat::from_xyzw(
         q.x + 0.5 * dq.x,
@@ -358,7 +359,7 @@ pub(crate) fn rotate_local(q: Quat, theta_local: Vec3) -> Quat {
 pub(crate) struct Correction {
     a: Option<Lever>,
     b: Option<Lever>,
-    n: Vec3,
+    n: Vec3A,
     /// Generalised inverse mass of the two sides along `n`.
     pub w: f32,
 }
@@ -372,7 +373,7 @@ impl Correction {
         Correction {
             a,
             b,
-            n,
+            n: Vec3A::from(n),
             w: wa + wb,
         }
     }
@@ -385,7 +386,7 @@ impl Correction {
         Correction {
             a,
             b,
-            n: Vec3::ZERO,
+            n: Vec3A::ZERO,
             w: wa + wb,
         }
     }

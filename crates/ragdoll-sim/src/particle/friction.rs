@@ -18,7 +18,7 @@
 
 use super::bone::{Bone, Correction, Side, positional, side_world};
 use super::contacts::{ContactPoint, Manifold};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
     match s {
@@ -33,7 +33,7 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
     match s {
         Some(i) if !bones[i].is_static() => {
             let b = &bones[i];
-            b.lin_vel + b.ang_vel.cross(p - b.center())
+            Vec3::from(b.lin_vel + b.ang_vel.cross(Vec3A::from(p) - (b.com + b.dcom)))
         }
         _ => Vec3::ZERO,
     }
@@ -185,7 +185,7 @@ pub(crate) fn solve_velocity(
     }
     // Torsional friction: twist about the normal, capped by μ r λ_n / h.
     let twist = |bones: &[Bone], s: Side| match s {
-        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(Vec3A::from(m.n)),
         _ => 0.0,
     };
     let spin = twist(bones, a) - twist(bones, m.b);

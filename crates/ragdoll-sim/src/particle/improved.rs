@@ -26,7 +26,7 @@ use super::{ParticleWorld, islands, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use parry3d::query::ContactManifold;
 use rayon::prelude::*;
 
@@ -164,7 +164,7 @@ fn rest(w: &mut ParticleWorld) {
     let dt = w.settings.timestep;
     w.frame_starts.clear();
     w.frame_starts
-        .extend(w.bones.iter().map(|b| (b.com, b.rot)));
+        .extend(w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)));
     for b in w.bones.iter_mut().filter(|b| !b.fixed) {
         b.sleep_time += dt;
         b.still_time += dt;
@@ -217,10 +217,10 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
 /// `v = Σ m v_k / M` and `ω = I⁻¹ Σ m r_k × v_k` (angular momentum over inertia).
 ///
 /// `arms` are the particles relative to the frame origin, `R rest_k`.
-fn velocity_from_particles(b: &mut Bone, arms: &[Vec3; 4], vk: &[Vec3; 4]) {
+fn velocity_from_particles(b: &mut Bone, arms: &[Vec3A; 4], vk: &[Vec3A; 4]) {
     let vc = (vk[0] + vk[1] + vk[2] + vk[3]) * 0.25;
     let m = b.mass * 0.25;
-    let mut l = Vec3::ZERO;
+    let mut l = Vec3A::ZERO;
     for (arm, v) in arms.iter().zip(vk) {
         l += arm.cross(*v - vc) * m;
     }
@@ -275,9 +275,8 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
         for b in p.bones.iter_mut() {
-            b.prev_com = b.com;
             b.prev_rot = b.rot;
-            b.dcom = Vec3::ZERO;
+            b.dcom = Vec3A::ZERO;
             if !b.is_static() {
                 b.advance(h, s.gravity);
             }
@@ -317,17 +316,18 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // 4. velocities from the particles' displacements; the frame origin moves on
         for b in p.bones.iter_mut() {
             if b.is_static() {
-                b.lin_vel = Vec3::ZERO;
-                b.ang_vel = Vec3::ZERO;
+                b.lin_vel = Vec3A::ZERO;
+                b.ang_vel = Vec3A::ZERO;
                 continue;
             }
             // `Bone::displacement` of each particle, its arm kept for the momentum.
-            let arms: [Vec3; 4] = std::array::from_fn(|k| b.rot * b.rest[k]);
-            let vk: [Vec3; 4] =
-                std::array::from_fn(|k| (b.dcom + (arms[k] - b.prev_rot * b.rest[k])) / h);
+            let arms: [Vec3A; 4] = std::array::from_fn(|k| b.rot * Vec3A::from(b.rest[k]));
+            let vk: [Vec3A; 4] = std::array::from_fn(|k| {
+                (b.dcom + (arms[k] - b.prev_rot * Vec3A::from(b.rest[k]))) / h
+            });
             velocity_from_particles(b, &arms, &vk);
             b.com += b.dcom;
-            b.dcom = Vec3::ZERO;
+            b.dcom = Vec3A::ZERO;
         }
         // 5. velocity pass (contact points are relative to the updated frames)
         for _ in 0..VELOCITY_PASSES {
@@ -363,7 +363,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let h = dt / n_sub as f32;
     w.frame_starts.clear();
     w.frame_starts
-        .extend(w.bones.iter().map(|b| (b.com, b.rot)));
+        .extend(w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)));
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
     // The broad phase's tree, built at the first detection and refitted at the others.
@@ -409,7 +409,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     );
     for &i in &newly {
         let b = &mut w.bones[i];
-        b.lin_vel = Vec3::ZERO;
-        b.ang_vel = Vec3::ZERO;
+        b.lin_vel = Vec3A::ZERO;
+        b.ang_vel = Vec3A::ZERO;
     }
 }

@@ -19,7 +19,7 @@ use super::contacts::{ContactPoint, Manifold};
 use super::improved::{self, Part};
 use super::joints::JointSet;
 use crate::scene::Settings;
-use glam::Vec3;
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// The root of `i`'s set, halving the path on the way.
@@ -293,11 +293,10 @@ pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f3
     // velocity is zero. The copies in the batches get the same; this covers the static
     // bones no constraint reads.
     for b in w.bones.iter_mut().filter(|b| b.is_static()) {
-        b.prev_com = b.com;
         b.prev_rot = b.rot;
-        b.dcom = Vec3::ZERO;
-        b.lin_vel = Vec3::ZERO;
-        b.ang_vel = Vec3::ZERO;
+        b.dcom = Vec3A::ZERO;
+        b.lin_vel = Vec3A::ZERO;
+        b.ang_vel = Vec3A::ZERO;
     }
     let world = &*w;
     let stepped: Vec<Batch> = plan

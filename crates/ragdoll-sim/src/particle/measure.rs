@@ -127,7 +127,7 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
         let pose = b.shape_pose();
         let com = pose.transform_point(b.shape_com);
         let (lin, ang) = match w.solver {
-            ParticleSolver::Improved => (b.lin_vel, b.ang_vel),
+            ParticleSolver::Improved => (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel)),
             ParticleSolver::Paper => {
                 let x = &w.particles.frame_start;
                 let p0 = x[b.particles[0] as usize];

@@ -37,7 +37,7 @@ use crate::snapshot::{
 };
 use bone::{Bone, EDGES};
 use contacts::{ContactSet, Filter};
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 use joints::{Joint, RestFrames};
 use parry3d::query::{ContactManifold, Ray};
 use parry3d::shape::SharedShape;
@@ -133,7 +133,8 @@ impl ParticleWorld {
             }
         }
         w.assign_figures(scene);
-        let frames: Vec<(Vec3, Quat)> = w.bones.iter().map(|b| (b.com, b.rot)).collect();
+        let frames: Vec<(Vec3, Quat)> =
+            w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)).collect();
         let rf = RestFrames { frames: &frames };
         for c in &scene.constraints {
             let a = Some(c.body1.index());
@@ -159,24 +160,23 @@ impl ParticleWorld {
             particles: [0; 4],
             rest: [Vec3::ZERO; 4],
             stick_rest: [0.0; 6],
-            com: desc.pose.position,
-            dcom: Vec3::ZERO,
+            com: desc.pose.position.into(),
+            dcom: Vec3A::ZERO,
             rot: desc.pose.rotation,
-            prev_com: desc.pose.position,
             prev_rot: desc.pose.rotation,
             shape_in_bone: Pose::IDENTITY,
             shape: BodyCollider::new(desc)
                 .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             mass,
-            inv_inertia_local: Vec3::ZERO,
+            inv_inertia_local: Vec3A::ZERO,
             fixed: desc.is_fixed(),
             asleep: false,
             sleep_time: 0.0,
             still_anchor: (desc.pose.position, desc.pose.rotation),
             still_time: 0.0,
-            lin_vel: desc.linear_velocity,
-            ang_vel: desc.angular_velocity,
+            lin_vel: desc.linear_velocity.into(),
+            ang_vel: desc.angular_velocity.into(),
             friction: desc.friction.contact,
             restitution: desc.restitution,
             air: (desc.friction.linear, desc.friction.angular),
@@ -191,9 +191,8 @@ impl ParticleWorld {
         let p = placement::particulate(&mp);
         let mut bone = self.make_bone(body, desc, mp.mass);
         let frame = desc.pose.mul_pose(&p.bone_in_shape);
-        bone.com = frame.position;
+        bone.com = frame.position.into();
         bone.rot = frame.rotation;
-        bone.prev_com = bone.com;
         bone.prev_rot = bone.rot;
         bone.shape_in_bone = Pose {
             position: -(p.bone_in_shape.rotation.inverse() * p.bone_in_shape.position),
@@ -203,7 +202,8 @@ impl ParticleWorld {
         bone.stick_rest = EDGES.map(|(a, b)| p.rest[a].distance(p.rest[b]));
         bone.inv_inertia_local = p
             .principal_inertia
-            .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 });
+            .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 })
+            .into();
         let s = &self.settings;
         let (dt, g) = (s.timestep, s.gravity);
         let movable = !desc.is_fixed();
@@ -214,19 +214,19 @@ impl ParticleWorld {
             // backwards: `x − v dt + ½ g dt²`, turned back by `ω dt`.
             let h = dt / improved::substeps(s) as f32;
             if movable {
-                bone.lin_vel -= g * (0.5 * h);
-                let start = bone.com - desc.linear_velocity * dt + g * (0.5 * dt * dt);
+                bone.lin_vel -= Vec3A::from(g * (0.5 * h));
+                let start = Vec3::from(bone.com) - desc.linear_velocity * dt + g * (0.5 * dt * dt);
                 let turn = Quat::from_scaled_axis(-desc.angular_velocity * dt);
                 self.frame_starts
                     .push((start, (turn * bone.rot).normalize()));
             } else {
-                self.frame_starts.push((bone.com, bone.rot));
+                self.frame_starts.push((Vec3::from(bone.com), bone.rot));
             }
             return Ok(bone);
         }
         for k in 0..4 {
             let x = bone.world(p.rest[k]);
-            let v = desc.linear_velocity + desc.angular_velocity.cross(x - bone.com);
+            let v = desc.linear_velocity + desc.angular_velocity.cross(x - Vec3::from(bone.com));
             bone.particles[k] = self.particles.push(
                 x,
                 v,
@@ -571,7 +571,7 @@ impl Method for ParticleWorld {
                 let shape_pose = bone.shape_pose();
                 bone.paper_frame(x);
                 let frame = Pose {
-                    position: bone.com,
+                    position: Vec3::from(bone.com),
                     rotation: bone.rot,
                 };
                 bone.rest = bone

@@ -230,7 +230,7 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         bone.particles = particles;
         bone.rest = pos.map(|p| frame.inverse_transform_point(p));
         bone.stick_rest = EDGES.map(|(a, b)| pos[a].distance(pos[b]));
-        bone.com = pos[0];
+        bone.com = pos[0].into();
         bone.rot = rot;
         bone.shape_in_bone = inv.mul_pose(&poses[i]);
         for (k, &(a, b)) in EDGES.iter().enumerate() {
