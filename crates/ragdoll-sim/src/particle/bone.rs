@@ -91,7 +91,7 @@ impl Bone {
         self.asleep = false;
         self.sleep_time = 0.0;
         self.still_time = 0.0;
-        self.still_anchor = (self.center(), self.rot);
+        self.still_anchor = (Vec3::from(self.center()), self.rot);
     }
 
     /// Inverse mass seen by the solver.
@@ -115,20 +115,20 @@ impl Bone {
     }
 
     /// The frame origin now.
-    pub fn center(&self) -> Vec3 {
-        Vec3::from(self.com + self.dcom)
+    pub fn center(&self) -> Vec3A {
+        self.com + self.dcom
     }
 
     /// Motion of a bone-frame point during the current substep.
-    pub fn displacement(&self, local: Vec3) -> Vec3 {
+    pub fn displacement(&self, local: Vec3) -> Vec3A {
         let local = Vec3A::from(local);
-        Vec3::from(self.dcom + (self.rot * local - self.prev_rot * local))
+        self.dcom + (self.rot * local - self.prev_rot * local)
     }
 
     /// World pose of the shape frame.
     pub fn shape_pose(&self) -> Pose {
         Pose {
-            position: self.center(),
+            position: Vec3::from(self.center()),
             rotation: self.rot,
         }
         .mul_pose(&self.shape_in_bone)
@@ -141,14 +141,14 @@ impl Bone {
     }
 
     /// World position of a point given in the bone frame.
-    pub fn world(&self, local: Vec3) -> Vec3 {
-        Vec3::from(self.com + (self.dcom + self.rot * Vec3A::from(local)))
+    pub fn world(&self, local: Vec3) -> Vec3A {
+        self.com + (self.dcom + self.rot * Vec3A::from(local))
     }
 
     /// Improved mode: particle `k`, rigidly placed in the frame. Between substeps this is
     /// where the solver's particle is; the improved world stores no particle arrays.
     pub fn corner(&self, k: usize) -> Vec3 {
-        self.world(self.rest[k])
+        Vec3::from(self.world(self.rest[k]))
     }
 
     /// Improved mode: the velocity of particle `k` as the next substep starts from it,
@@ -278,10 +278,10 @@ pub(crate) type Side = Option<usize>;
 
 /// World point and frame origin of a point given in a side's local frame (world: as is).
 #[inline]
-pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
+pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3A {
     match s {
         Some(i) => bones[i].world(local),
-        None => local,
+        None => Vec3A::from(local),
     }
 }
 
@@ -301,7 +301,7 @@ impl Lever {
     /// a pure rotation about `n`), with its generalised inverse mass; no lever for a
     /// static side.
     #[inline]
-    fn of(bones: &[Bone], s: Side, p: Option<Vec3>, n: Vec3) -> (Option<Lever>, f32) {
+    fn of(bones: &[Bone], s: Side, p: Option<Vec3A>, n: Vec3A) -> (Option<Lever>, f32) {
         let Some(i) = s else {
             return (None, 0.0);
         };
@@ -309,9 +309,8 @@ impl Lever {
         if b.is_static() {
             return (None, 0.0);
         }
-        let n = Vec3A::from(n);
         let (axis, linear) = match p {
-            Some(p) => ((Vec3A::from(p) - (b.com + b.dcom)).cross(n), b.inv_mass()),
+            Some(p) => ((p - b.center()).cross(n), b.inv_mass()),
             None => (n, 0.0),
         };
         let local = b.rot.inverse() * axis;
@@ -367,20 +366,20 @@ pub(crate) struct Correction {
 impl Correction {
     /// Moving point `pa` of side `a` along unit `n` and `pb` of `b` against it.
     #[inline]
-    pub fn along(bones: &[Bone], (a, pa): (Side, Vec3), (b, pb): (Side, Vec3), n: Vec3) -> Self {
+    pub fn along(bones: &[Bone], (a, pa): (Side, Vec3A), (b, pb): (Side, Vec3A), n: Vec3A) -> Self {
         let (a, wa) = Lever::of(bones, a, Some(pa), n);
         let (b, wb) = Lever::of(bones, b, Some(pb), n);
         Correction {
             a,
             b,
-            n: Vec3A::from(n),
+            n,
             w: wa + wb,
         }
     }
 
     /// Turning side `a` about unit `n` and `b` against it; no point moves along `n`.
     #[inline]
-    pub fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3) -> Self {
+    pub fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3A) -> Self {
         let (a, wa) = Lever::of(bones, a, None, n);
         let (b, wb) = Lever::of(bones, b, None, n);
         Correction {
@@ -422,9 +421,9 @@ pub(crate) fn positional(
     bones: &mut [Bone],
     a: Side,
     b: Side,
-    pa: Vec3,
-    pb: Vec3,
-    delta: Vec3,
+    pa: Vec3A,
+    pb: Vec3A,
+    delta: Vec3A,
     alpha_tilde: f32,
 ) -> f32 {
     let c = delta.length();
@@ -442,7 +441,7 @@ pub(crate) fn positional(
 
 /// XPBD angular constraint: rotates side `a` relative to `b` by the rotation vector
 /// `dphi` (split by generalised inverse inertia).
-pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3, alpha_tilde: f32) {
+pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3A, alpha_tilde: f32) {
     let angle = dphi.length();
     if angle < 1e-9 {
         return;

@@ -10,7 +10,7 @@
 use super::bone::{Bone, Side};
 use crate::broadphase::Reused;
 use crate::scene::Ground;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
 use parry3d::shape::HalfSpace;
@@ -27,8 +27,9 @@ pub(crate) struct Manifold {
     pub a: usize,
     /// The second bone, or the ground.
     pub b: Side,
-    /// Unit normal from `a` towards `b` (world), fixed for the frame.
-    pub n: Vec3,
+    /// Unit normal from `a` towards `b` (world), fixed for the frame; in SIMD lanes, as
+    /// the solver uses it.
+    pub n: Vec3A,
     /// Combined Coulomb coefficient.
     pub mu: f32,
     /// Combined restitution.
@@ -112,6 +113,7 @@ impl ContactSet {
         (mu, e): (f32, f32),
         point: ContactPoint,
     ) {
+        let n = Vec3A::from(n);
         let end = self.points.len() as u32;
         let open = self.manifolds.len() > first;
         match self.manifolds.last_mut() {

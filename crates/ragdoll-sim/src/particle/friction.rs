@@ -20,22 +20,22 @@ use super::bone::{Bone, Correction, Side, positional, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::{Vec3, Vec3A};
 
-fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3 {
+fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3A {
     match s {
         Some(i) => bones[i].displacement(local),
-        None => Vec3::ZERO,
+        None => Vec3A::ZERO,
     }
 }
 
 /// Velocity of a side's material point at world `p`.
 #[inline]
-pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3) -> Vec3 {
+pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3A) -> Vec3A {
     match s {
         Some(i) if !bones[i].is_static() => {
             let b = &bones[i];
-            Vec3::from(b.lin_vel + b.ang_vel.cross(Vec3A::from(p) - (b.com + b.dcom)))
+            b.lin_vel + b.ang_vel.cross(p - b.center())
         }
-        _ => Vec3::ZERO,
+        _ => Vec3A::ZERO,
     }
 }
 
@@ -46,7 +46,7 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
     let depth = (pa - pb).dot(m.n);
     if depth > 0.0 {
         if c.touched_at.is_none() {
-            c.touched_at = Some(start_offset(bones, m, c, pa, pb));
+            c.touched_at = Some(Vec3::from(start_offset(bones, m, c, pa, pb)));
         }
         c.lambda_n += positional(bones, Some(m.a), m.b, pa, pb, -m.n * depth, 0.0);
     }
@@ -55,7 +55,7 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
 /// Tangential offset of a contact's two points at the start of the substep, `pa − pb`
 /// less their motion since (`pa`, `pb` the points now; any time in the substep gives
 /// the same).
-fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3, pb: Vec3) -> Vec3 {
+fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3A, pb: Vec3A) -> Vec3A {
     let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
     let d = pa - pb - sub;
     d - m.n * d.dot(m.n)
@@ -114,16 +114,16 @@ pub(crate) fn solve_friction(
     let a = Some(m.a);
     let pa = bones[m.a].world(c.ra);
     let pb = side_world(bones, m.b, c.rb);
-    let tangential = |d: Vec3| d - m.n * d.dot(m.n);
+    let tangential = |d: Vec3A| d - m.n * d.dot(m.n);
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
     let sub = tangential(bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb));
     // A point not pressed itself (its manifold is) has not drifted.
     let drift = c
         .touched_at
-        .map_or(Vec3::ZERO, |t| tangential(pa - pb) - sub - t);
+        .map_or(Vec3A::ZERO, |t| tangential(pa - pb) - sub - Vec3A::from(t));
     // Corrections move pa − pb against the slip.
-    let against = |d: Vec3| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
+    let against = |d: Vec3A| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
     // Static friction takes back the slip and a share of the drift when the cone allows
     // both; kinetic friction (or a static one that cannot afford the drift) acts on the
     // substep's slip alone, so it only ever opposes the motion it sees.
@@ -185,7 +185,7 @@ pub(crate) fn solve_velocity(
     }
     // Torsional friction: twist about the normal, capped by μ r λ_n / h.
     let twist = |bones: &[Bone], s: Side| match s {
-        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(Vec3A::from(m.n)),
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
         _ => 0.0,
     };
     let spin = twist(bones, a) - twist(bones, m.b);

@@ -79,8 +79,8 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
             let first = set.manifolds.len();
             shape_pair(bones, i, j, prediction, scratch, |pa, pb, n, _| {
                 let point = ContactPoint::new(
-                    bones[i].rot.inverse() * (pa - bones[i].center()),
-                    bones[j].rot.inverse() * (pb - bones[j].center()),
+                    bones[i].rot.inverse() * (pa - Vec3::from(bones[i].center())),
+                    bones[j].rot.inverse() * (pb - Vec3::from(bones[j].center())),
                 );
                 set.push(first, (i, Some(j)), n, (mu, e), point);
             });
@@ -101,7 +101,8 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
                 let e = b.restitution.max(ground.restitution);
                 let first = set.manifolds.len();
                 ground_pair(bones, i, g, margins[i], scratch, |pa, pb, n, _| {
-                    let point = ContactPoint::new(b.rot.inverse() * (pa - b.center()), pb);
+                    let point =
+                        ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
                     set.push(first, (i, None), n, (mu, e), point);
                 });
             },

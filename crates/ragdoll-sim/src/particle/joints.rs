@@ -10,7 +10,7 @@ use super::bone::{Bone, Side, angular, positional, side_rot, side_world};
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 
 /// Type-specific data, in the bones' frames.
 #[derive(Clone, Copy, Debug)]
@@ -250,8 +250,8 @@ impl Joint {
     /// The anchor as seen from body1 and from body2 (world).
     pub fn anchors(&self, bones: &[Bone]) -> (Vec3, Vec3) {
         (
-            side_world(bones, self.a, self.anchor_a),
-            side_world(bones, self.b, self.anchor_b),
+            Vec3::from(side_world(bones, self.a, self.anchor_a)),
+            Vec3::from(side_world(bones, self.b, self.anchor_b)),
         )
     }
 
@@ -301,8 +301,8 @@ impl Joint {
         match self.kind {
             JointType::Hinge { axis_a, axis_b } => {
                 // Align the axes: rotate body1 by the rotation taking its axis onto body2's.
-                let ta = side_rot(bones, a) * axis_a;
-                let tb = side_rot(bones, b) * axis_b;
+                let ta = side_rot(bones, a) * Vec3A::from(axis_a);
+                let tb = side_rot(bones, b) * Vec3A::from(axis_b);
                 let c = ta.cross(tb);
                 let s = c.length();
                 if s > 1e-9 {
@@ -310,8 +310,8 @@ impl Joint {
                 }
             }
             JointType::Universal { shaft_a, shaft_b } => {
-                let s1 = side_rot(bones, a) * shaft_a;
-                let s2 = side_rot(bones, b) * shaft_b;
+                let s1 = side_rot(bones, a) * Vec3A::from(shaft_a);
+                let s2 = side_rot(bones, b) * Vec3A::from(shaft_b);
                 let n = s1.cross(s2);
                 let l = n.length();
                 if l > 1e-9 {
@@ -326,7 +326,7 @@ impl Joint {
             }
             JointType::Fixed | JointType::Slider { .. } => {
                 let e = self.orientation_error(bones, a, b);
-                angular(bones, a, b, e, 0.0);
+                angular(bones, a, b, Vec3A::from(e), 0.0);
             }
             JointType::Ball | JointType::Spring { .. } => {}
         }
@@ -360,7 +360,7 @@ impl Joint {
                 }
             }
             JointType::Slider { axis_b } => {
-                let axis = side_rot(bones, b) * axis_b;
+                let axis = side_rot(bones, b) * Vec3A::from(axis_b);
                 let d = pb - pa;
                 positional(bones, a, b, pa, pb, d - axis * axis.dot(d), 0.0);
             }

@@ -8,7 +8,7 @@
 //! generalised inverse inertia.
 
 use super::bone::{Bone, Side, angular, side_rot};
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 
 /// A swing limit in the bones' frames.
 #[derive(Clone, Copy, Debug)]
@@ -91,7 +91,8 @@ impl AngleLimit {
     /// rotation about the axis alone.
     pub fn angle(&self, bones: &[Bone], a: Side, b: Side) -> (f32, Vec3) {
         let qa = side_rot(bones, a);
-        self.angle_of(self.relative(bones, a, b), qa)
+        let (phi, grad) = self.angle_of(self.relative(bones, a, b), qa);
+        (phi, Vec3::from(grad))
     }
 
     /// Body1's rotation since rest relative to body2, `Δ` of [`AngleLimit::angle`], with
@@ -106,8 +107,8 @@ impl AngleLimit {
 
     /// [`AngleLimit::angle`] from `Δ` and body1's orientation `qa`.
     #[inline]
-    fn angle_of(&self, d: Quat, qa: Quat) -> (f32, Vec3) {
-        let (x, v, w) = (self.axis_a, Vec3::new(d.x, d.y, d.z), d.w);
+    fn angle_of(&self, d: Quat, qa: Quat) -> (f32, Vec3A) {
+        let (x, v, w) = (Vec3A::from(self.axis_a), Vec3A::new(d.x, d.y, d.z), d.w);
         let y = v.dot(x);
         let phi = 2.0 * y.atan2(w);
         let n = w * w + y * y;
@@ -238,7 +239,7 @@ impl SwingLimit {
     /// Rotates the shaft back onto the cone or pyramid.
     pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32) {
         if let Some((n, angle)) = self.target(bones, a, b) {
-            angular(bones, a, b, n * angle, alpha_tilde);
+            angular(bones, a, b, Vec3A::from(n * angle), alpha_tilde);
         }
     }
 }

@@ -225,7 +225,7 @@ impl ParticleWorld {
             return Ok(bone);
         }
         for k in 0..4 {
-            let x = bone.world(p.rest[k]);
+            let x = Vec3::from(bone.world(p.rest[k]));
             let v = desc.linear_velocity + desc.angular_velocity.cross(x - Vec3::from(bone.com));
             bone.particles[k] = self.particles.push(
                 x,
@@ -319,6 +319,7 @@ pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
     };
     let local = bones[i].shape_in_bone.transform_point(g.local_point);
     let p = bones[i].world(local);
+    let target = Vec3A::from(g.target);
     // A 5 Hz spring on the bone's own mass, like Box2D's mouse joint: compliance
     // α = 1/k with k = m ω², ω = 2π·5 s⁻¹. Scaled by the mass so a light hand and a heavy
     // chest follow the mouse alike; for the human's 15 kg chest k ≈ 15 kN/m, so the rest
@@ -330,8 +331,8 @@ pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
         Some(i),
         None,
         p,
-        g.target,
-        g.target - p,
+        target,
+        target - p,
         compliance / (h * h),
     );
 }
@@ -342,7 +343,7 @@ pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
         return;
     };
     let local = w.bones[i].shape_in_bone.transform_point(g.local_point);
-    let p = w.bones[i].world(local);
+    let p = Vec3::from(w.bones[i].world(local));
     let d = (g.target - p) * 0.05;
     for &k in &w.bones[i].particles {
         if w.particles.inv_mass[k as usize] > 0.0 {
@@ -458,8 +459,8 @@ impl Method for ParticleWorld {
                 let pa = self.bones[m.a].world(c.ra);
                 let pb = bone::side_world(&self.bones, m.b, c.rb);
                 out.contacts.push(ContactInstance {
-                    point: pa,
-                    normal: m.n,
+                    point: Vec3::from(pa),
+                    normal: Vec3::from(m.n),
                     depth: (pa - pb).dot(m.n),
                 });
             }

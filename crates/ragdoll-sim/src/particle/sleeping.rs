@@ -15,6 +15,7 @@ use super::contacts::Manifold;
 use super::islands::{find, union};
 use super::joints::Joint;
 use crate::scene::SleepSettings;
+use glam::Vec3;
 
 /// Updates sleep timers and puts islands to sleep or wakes them. Returns the bones that
 /// just fell asleep so the caller can zero their velocities. A `held` bone
@@ -43,10 +44,12 @@ pub(crate) fn update(
         let (p, q) = b.still_anchor;
         let turned = (b.rot * q.inverse()).to_axis_angle().1;
         let turned = turned.min(std::f32::consts::TAU - turned);
-        if b.asleep || ((b.center() - p).length() <= s.translation && turned <= s.rotation) {
+        if b.asleep
+            || ((Vec3::from(b.center()) - p).length() <= s.translation && turned <= s.rotation)
+        {
             b.still_time += dt;
         } else {
-            b.still_anchor = (b.center(), b.rot);
+            b.still_anchor = (Vec3::from(b.center()), b.rot);
             b.still_time = 0.0;
         }
     }
