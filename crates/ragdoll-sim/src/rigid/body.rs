@@ -7,7 +7,7 @@
 //! world (`body2 "world"`) and the ground, so constraint code never branches on it.
 
 use crate::scene::{BodyDesc, Collider, MassProps, Shape};
-use glam::{Mat3, Mat3A, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 use parry3d::shape::SharedShape;
 
 /// Hot per-body state, one entry per body plus the trailing static anchor.
@@ -18,9 +18,9 @@ pub struct BodyStates {
     /// Orientation of the body (= of its shape frame).
     pub rot: Vec<Quat>,
     /// Linear velocity of the centre of mass.
-    pub lin_vel: Vec<Vec3>,
+    pub lin_vel: Vec<Vec3A>,
     /// Angular velocity (world).
-    pub ang_vel: Vec<Vec3>,
+    pub ang_vel: Vec<Vec3A>,
     /// Inverse mass; 0 for fixed, sleeping and the static anchor.
     pub inv_mass: Vec<f32>,
     /// World-space inverse inertia `R I⁻¹ Rᵀ`, refreshed every substep. Stored with
@@ -58,8 +58,8 @@ impl BodyStates {
     pub fn push(&mut self, com: Vec3, rot: Quat, v: Vec3, w: Vec3) {
         self.com.push(com);
         self.rot.push(rot);
-        self.lin_vel.push(v);
-        self.ang_vel.push(w);
+        self.lin_vel.push(Vec3A::from(v));
+        self.ang_vel.push(Vec3A::from(w));
         self.inv_mass.push(0.0);
         self.inv_inertia.push(Mat3A::ZERO);
     }
@@ -93,20 +93,20 @@ impl BodyStates {
 
     /// Velocity of the material point at world offset `r` from body `i`'s centre of mass.
     #[inline]
-    pub fn point_velocity(&self, i: usize, r: Vec3) -> Vec3 {
+    pub fn point_velocity(&self, i: usize, r: Vec3A) -> Vec3A {
         self.lin_vel[i] + self.ang_vel[i].cross(r)
     }
 
     /// Applies the impulse `p` at offset `r` to body `i` (Newton: Δv = p/m, Δω = I⁻¹ r×p).
     #[inline]
-    pub fn apply_impulse(&mut self, i: usize, r: Vec3, p: Vec3) {
+    pub fn apply_impulse(&mut self, i: usize, r: Vec3A, p: Vec3A) {
         self.lin_vel[i] += p * self.inv_mass[i];
         self.ang_vel[i] += self.inv_inertia[i] * r.cross(p);
     }
 
     /// Applies the angular impulse `l` to body `i`.
     #[inline]
-    pub fn apply_angular_impulse(&mut self, i: usize, l: Vec3) {
+    pub fn apply_angular_impulse(&mut self, i: usize, l: Vec3A) {
         self.ang_vel[i] += self.inv_inertia[i] * l;
     }
 
@@ -143,9 +143,9 @@ impl BodyStates {
 #[derive(Clone, Copy, Debug)]
 pub struct SolverBody {
     /// Linear velocity (m/s).
-    pub v: Vec3,
+    pub v: Vec3A,
     /// Angular velocity (rad/s).
-    pub w: Vec3,
+    pub w: Vec3A,
     /// Inverse mass as the solver sees it (zero when static or asleep).
     pub inv_mass: f32,
     /// World inverse inertia as the solver sees it.
@@ -173,20 +173,20 @@ impl SolverBody {
 
     /// Velocity of the material point at world offset `r` from the centre of mass.
     #[inline]
-    pub fn point_velocity(&self, r: Vec3) -> Vec3 {
+    pub fn point_velocity(&self, r: Vec3A) -> Vec3A {
         self.v + self.w.cross(r)
     }
 
     /// Applies the impulse `p` at offset `r`.
     #[inline]
-    pub fn apply_impulse(&mut self, r: Vec3, p: Vec3) {
+    pub fn apply_impulse(&mut self, r: Vec3A, p: Vec3A) {
         self.v += p * self.inv_mass;
         self.w += self.inv_inertia * r.cross(p);
     }
 
     /// Applies the angular impulse `l`.
     #[inline]
-    pub fn apply_angular_impulse(&mut self, l: Vec3) {
+    pub fn apply_angular_impulse(&mut self, l: Vec3A) {
         self.w += self.inv_inertia * l;
     }
 }

@@ -30,7 +30,7 @@ use super::contact::{ContactPair, LINEAR_SLOP};
 use super::contact_wide::{self, Bundle, LANES, SLOTS};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::StepContext;
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec3A};
 
 /// One touching pair's share of the step.
 #[derive(Clone, Copy, Debug, Default)]
@@ -149,7 +149,7 @@ impl ContactConstraints {
             let (ia, ib) = (s.inv_inertia[a], s.inv_inertia[b]);
             let mass =
                 |ja: Vec3, jb: Vec3| inverse_or_zero(ma + mb + ja.dot(ia * ja) + jb.dot(ib * jb));
-            let dv = s.lin_vel[b] - s.lin_vel[a];
+            let dv = Vec3::from(s.lin_vel[b] - s.lin_vel[a]);
             let start = out.points.len();
             for (c, separation) in pair.contact_points() {
                 let ra = s.rot[a] * c.local_a;
@@ -177,8 +177,8 @@ impl ContactConstraints {
                         dv,
                         ja_n,
                         jb_n,
-                        s.ang_vel[a],
-                        s.ang_vel[b],
+                        Vec3::from(s.ang_vel[a]),
+                        Vec3::from(s.ang_vel[b]),
                     ),
                     ..Default::default()
                 });
@@ -290,8 +290,8 @@ impl ContactConstraints {
     pub fn warm_start(&self, s: &mut BodyStates) {
         for pc in self.single.iter().map(|&i| &self.pairs[i as usize]) {
             let (a, b) = (pc.a, pc.b);
-            let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
-            let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
+            let (mut va, mut wa) = (Vec3::from(s.lin_vel[a]), Vec3::from(s.ang_vel[a]));
+            let (mut vb, mut wb) = (Vec3::from(s.lin_vel[b]), Vec3::from(s.ang_vel[b]));
             let [t0, t1] = pc.tangents;
             for p in &self.points[pc.start..pc.start + pc.count] {
                 let [l0, l1] = p.tangent_impulse;
@@ -303,10 +303,10 @@ impl ContactConstraints {
             }
             wa -= s.inv_inertia[a] * pc.rolling_impulse;
             wb += s.inv_inertia[b] * pc.rolling_impulse;
-            s.lin_vel[a] = va;
-            s.ang_vel[a] = wa;
-            s.lin_vel[b] = vb;
-            s.ang_vel[b] = wb;
+            s.lin_vel[a] = Vec3A::from(va);
+            s.ang_vel[a] = Vec3A::from(wa);
+            s.lin_vel[b] = Vec3A::from(vb);
+            s.ang_vel[b] = Vec3A::from(wb);
         }
         for bundle in &self.bundles {
             bundle.warm_start(s);
@@ -334,8 +334,8 @@ impl ContactConstraints {
         for &i in &self.single {
             let pc = &mut self.pairs[i as usize];
             let (a, b) = (pc.a, pc.b);
-            let (mut va, mut wa) = (s.lin_vel[a], s.ang_vel[a]);
-            let (mut vb, mut wb) = (s.lin_vel[b], s.ang_vel[b]);
+            let (mut va, mut wa) = (Vec3::from(s.lin_vel[a]), Vec3::from(s.ang_vel[a]));
+            let (mut vb, mut wb) = (Vec3::from(s.lin_vel[b]), Vec3::from(s.ang_vel[b]));
             let (ma, mb) = (pc.inv_mass_a, pc.inv_mass_b);
             let n = pc.normal;
             let [t0, t1] = pc.tangents;
@@ -402,10 +402,10 @@ impl ContactConstraints {
                 wa -= s.inv_inertia[a] * (new - old);
                 wb += s.inv_inertia[b] * (new - old);
             }
-            s.lin_vel[a] = va;
-            s.ang_vel[a] = wa;
-            s.lin_vel[b] = vb;
-            s.ang_vel[b] = wb;
+            s.lin_vel[a] = Vec3A::from(va);
+            s.ang_vel[a] = Vec3A::from(wa);
+            s.lin_vel[b] = Vec3A::from(vb);
+            s.ang_vel[b] = Vec3A::from(wb);
         }
         for bundle in &mut self.bundles {
             bundle.solve(s, ctx, use_bias);
@@ -429,22 +429,22 @@ impl ContactConstraints {
                     }
                     let vn = row_velocity(
                         pc.normal,
-                        s.lin_vel[b] - s.lin_vel[a],
+                        Vec3::from(s.lin_vel[b] - s.lin_vel[a]),
                         p.ja_n,
                         p.jb_n,
-                        s.ang_vel[a],
-                        s.ang_vel[b],
+                        Vec3::from(s.ang_vel[a]),
+                        Vec3::from(s.ang_vel[b]),
                     );
                     let l = -p.normal_mass * (vn + pc.restitution * p.relative_velocity);
                     let new = (p.normal_impulse + l).max(0.0);
                     let d = new - p.normal_impulse;
                     p.normal_impulse = new;
-                    s.lin_vel[a] -= pc.normal * (d * pc.inv_mass_a);
-                    s.lin_vel[b] += pc.normal * (d * pc.inv_mass_b);
+                    s.lin_vel[a] -= Vec3A::from(pc.normal * (d * pc.inv_mass_a));
+                    s.lin_vel[b] += Vec3A::from(pc.normal * (d * pc.inv_mass_b));
                     // The last substep's inertias, still in place (a bundled point's
                     // `I⁻¹ J` lives in its bundle).
-                    s.ang_vel[a] -= (s.inv_inertia[a] * p.ja_n) * d;
-                    s.ang_vel[b] += (s.inv_inertia[b] * p.jb_n) * d;
+                    s.ang_vel[a] -= Vec3A::from((s.inv_inertia[a] * p.ja_n) * d);
+                    s.ang_vel[b] += Vec3A::from((s.inv_inertia[b] * p.jb_n) * d);
                 }
             }
         }

@@ -22,7 +22,7 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec3A};
 use std::ops::{Add, AddAssign, Mul, Sub, SubAssign};
 use wide::f32x4;
 
@@ -278,10 +278,10 @@ impl Bundle {
     fn gather(&self, s: &BodyStates) -> [Vec3x4; 4] {
         let (a, b) = (self.a, self.b);
         [
-            Vec3x4::from_fn(|k| s.lin_vel[a[k]]),
-            Vec3x4::from_fn(|k| s.ang_vel[a[k]]),
-            Vec3x4::from_fn(|k| s.lin_vel[b[k]]),
-            Vec3x4::from_fn(|k| s.ang_vel[b[k]]),
+            Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[a[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[a[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[b[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[b[k]])),
         ]
     }
 
@@ -295,12 +295,12 @@ impl Bundle {
             }
             let (a, b) = (self.a[k], self.b[k]);
             if self.inv_mass_a.as_array()[k] > 0.0 {
-                s.lin_vel[a] = va.lane(k);
-                s.ang_vel[a] = wa.lane(k);
+                s.lin_vel[a] = Vec3A::from(va.lane(k));
+                s.ang_vel[a] = Vec3A::from(wa.lane(k));
             }
             if self.inv_mass_b.as_array()[k] > 0.0 {
-                s.lin_vel[b] = vb.lane(k);
-                s.ang_vel[b] = wb.lane(k);
+                s.lin_vel[b] = Vec3A::from(vb.lane(k));
+                s.ang_vel[b] = Vec3A::from(wb.lane(k));
             }
         }
     }

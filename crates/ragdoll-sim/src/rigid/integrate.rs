@@ -6,7 +6,7 @@
 //! "Numerical methods".
 
 use super::body::{BodyStates, Motions};
-use glam::{Mat3, Mat3A, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
 /// constraints use it. Sleeping and fixed bodies keep zero.
@@ -64,8 +64,13 @@ pub fn integrate_velocities(
         if !awake[i] {
             continue;
         }
-        let mut v = states.lin_vel[i] + gravity * h;
-        let mut w = gyroscopic(states.ang_vel[i], states.rot[i], b.inertia(motion.full), h);
+        let mut v = states.lin_vel[i] + Vec3A::from(gravity * h);
+        let mut w = Vec3A::from(gyroscopic(
+            Vec3::from(states.ang_vel[i]),
+            states.rot[i],
+            b.inertia(motion.full),
+            h,
+        ));
         if b.linear_damping > 0.0 {
             v *= (1.0 - b.linear_damping.min(1.0)).max(0.0).powf(h);
         }
@@ -83,7 +88,7 @@ pub fn integrate_positions(states: &mut BodyStates, awake: &[bool], h: f32) {
         if !moving {
             continue;
         }
-        states.com[i] += states.lin_vel[i] * h;
+        states.com[i] += Vec3::from(states.lin_vel[i] * h);
         let w = states.ang_vel[i];
         let q = states.rot[i];
         let dq = Quat::from_xyzw(w.x, w.y, w.z, 0.0) * q;

@@ -14,7 +14,7 @@
 
 use super::body::BodyStates;
 use crate::scene::SleepSettings;
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 
 /// Sleep bookkeeping per body plus the union–find arrays.
 #[derive(Clone, Debug, Default)]
@@ -41,8 +41,8 @@ impl Islands {
             still_time: vec![0.0; n],
             rest_com: s.com[..n].to_vec(),
             rest_rot: s.rot[..n].to_vec(),
-            prev_lin: s.lin_vel[..n].to_vec(),
-            prev_ang: s.ang_vel[..n].to_vec(),
+            prev_lin: s.lin_vel[..n].iter().map(|&v| Vec3::from(v)).collect(),
+            prev_ang: s.ang_vel[..n].iter().map(|&w| Vec3::from(w)).collect(),
             island_min_still: vec![0.0; n],
             island_wake: vec![false; n],
         }
@@ -55,8 +55,8 @@ impl Islands {
         self.still_time.push(0.0);
         self.rest_com.push(s.com[i]);
         self.rest_rot.push(s.rot[i]);
-        self.prev_lin.push(s.lin_vel[i]);
-        self.prev_ang.push(s.ang_vel[i]);
+        self.prev_lin.push(Vec3::from(s.lin_vel[i]));
+        self.prev_ang.push(Vec3::from(s.ang_vel[i]));
         self.island_min_still.push(0.0);
         self.island_wake.push(false);
     }
@@ -128,7 +128,7 @@ impl Islands {
             if !dynamic[i] || self.asleep[i] {
                 continue;
             }
-            let (v, w) = (s.lin_vel[i], s.ang_vel[i]);
+            let (v, w) = (Vec3::from(s.lin_vel[i]), Vec3::from(s.ang_vel[i]));
             let lin_acc = (v - self.prev_lin[i]).length() / dt;
             let ang_acc = (w - self.prev_ang[i]).length() / dt;
             self.prev_lin[i] = v;
@@ -179,8 +179,8 @@ impl Islands {
             let r = self.find(i as u32) as usize;
             if forced || self.island_min_still[r] >= cfg.time {
                 self.asleep[i] = true;
-                s.lin_vel[i] = Vec3::ZERO;
-                s.ang_vel[i] = Vec3::ZERO;
+                s.lin_vel[i] = Vec3A::ZERO;
+                s.ang_vel[i] = Vec3A::ZERO;
                 self.prev_lin[i] = Vec3::ZERO;
                 self.prev_ang[i] = Vec3::ZERO;
                 any = true;

@@ -13,7 +13,7 @@
 use super::body::BodyStates;
 use super::project::{ANGULAR_SLOP, JOINT_SLOP, MAX_ANGULAR_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::{Softness, Spring, StepContext};
-use glam::{Mat3, Mat3A, Quat, Vec3};
+use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 
 /// The two bodies of a joint and the joint anchor fixed in each.
 #[derive(Clone, Copy, Debug)]
@@ -69,13 +69,13 @@ impl JointFrame {
 
     /// Relative angular velocity `ω_a − ω_b`.
     #[inline]
-    pub fn rel_ang_vel(&self, s: &BodyStates) -> Vec3 {
+    pub fn rel_ang_vel(&self, s: &BodyStates) -> Vec3A {
         s.ang_vel[self.a] - s.ang_vel[self.b]
     }
 
     /// Applies the angular impulse `l` to a and `−l` to b.
     #[inline]
-    pub fn apply_angular(&self, s: &mut BodyStates, l: Vec3) {
+    pub fn apply_angular(&self, s: &mut BodyStates, l: Vec3A) {
         s.apply_angular_impulse(self.a, l);
         s.apply_angular_impulse(self.b, -l);
     }
@@ -106,12 +106,12 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointPart {
     /// Accumulated impulse on b (world).
-    pub impulse: Vec3,
+    pub impulse: Vec3A,
     /// World offsets of the anchor from each centre of mass, at `prepare`.
-    ra: Vec3,
-    rb: Vec3,
+    ra: Vec3A,
+    rb: Vec3A,
     /// `p_b − p_a` at `prepare`.
-    c: Vec3,
+    c: Vec3A,
     /// How an impulse `p` on b turns each body, `Δω_b = I_b⁻¹ (r_b × p) = T_b p` and
     /// `Δω_a = −T_a p`: `T = I⁻¹ r̂` at `prepare`, so an iteration applies its impulse with
     /// two matrix–vector products and no cross products. Both, and `K⁻¹`, with 16-byte
@@ -126,9 +126,9 @@ impl PointPart {
     /// Evaluates the offsets, the error, the turns and `K⁻¹` on the current positions.
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (ra, rb) = f.offsets(s);
-        self.ra = ra;
-        self.rb = rb;
-        self.c = (s.com[f.b] + rb) - (s.com[f.a] + ra);
+        self.ra = Vec3A::from(ra);
+        self.rb = Vec3A::from(rb);
+        self.c = Vec3A::from((s.com[f.b] + rb) - (s.com[f.a] + ra));
         let (ta, ka) = point_response(s, f.a, ra);
         let (tb, kb) = point_response(s, f.b, rb);
         self.turn_a = Mat3A::from(ta);
@@ -138,7 +138,7 @@ impl PointPart {
 
     /// Applies the impulse `p` on b and `−p` on a.
     #[inline]
-    fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3) {
+    fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
         s.lin_vel[f.a] -= p * s.inv_mass[f.a];
         s.ang_vel[f.a] -= self.turn_a * p;
         s.lin_vel[f.b] += p * s.inv_mass[f.b];
@@ -272,7 +272,7 @@ pub struct AngularLock3 {
     /// `q_b⁻¹ q_a` at rest.
     pub rest: Quat,
     /// Accumulated angular impulse on a.
-    pub impulse: Vec3,
+    pub impulse: Vec3A,
 }
 
 impl AngularLock3 {
@@ -280,7 +280,7 @@ impl AngularLock3 {
     pub fn new(f: &JointFrame, s: &BodyStates) -> AngularLock3 {
         AngularLock3 {
             rest: s.rot[f.b].inverse() * s.rot[f.a],
-            impulse: Vec3::ZERO,
+            impulse: Vec3A::ZERO,
         }
     }
 
@@ -301,7 +301,7 @@ impl AngularLock3 {
 
     /// One soft block update.
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        let c = self.error(f, s);
+        let c = Vec3A::from(self.error(f, s));
         let cdot = f.rel_ang_vel(s);
         let soft = bilateral(ctx, use_bias);
         let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
@@ -338,8 +338,8 @@ pub struct AlignPart {
     /// Accumulated impulse (two components along the current perpendiculars).
     pub impulse: [f32; 2],
     /// The rows at `prepare`: two world directions perpendicular to `d_a`.
-    u: Vec3,
-    v: Vec3,
+    u: Vec3A,
+    v: Vec3A,
     /// The error `d_b × d_a` along `u` and `v`.
     error: [f32; 2],
     /// The effective mass `K = [u v]ᵀ (I_a⁻¹ + I_b⁻¹) [u v]`: `k11`, `k12`, `k22`, and its
@@ -347,7 +347,7 @@ pub struct AlignPart {
     k: [f32; 4],
     /// How a unit impulse along each row turns each body: `I_a⁻¹ u`, `I_a⁻¹ v`,
     /// `I_b⁻¹ u`, `I_b⁻¹ v`, so an iteration applies its impulse with scaled additions.
-    turn: [Vec3; 4],
+    turn: [Vec3A; 4],
 }
 
 impl AlignPart {
@@ -371,6 +371,7 @@ impl AlignPart {
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
         let (da, db, u, v) = self.basis(f, s);
         let e = db.cross(da);
+        let (u, v, e) = (Vec3A::from(u), Vec3A::from(v), Vec3A::from(e));
         let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
         self.turn = [ia * u, ia * v, ib * u, ib * v];
         let [au, av, bu, bv] = self.turn;
@@ -472,7 +473,7 @@ pub struct AxisRow {
     /// How a unit impulse along the axis turns each body, `I_a⁻¹ axis` and `I_b⁻¹ axis`,
     /// and the row's `k = axisᵀ (I_a⁻¹ + I_b⁻¹) axis`: fixed from [`AxisRow::set`] to
     /// the end of the substep, as the inertias are.
-    turn: [Vec3; 2],
+    turn: [Vec3A; 2],
     k: f32,
 }
 
@@ -485,7 +486,7 @@ impl AxisRow {
             kind,
             impulse: 0.0,
             active: false,
-            turn: [Vec3::ZERO; 2],
+            turn: [Vec3A::ZERO; 2],
             k: 0.0,
         }
     }
@@ -499,6 +500,7 @@ impl AxisRow {
         if !active {
             self.impulse = 0.0;
         } else {
+            let axis = Vec3A::from(axis);
             self.turn = [s.inv_inertia[f.a] * axis, s.inv_inertia[f.b] * axis];
             self.k = axis.dot(self.turn[0] + self.turn[1]);
         }
@@ -529,7 +531,7 @@ impl AxisRow {
             return;
         }
         let m = 1.0 / k;
-        let cdot = self.axis.dot(f.rel_ang_vel(s));
+        let cdot = Vec3A::from(self.axis).dot(f.rel_ang_vel(s));
         let old = self.impulse;
         let new = match self.kind {
             RowKind::Limit | RowKind::Equality => {
@@ -594,7 +596,7 @@ pub struct FrictionMotor {
     /// Largest friction torque (N·m); 0 disables the motor.
     pub max_torque: f32,
     /// Accumulated angular impulse on a.
-    pub impulse: Vec3,
+    pub impulse: Vec3A,
     /// Whether the last update held the joint (impulse below the cap: sticking).
     pub holding: bool,
 }
@@ -606,7 +608,7 @@ impl FrictionMotor {
     pub fn new(friction: f32, mass_a: f32, arm: f32, g: f32) -> FrictionMotor {
         FrictionMotor {
             max_torque: friction * mass_a * g * arm.max(0.05),
-            impulse: Vec3::ZERO,
+            impulse: Vec3A::ZERO,
             holding: false,
         }
     }
@@ -631,7 +633,9 @@ impl FrictionMotor {
         let cap = self.max_torque * ctx.h;
         self.holding = new.length_squared() <= cap * cap;
         if !self.holding {
-            new = new.normalize() * cap;
+            // `v · (1/|v|)`, as `Vec3::normalize` rounds it (`Vec3A::normalize` divides
+            // each lane by `|v|`, which rounds differently).
+            new = new * new.length_recip() * cap;
         }
         self.impulse = new;
         f.apply_angular(s, new - old);

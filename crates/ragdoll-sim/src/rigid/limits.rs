@@ -26,6 +26,11 @@ pub fn row_kind(style: LimitStyle) -> RowKind {
 }
 
 /// A swing limit in body space.
+// The 0° cone's rows (an `AlignPart`, its impulses' turns in SIMD lanes) are larger
+// than a cone's: boxing them would put a pointer in the hot loop and lose `Copy`, which
+// the projection uses to measure a limit without touching its rows. Limited ball joints
+// are one per figure joint, a few dozen bytes each.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Swing {
     /// Shaft within `half_angle` of the axis; `C = half_angle − ∠(axis, shaft)`.

@@ -10,7 +10,7 @@ use super::body::BodyStates;
 use super::joint::{AngularLock3, JointFrame};
 use super::joint_set::JointSolve;
 use super::soft::{Softness, StepContext};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A slider joint.
 #[derive(Clone, Debug)]
@@ -40,10 +40,10 @@ impl SliderJoint {
 
     fn apply(&self, s: &mut BodyStates, u: Vec3, ra: Vec3, rbd: Vec3, l: f32) {
         let f = &self.frame;
-        s.lin_vel[f.a] += u * (l * s.inv_mass[f.a]);
-        s.ang_vel[f.a] += s.inv_inertia[f.a] * ra.cross(u) * l;
-        s.lin_vel[f.b] -= u * (l * s.inv_mass[f.b]);
-        s.ang_vel[f.b] -= s.inv_inertia[f.b] * rbd.cross(u) * l;
+        s.lin_vel[f.a] += Vec3A::from(u * (l * s.inv_mass[f.a]));
+        s.ang_vel[f.a] += Vec3A::from(s.inv_inertia[f.a] * ra.cross(u) * l);
+        s.lin_vel[f.b] -= Vec3A::from(u * (l * s.inv_mass[f.b]));
+        s.ang_vel[f.b] -= Vec3A::from(s.inv_inertia[f.b] * rbd.cross(u) * l);
     }
 
     /// Perpendicular offset of b's anchor from a's slide line (m), the slider's gap.
@@ -83,9 +83,9 @@ impl JointSolve for SliderJoint {
             if !(kk > 1e-20) {
                 continue;
             }
-            let cdot = u.dot(s.lin_vel[f.a]) + ja.dot(s.ang_vel[f.a])
-                - u.dot(s.lin_vel[f.b])
-                - jb.dot(s.ang_vel[f.b]);
+            let cdot = u.dot(Vec3::from(s.lin_vel[f.a])) + ja.dot(Vec3::from(s.ang_vel[f.a]))
+                - u.dot(Vec3::from(s.lin_vel[f.b]))
+                - jb.dot(Vec3::from(s.ang_vel[f.b]));
             let l = -soft.mass_scale / kk * (cdot + soft.bias_rate * u.dot(d))
                 - soft.impulse_scale * self.impulse[k];
             self.impulse[k] += l;

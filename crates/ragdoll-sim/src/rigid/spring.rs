@@ -9,7 +9,7 @@ use super::body::BodyStates;
 use super::joint::JointFrame;
 use super::joint_set::JointSolve;
 use super::soft::{Softness, Spring, StepContext};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A spring joint.
 #[derive(Clone, Debug)]
@@ -44,6 +44,7 @@ impl SpringJoint {
     }
 
     fn apply(&self, s: &mut BodyStates, n: Vec3, ra: Vec3, rb: Vec3, l: f32) {
+        let (ra, rb, n) = (Vec3A::from(ra), Vec3A::from(rb), Vec3A::from(n));
         s.apply_impulse(self.frame.a, ra, -n * l);
         s.apply_impulse(self.frame.b, rb, n * l);
     }
@@ -73,7 +74,12 @@ impl JointSolve for SpringJoint {
         if !(k > 1e-20) {
             return;
         }
-        let cdot = |s: &BodyStates| n.dot(s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra));
+        let cdot = |s: &BodyStates| {
+            let (ra, rb) = (Vec3A::from(ra), Vec3A::from(rb));
+            n.dot(Vec3::from(
+                s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra),
+            ))
+        };
         // The spring itself: a physical force, identical in both passes.
         let c = len - self.rest_length;
         let stiffness = if c > 0.0 { self.stretch } else { self.compress };

@@ -13,7 +13,7 @@ use crate::scene::{
     validate,
 };
 use crate::snapshot::{BodyInstance, BodyRole, ContactInstance, RenderSnapshot};
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 use parry3d::math::Pose as PPose;
 use parry3d::query::{self, Ray};
 use parry3d::shape::SharedShape;
@@ -241,9 +241,9 @@ impl Method for MultibodyWorld {
                 let r = q * (g.local_point - self.info[i].local_com);
                 let p = self.states.com[i] + r;
                 let dt = self.settings.timestep;
-                let v = self.states.point_velocity(i, r);
+                let v = Vec3::from(self.states.point_velocity(i, r.into()));
                 let dv = (g.target - p) * (0.5 / dt) - v;
-                self.states.lin_vel[i] += dv * 0.5;
+                self.states.lin_vel[i] += Vec3A::from(dv * 0.5);
             }
         }
         solver::step(
@@ -316,8 +316,8 @@ impl Method for MultibodyWorld {
             if b.fixed {
                 continue;
             }
-            let v = self.states.lin_vel[i];
-            let w = self.states.ang_vel[i];
+            let v = Vec3::from(self.states.lin_vel[i]);
+            let w = Vec3::from(self.states.ang_vel[i]);
             let q = self.states.rot[i];
             // ½ ωᵀ I ω with I in body space: ω taken into the body frame.
             let wb = q.inverse() * w;
@@ -352,8 +352,8 @@ impl Method for MultibodyWorld {
             out.push(BodyState {
                 com: self.states.com[i],
                 orientation: self.states.rot[i],
-                linear_velocity: self.states.lin_vel[i],
-                angular_velocity: self.states.ang_vel[i],
+                linear_velocity: self.states.lin_vel[i].into(),
+                angular_velocity: self.states.ang_vel[i].into(),
             });
         }
     }
@@ -410,8 +410,8 @@ impl Method for MultibodyWorld {
         let s = &mut self.states;
         s.com.insert(i, com);
         s.rot.insert(i, desc.pose.rotation);
-        s.lin_vel.insert(i, desc.linear_velocity);
-        s.ang_vel.insert(i, desc.angular_velocity);
+        s.lin_vel.insert(i, desc.linear_velocity.into());
+        s.ang_vel.insert(i, desc.angular_velocity.into());
         s.inv_mass.insert(i, 0.0);
         s.inv_inertia.insert(i, glam::Mat3A::ZERO);
         self.dynamic.push(!desc.is_fixed());
