@@ -131,8 +131,8 @@ impl PointPart {
         self.c = Vec3A::from((s.com[f.b] + rb) - (s.com[f.a] + ra));
         let (ta, ka) = point_response(s, f.a, ra);
         let (tb, kb) = point_response(s, f.b, rb);
-        self.turn_a = Mat3A::from(ta);
-        self.turn_b = Mat3A::from(tb);
+        self.turn_a = ta;
+        self.turn_b = tb;
         self.k_inv = invert_symmetric(ka + kb).map(Mat3A::from);
     }
 
@@ -221,12 +221,12 @@ impl std::ops::Add for SymMat3 {
 /// whose entry `(j, k)` is `ĉ_j · t_k` with `ĉ_j` the columns of `r̂` and `t_k` those of
 /// `T`.
 #[inline]
-pub fn point_response(s: &BodyStates, i: usize, r: Vec3) -> (Mat3, SymMat3) {
-    let c0 = Vec3::new(0.0, r.z, -r.y);
-    let c1 = Vec3::new(-r.z, 0.0, r.x);
-    let c2 = Vec3::new(r.y, -r.x, 0.0);
+pub fn point_response(s: &BodyStates, i: usize, r: Vec3) -> (Mat3A, SymMat3) {
+    let c0 = Vec3A::new(0.0, r.z, -r.y);
+    let c1 = Vec3A::new(-r.z, 0.0, r.x);
+    let c2 = Vec3A::new(r.y, -r.x, 0.0);
     let ii = s.inv_inertia[i];
-    let t = Mat3::from_cols(ii * c0, ii * c1, ii * c2);
+    let t = Mat3A::from_cols(ii * c0, ii * c1, ii * c2);
     let m = s.inv_mass[i];
     let k = SymMat3([
         m + c0.dot(t.x_axis),
