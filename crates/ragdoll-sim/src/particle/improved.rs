@@ -153,23 +153,12 @@ fn narrow_phase<T: Sync>(
     }
 }
 
-/// A frame of a world at rest: every bone fixed or asleep, nothing held (a grab wakes
-/// its bone when it is set). Nothing is detected or solved, since the substeps would
-/// leave every bone where it is, and the frame's start poses are the poses. What
-/// [`sleeping::update`] would do is only the timers: every sleeping bone counts as slow
-/// and still, and its island, unchanged since the last detection (none runs while
-/// everything sleeps), stays asleep, since its timers only grow — so the island search
-/// over every joint and contact (a resting pile of 1000 humans: 0.3 ms a frame) is
-/// skipped. The same bits as the full update.
-fn rest(w: &mut ParticleWorld) {
-    let dt = w.settings.timestep;
+/// Records each bone's frame at the start of the frame, for the energy metric's
+/// `(x(t) − x(t−dt))/dt` (`measure`).
+fn record_frame_starts(w: &mut ParticleWorld) {
     w.frame_starts.clear();
     w.frame_starts
         .extend(w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)));
-    for b in w.bones.iter_mut().filter(|b| !b.fixed) {
-        b.sleep_time += dt;
-        b.still_time += dt;
-    }
 }
 
 /// Wakes every sleeping figure a moving bone touches, before the substeps that would
@@ -354,17 +343,18 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 /// and contacts, static bones only read — cannot touch each other and their substeps
 /// run on all of rayon's threads (`islands`). A single thread steps the world in place.
 pub(crate) fn step(w: &mut ParticleWorld) {
+    // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is set)
+    // has nothing to detect or solve: its substeps would leave every bone where it is.
     if w.grab.is_none() && w.bones.iter().all(|b| b.is_static()) {
-        rest(w);
+        record_frame_starts(w);
+        sleeping::advance_at_rest(&mut w.bones, w.settings.timestep);
         return;
     }
     let s = w.settings.clone();
     let dt = s.timestep;
     let n_sub = substeps(&s);
     let h = dt / n_sub as f32;
-    w.frame_starts.clear();
-    w.frame_starts
-        .extend(w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)));
+    record_frame_starts(w);
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
     // The broad phase's tree, built at the first detection and refitted at the others.

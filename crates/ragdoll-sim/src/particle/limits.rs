@@ -145,6 +145,16 @@ impl AngleLimit {
         ]
     }
 
+    /// Whether the relative rotation `Δ` ([`AngleLimit::relative`], `w ≥ 0`) is inside the
+    /// range by [`INSIDE_MARGIN`] at least, told without its angle: `(v · x) / w` between
+    /// the bounds of [`AngleLimit::inside`].
+    #[inline]
+    fn surely_inside(&self, d: Quat) -> bool {
+        let y = d.x * self.axis_a.x + d.y * self.axis_a.y + d.z * self.axis_a.z;
+        let [lo, hi] = self.inside;
+        d.w > 0.0 && y >= d.w * lo && y <= d.w * hi
+    }
+
     /// Excess beyond the range (rad, ≥ 0).
     pub fn violation(&self, bones: &[Bone], a: Side, b: Side) -> f32 {
         let (phi, _) = self.angle(bones, a, b);
@@ -168,9 +178,7 @@ impl AngleLimit {
     /// test passes by is one whose measured angle its clamp would leave as it is).
     pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32) {
         let d = self.relative(bones, a, b);
-        let y = d.x * self.axis_a.x + d.y * self.axis_a.y + d.z * self.axis_a.z;
-        let [lo, hi] = self.inside;
-        if d.w > 0.0 && y >= d.w * lo && y <= d.w * hi {
+        if self.surely_inside(d) {
             return;
         }
         let (phi, j) = self.angle_of(d, side_rot(bones, a));
@@ -351,9 +359,7 @@ mod tests {
                     q = -q;
                 }
                 let (phi, _) = limit.angle_of(q, Quat::IDENTITY);
-                let y = q.x * axis.x + q.y * axis.y + q.z * axis.z;
-                let [lo, hi] = limit.inside;
-                let quick = q.w > 0.0 && y >= q.w * lo && y <= q.w * hi;
+                let quick = limit.surely_inside(q);
                 assert!(
                     !quick || (min..=max).contains(&phi),
                     "[{min}, {max}]: passed by at {phi}"
