@@ -55,6 +55,18 @@ impl Reused {
     /// [`overlapping_pairs`] of `aabbs`, on the tree refitted to them when it has as
     /// many leaves, else on a new one.
     pub fn overlapping_pairs(&mut self, aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
+        self.overlapping_pairs_where(aabbs, |_, _| true, out);
+    }
+
+    /// [`Self::overlapping_pairs`] that `keep(i, j)` accepts, judged as the traversal
+    /// reaches them: a pile mostly asleep overlaps mostly between sleeping bodies, pairs
+    /// nobody wants, and sorting them cost as much as finding them.
+    pub fn overlapping_pairs_where(
+        &mut self,
+        aabbs: &[Aabb],
+        keep: impl Fn(u32, u32) -> bool,
+        out: &mut Vec<(u32, u32)>,
+    ) {
         let start = out.len();
         if aabbs.len() >= 2 {
             let tree = match &mut self.tree {
@@ -68,7 +80,10 @@ impl Reused {
                 slot => slot.insert(Bvh::from_leaves(BvhBuildStrategy::Binned, aabbs)),
             };
             tree.traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |a, b| {
-                out.push((a.min(b), a.max(b)));
+                let pair = (a.min(b), a.max(b));
+                if keep(pair.0, pair.1) {
+                    out.push(pair);
+                }
             });
         }
         out[start..].sort_unstable();

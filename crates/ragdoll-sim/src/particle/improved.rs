@@ -63,10 +63,22 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
         .map(|(b, spin)| (b.lin_vel.length() + spin) * dt + reach)
         .collect();
     let mut pairs = std::mem::take(&mut w.pairs);
-    broad_phase_on(tree, &w.bones, &margins, &w.filter, &mut pairs);
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
+    // The ground needs no broad phase: its contacts are found on one thread while the
+    // other builds and traverses the tree (which parry does on one), then appended after
+    // the pairs' in the order the serial loop made them.
+    let ((), ground_contacts) = rayon::join(
+        || broad_phase_on(tree, bones, &margins, &w.filter, &mut pairs),
+        || {
+            let mut set = ContactSet::default();
+            if let Some(ground) = &w.settings.ground {
+                ground_contacts(bones, ground, &margins, &mut set);
+            }
+            set
+        },
+    );
     narrow_phase(
         &pairs,
         &mut w.manifolds,
@@ -86,30 +98,26 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
             });
         },
     );
-    if let Some(ground) = w.settings.ground {
-        let g: &Ground = &ground;
-        let moving: Vec<usize> = (0..bones.len())
-            .filter(|&i| !bones[i].is_static())
-            .collect();
-        narrow_phase(
-            &moving,
-            &mut w.manifolds,
-            &mut contacts,
-            |&i, scratch, set| {
-                let b = &bones[i];
-                let mu = (b.friction * ground.friction).sqrt();
-                let e = b.restitution.max(ground.restitution);
-                let first = set.manifolds.len();
-                ground_pair(bones, i, g, margins[i], scratch, |pa, pb, n, _| {
-                    let point =
-                        ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
-                    set.push(first, (i, None), n, (mu, e), point);
-                });
-            },
-        );
-    }
+    contacts.append(&ground_contacts);
     w.contacts = contacts;
     w.pairs = pairs;
+}
+
+/// Each moving bone's contacts with the ground, `margins[i]` ahead, into `set`.
+fn ground_contacts(bones: &[Bone], ground: &Ground, margins: &[f32], set: &mut ContactSet) {
+    let moving: Vec<usize> = (0..bones.len())
+        .filter(|&i| !bones[i].is_static())
+        .collect();
+    narrow_phase(&moving, &mut Vec::new(), set, |&i, scratch, set| {
+        let b = &bones[i];
+        let mu = (b.friction * ground.friction).sqrt();
+        let e = b.restitution.max(ground.restitution);
+        let first = set.manifolds.len();
+        ground_pair(bones, i, ground, margins[i], scratch, |pa, pb, n, _| {
+            let point = ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
+            set.push(first, (i, None), n, (mu, e), point);
+        });
+    });
 }
 
 /// Pairs (or bones, for the ground) per task of the parallel narrow phase, and the

@@ -136,15 +136,17 @@ impl ParticleWorld {
         let frames: Vec<(Vec3, Quat)> =
             w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)).collect();
         let rf = RestFrames { frames: &frames };
+        let mut excluded = Vec::new();
         for c in &scene.constraints {
             let a = Some(c.body1.index());
             let b = c.body2.body().map(|b| b.index());
             w.joints.push(Joint::new(&rf, a, b, &c.kind));
             if let Some(b) = b {
-                w.filter.exclude(c.body1.index(), b);
+                excluded.push((c.body1.index(), b));
             }
         }
-        w.exclude_rest_overlaps();
+        excluded.extend(w.rest_overlaps());
+        w.filter = Filter::new(w.bones.len(), &excluded);
         // Built by pushing, these arrays have up to twice the room they use; they keep
         // their size from here on (a projectile is the only thing ever added).
         w.bones.shrink_to_fit();
@@ -275,21 +277,21 @@ impl ParticleWorld {
         }
     }
 
-    /// Bodies that overlap in the rest pose never collide with each other.
-    fn exclude_rest_overlaps(&mut self) {
+    /// The pairs of bodies that overlap in the rest pose: they never collide with each
+    /// other.
+    fn rest_overlaps(&self) -> Vec<(usize, usize)> {
         let margin = vec![0.0; self.bones.len()];
         let mut pairs = Vec::new();
         broad_all(&self.bones, &margin, &mut pairs);
         let mut manifolds = Vec::new();
-        for (i, j) in pairs {
+        pairs.retain(|&(i, j)| {
             let mut overlap = false;
             contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
                 overlap |= d < -1e-3
             });
-            if overlap {
-                self.filter.exclude(i, j);
-            }
-        }
+            overlap
+        });
+        pairs
     }
 
     /// The solver in use.
