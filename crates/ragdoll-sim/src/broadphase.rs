@@ -9,7 +9,9 @@
 //! does not depend on the tree's traversal order.
 
 use parry3d::bounding_volume::Aabb;
+use parry3d::bounding_volume::BoundingVolume;
 use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
+use rayon::prelude::*;
 
 /// Distance within which both methods create contacts before touching, beyond what a
 /// pair can close over the time detected for (m).
@@ -36,24 +38,99 @@ pub fn overlapping_pairs(aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
     Reused::default().overlapping_pairs(aabbs, out);
 }
 
-/// A tree reused by the detections of one step: the particle method detects four times
-/// a frame, each time with boxes that moved a little. The first call builds the tree;
-/// later calls with as many boxes move its leaves and refit the nodes above them,
+/// Trees reused by the detections of one step: the particle method detects four times
+/// a frame, each time with boxes that moved a little. The first call builds the trees;
+/// later calls with as many boxes move their leaves and refit the nodes above them,
 /// bottom up (parry's `refit_without_opt`), about a tenth of a build. A refitted tree is
 /// looser than a fresh one, so its traversal tests more nodes, but the overlapping pairs
 /// are the boxes' own: the same pairs, in the same sorted order, as from a new tree.
+///
+/// On a pool of several threads, many boxes are cut into runs of consecutive indices,
+/// a tree each ([`parts`]): the trees are built and traversed against themselves on all
+/// threads, then against each other. parry builds a tree on one thread, and at 16 000
+/// bones building and traversing one tree was the largest serial part of a particle
+/// frame. A scene's bodies are numbered figure by figure and its figures placed in
+/// order, so runs of indices are regions of space and the trees' roots rarely overlap
+/// much. Which trees found a pair does not matter: the pairs are sorted.
 ///
 /// It lives for one step and is dropped after it: kept between steps, the tree and its
 /// workspace would cost about 144 bytes per body, a third of the memory goal.
 #[derive(Default)]
 pub struct Reused {
-    tree: Option<Bvh>,
+    parts: Vec<Part>,
+}
+
+/// One run of boxes and its tree.
+struct Part {
+    /// Index of the run's first box; the tree's leaves count from it.
+    start: u32,
+    tree: Bvh,
     workspace: BvhWorkspace,
 }
 
+/// Boxes from which [`Reused`] cuts them into runs, a tree each.
+const BOXES_TO_CUT: usize = 4096;
+
+/// How many runs [`Reused`] cuts `n` boxes into on this thread pool: one per thread, at
+/// most eight (the trees' cross traversals grow with the square of their number).
+fn parts(n: usize) -> usize {
+    if n < BOXES_TO_CUT {
+        1
+    } else {
+        rayon::current_num_threads().clamp(1, 8)
+    }
+}
+
+impl Part {
+    /// The run `start..end` of `aabbs`, in a new tree.
+    fn build(aabbs: &[Aabb], start: usize, end: usize) -> Part {
+        Part {
+            start: start as u32,
+            tree: Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs[start..end]),
+            workspace: BvhWorkspace::default(),
+        }
+    }
+
+    /// Moves the leaves to `run` (as many boxes as the tree has) and refits the tree.
+    fn refit(&mut self, run: &[Aabb]) {
+        for (i, aabb) in run.iter().enumerate() {
+            self.tree.update_partially_if_present(*aabb, i as u32, 0.0);
+        }
+        self.tree.refit_without_opt();
+    }
+
+    /// The run's overlapping pairs `keep` accepts, by box index, into `out`.
+    fn self_pairs(&mut self, keep: &impl Fn(u32, u32) -> bool, out: &mut Vec<(u32, u32)>) {
+        let start = self.start;
+        self.tree
+            .traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |a, b| {
+                let pair = (start + a.min(b), start + a.max(b));
+                if keep(pair.0, pair.1) {
+                    out.push(pair);
+                }
+            });
+    }
+
+    /// The pairs of a box of this run and one of `other`'s (a later run) that overlap
+    /// and `keep` accepts.
+    fn cross_pairs(
+        &self,
+        other: &Part,
+        aabbs: &[Aabb],
+        keep: &impl Fn(u32, u32) -> bool,
+    ) -> Vec<(u32, u32)> {
+        self.tree
+            .leaf_pairs(&other.tree, |a, b| a.intersects(b))
+            .map(|(a, b)| (self.start + a, other.start + b))
+            // `leaf_pairs` does not test the pair it starts from.
+            .filter(|&(a, b)| aabbs[a as usize].intersects(&aabbs[b as usize]) && keep(a, b))
+            .collect()
+    }
+}
+
 impl Reused {
-    /// [`overlapping_pairs`] of `aabbs`, on the tree refitted to them when it has as
-    /// many leaves, else on a new one.
+    /// [`overlapping_pairs`] of `aabbs`, on the trees refitted to them when they have
+    /// as many leaves, else on new ones.
     pub fn overlapping_pairs(&mut self, aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
         self.overlapping_pairs_where(aabbs, |_, _| true, out);
     }
@@ -64,27 +141,64 @@ impl Reused {
     pub fn overlapping_pairs_where(
         &mut self,
         aabbs: &[Aabb],
-        keep: impl Fn(u32, u32) -> bool,
+        keep: impl Fn(u32, u32) -> bool + Sync,
         out: &mut Vec<(u32, u32)>,
     ) {
         let start = out.len();
-        if aabbs.len() >= 2 {
-            let tree = match &mut self.tree {
-                Some(tree) if tree.leaf_count() as usize == aabbs.len() => {
-                    for (i, aabb) in aabbs.iter().enumerate() {
-                        tree.update_partially_if_present(*aabb, i as u32, 0.0);
-                    }
-                    tree.refit_without_opt();
-                    tree
-                }
-                slot => slot.insert(Bvh::from_leaves(BvhBuildStrategy::Binned, aabbs)),
-            };
-            tree.traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |a, b| {
-                let pair = (a.min(b), a.max(b));
-                if keep(pair.0, pair.1) {
-                    out.push(pair);
-                }
+        let n = aabbs.len();
+        if n < 2 {
+            return;
+        }
+        let k = parts(n);
+        let run = |p: usize| (n * p / k, n * (p + 1) / k);
+        let reusable = self.parts.len() == k
+            && (0..k).all(|p| {
+                let (s, e) = run(p);
+                self.parts[p].start as usize == s
+                    && self.parts[p].tree.leaf_count() as usize == e - s
             });
+        if k == 1 {
+            if reusable {
+                self.parts[0].refit(aabbs);
+            } else {
+                self.parts = vec![Part::build(aabbs, 0, n)];
+            }
+            self.parts[0].self_pairs(&keep, out);
+        } else {
+            if reusable {
+                self.parts.par_iter_mut().for_each(|part| {
+                    let s = part.start as usize;
+                    let e = s + part.tree.leaf_count() as usize;
+                    part.refit(&aabbs[s..e]);
+                });
+            } else {
+                self.parts = (0..k)
+                    .into_par_iter()
+                    .map(|p| {
+                        let (s, e) = run(p);
+                        Part::build(aabbs, s, e)
+                    })
+                    .collect();
+            }
+            let found: Vec<Vec<(u32, u32)>> = self
+                .parts
+                .par_iter_mut()
+                .map(|part| {
+                    let mut pairs = Vec::new();
+                    part.self_pairs(&keep, &mut pairs);
+                    pairs
+                })
+                .collect();
+            let parts = &self.parts;
+            let crossing: Vec<Vec<(u32, u32)>> = (0..k)
+                .flat_map(|p| (p + 1..k).map(move |q| (p, q)))
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|(p, q)| parts[p].cross_pairs(&parts[q], aabbs, &keep))
+                .collect();
+            for pairs in found.iter().chain(&crossing) {
+                out.extend_from_slice(pairs);
+            }
         }
         out[start..].sort_unstable();
     }
@@ -148,6 +262,59 @@ mod tests {
             overlapping_pairs(&moved, &mut fresh);
             assert_ne!(fresh, slow, "step {step} moved nothing that matters");
             assert_eq!(refitted, fresh, "step {step}");
+        }
+    }
+
+    /// Enough boxes to be cut into runs, a tree each: on pools of two and three threads,
+    /// fresh and refitted, the same pairs as one tree on one thread and as the quadratic
+    /// answer, with a `keep` that drops some. The runs' trees overlap (the boxes are
+    /// numbered in an order that scatters them) so the cross traversals find pairs.
+    #[test]
+    fn trees_cut_into_runs_find_the_same_pairs() {
+        let n = BOXES_TO_CUT + 700;
+        let boxes = |shift: f32| -> Vec<Aabb> {
+            (0..n)
+                .map(|k| {
+                    let s = (k * 7919) % n; // a scattered cell of a 20 x 20 x ~13 grid
+                    let c = Vec3::new(
+                        (s % 20) as f32 * 0.5 + shift * ((k % 3) as f32 - 1.0),
+                        ((s / 20) % 20) as f32 * 0.5,
+                        (s / 400) as f32 * 0.5 + 0.1 * (k % 5) as f32,
+                    );
+                    let h = Vec3::splat(0.26 + 0.02 * (k % 4) as f32);
+                    Aabb::new(c - h, c + h)
+                })
+                .collect()
+        };
+        let keep = |a: u32, b: u32| (a + b) % 7 != 0;
+        let slow = |aabbs: &[Aabb]| {
+            let mut out = Vec::new();
+            for a in 0..aabbs.len() {
+                for b in a + 1..aabbs.len() {
+                    if aabbs[a].intersects(&aabbs[b]) && keep(a as u32, b as u32) {
+                        out.push((a as u32, b as u32));
+                    }
+                }
+            }
+            out
+        };
+        let (first, moved) = (boxes(0.0), boxes(0.3));
+        let (want_first, want_moved) = (slow(&first), slow(&moved));
+        assert!(want_first.len() > n && want_first != want_moved);
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                assert_eq!(parts(n), threads);
+                let mut reused = Reused::default();
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                reused.overlapping_pairs_where(&first, keep, &mut a);
+                reused.overlapping_pairs_where(&moved, keep, &mut b);
+                assert_eq!(a, want_first, "{threads} threads, built");
+                assert_eq!(b, want_moved, "{threads} threads, refitted");
+            });
         }
     }
 }
