@@ -286,7 +286,7 @@ mod tests {
                 })
                 .collect()
         };
-        let keep = |a: u32, b: u32| (a + b) % 7 != 0;
+        let keep = |a: u32, b: u32| !(a + b).is_multiple_of(7);
         let slow = |aabbs: &[Aabb]| {
             let mut out = Vec::new();
             for a in 0..aabbs.len() {
