@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::speculative_margin;
+use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -248,13 +248,18 @@ impl Contacts {
             self.aabbs.push(aabb.loosened(margin + motion));
         }
         self.candidates.clear();
-        crate::broadphase::overlapping_pairs(&self.aabbs, &mut self.candidates);
+        // Pairs judged as the traversal finds them, not sorted first and filtered after:
+        // most overlaps are a figure's jointed neighbours or between sleeping bodies.
         let excluded = &self.excluded;
-        self.candidates.retain(|&(a, b)| {
-            (awake[a as usize] || awake[b as usize])
-                && may_collide(info, a as usize, b as usize)
-                && excluded.binary_search(&(a, b)).is_err()
-        });
+        Reused::default().overlapping_pairs_where(
+            &self.aabbs,
+            |a, b| {
+                (awake[a as usize] || awake[b as usize])
+                    && may_collide(info, a as usize, b as usize)
+                    && excluded.binary_search(&(a, b)).is_err()
+            },
+            &mut self.candidates,
+        );
         // Bodies near the ground plane (the plane comes last: the anchor has the largest index).
         if let Some(g) = &self.ground {
             for i in 0..n {
@@ -269,7 +274,6 @@ impl Contacts {
                     self.candidates.push((i as u32, anchor));
                 }
             }
-            self.candidates.sort_unstable();
         }
         // Sleeping pairs stay in the cache as they are (islands need them).
         for p in &self.pairs {
