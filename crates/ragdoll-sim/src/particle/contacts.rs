@@ -248,7 +248,7 @@ pub(crate) fn broad_phase_on(
     // detection run on one thread while the other waited.
     let (aabbs, keys): (Vec<_>, Vec<_>) = bones
         .par_iter()
-        .with_min_len(AABBS_PER_TASK)
+        .with_min_len(BONES_PER_TASK)
         .zip(margin)
         .map(|(b, m)| {
             let aabb = b
@@ -272,8 +272,8 @@ pub(crate) fn broad_phase_on(
     out.extend(pairs.into_iter().map(|(i, j)| (i as usize, j as usize)));
 }
 
-/// Bones per task when their boxes are computed on the thread pool.
-const AABBS_PER_TASK: usize = 512;
+/// Bones per task when a detection's per-bone work (margins, boxes) runs on the pool.
+pub(super) const BONES_PER_TASK: usize = 512;
 
 /// Contacts between two bones with `prediction` (m) of speculative distance. Calls
 /// `emit(point_on_a_world, point_on_b_world, normal_a_to_b, distance)`.

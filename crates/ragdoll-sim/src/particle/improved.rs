@@ -18,7 +18,7 @@
 
 use super::bone::Bone;
 use super::contacts::{
-    ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, shape_pair,
+    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, shape_pair,
 };
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
@@ -43,25 +43,23 @@ use rayon::prelude::*;
 fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let g = w.settings.gravity.length();
     let reach = speculative_margin(g, dt);
-    let spins: Vec<f32> = w
+    // Per bone, on all threads (as its box, `broad_phase_on`).
+    let (spins, margins): (Vec<f32>, Vec<f32>) = w
         .bones
-        .iter()
+        .par_iter()
+        .with_min_len(BONES_PER_TASK)
         .map(|b| {
-            b.ang_vel.length()
-                * b.shape
-                    .get()
-                    .shape()
-                    .compute_local_aabb()
-                    .half_extents()
-                    .length()
+            let radius = b
+                .shape
+                .get()
+                .shape()
+                .compute_local_aabb()
+                .half_extents()
+                .length();
+            let spin = b.ang_vel.length() * radius;
+            (spin, (b.lin_vel.length() + spin) * dt + reach)
         })
-        .collect();
-    let margins: Vec<f32> = w
-        .bones
-        .iter()
-        .zip(&spins)
-        .map(|(b, spin)| (b.lin_vel.length() + spin) * dt + reach)
-        .collect();
+        .unzip();
     let mut pairs = std::mem::take(&mut w.pairs);
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
