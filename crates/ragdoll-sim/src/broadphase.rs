@@ -50,8 +50,9 @@ pub fn overlapping_pairs(aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
 /// threads, then against each other. parry builds a tree on one thread, and at 16 000
 /// bones building and traversing one tree was the largest serial part of a particle
 /// frame. A scene's bodies are numbered figure by figure and its figures placed in
-/// order, so runs of indices are regions of space and the trees' roots rarely overlap
-/// much. Which trees found a pair does not matter: the pairs are sorted.
+/// order, so runs of indices tend to be regions of space and the cross traversals stay
+/// short (they are correct either way). Which trees found a pair does not matter: the
+/// pairs are sorted.
 ///
 /// It lives for one step and is dropped after it: kept between steps, the tree and its
 /// workspace would cost about 144 bytes per body, a third of the memory goal.
@@ -196,6 +197,9 @@ impl Reused {
                 .into_par_iter()
                 .map(|(p, q)| parts[p].cross_pairs(&parts[q], aabbs, &keep))
                 .collect();
+            // Room for all of them at once: `out` is kept between steps at its largest
+            // size, and growing it run by run would leave it up to twice that.
+            out.reserve_exact(found.iter().chain(&crossing).map(Vec::len).sum());
             for pairs in found.iter().chain(&crossing) {
                 out.extend_from_slice(pairs);
             }

@@ -155,14 +155,15 @@ impl ContactSet {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Filter {
     /// Bone `i`'s excluded partners of higher index are `partners[first[i]..first[i +
-    /// 1]]`, ascending. Bones past its end (a projectile) have none.
+    /// 1]]`, ascending. Bones past its end (the last with a partner, a projectile)
+    /// have none.
     first: Vec<u32>,
     partners: Vec<u32>,
 }
 
-/// What the filter reads of a bone, eight bytes: the broad phase asks it of every
-/// overlapping pair, and reading it from the bones themselves (a cache line each, in
-/// no order) cost as much as the tree's traversal.
+/// What the filter reads of a bone, eight bytes, gathered with the bones' boxes: the
+/// broad phase asks it of every overlapping pair, in no order, and a bone itself spans
+/// several cache lines.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FilterKey {
     figure: u32,
@@ -192,11 +193,16 @@ impl Filter {
             .collect();
         sorted.sort_unstable();
         sorted.dedup();
-        let mut first = vec![0u32; bones + 1];
+        // Rows up to the last bone with a partner: a scene without joints holds none.
+        let rows = sorted
+            .last()
+            .map_or(0, |&(lo, _)| lo as usize + 1)
+            .min(bones);
+        let mut first = vec![0u32; if rows > 0 { rows + 1 } else { 0 }];
         for &(lo, _) in &sorted {
             first[lo as usize + 1] += 1;
         }
-        for i in 0..bones {
+        for i in 0..rows {
             first[i + 1] += first[i];
         }
         let partners = sorted.iter().map(|&(_, hi)| hi).collect();
@@ -393,6 +399,9 @@ mod tests {
             "one figure, no self-collision"
         );
         assert!(filter.collides((2, alone), (3, key(2))), "two figures");
+        let none = Filter::new(5, &[]);
+        assert!(none.first.is_empty() && none.partners.is_empty());
+        assert!(none.collides((0, key(0)), (4, key(0))));
     }
 
     /// A pair's points with one normal share a manifold; a second pair, or a second

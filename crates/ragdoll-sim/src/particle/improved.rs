@@ -64,9 +64,9 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
-    // The ground needs no broad phase: its contacts are found on one thread while the
-    // other builds and traverses the tree (which parry does on one), then appended after
-    // the pairs' in the order the serial loop made them.
+    // The ground needs no broad phase: its contacts are found beside it (on a thread
+    // the tree's build leaves free), then appended after the pairs' in the order the
+    // serial loop made them.
     let ((), ground_contacts) = rayon::join(
         || broad_phase_on(tree, bones, &margins, &w.filter, &mut pairs),
         || {
