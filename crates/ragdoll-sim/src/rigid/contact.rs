@@ -248,19 +248,9 @@ impl Contacts {
             self.aabbs.push(aabb.loosened(margin + motion));
         }
         self.candidates.clear();
-        // Pairs judged as the traversal finds them, not sorted first and filtered after:
-        // most overlaps are a figure's jointed neighbours or between sleeping bodies.
-        let excluded = &self.excluded;
-        Reused::default().overlapping_pairs_where(
-            &self.aabbs,
-            |a, b| {
-                (awake[a as usize] || awake[b as usize])
-                    && may_collide(info, a as usize, b as usize)
-                    && excluded.binary_search(&(a, b)).is_err()
-            },
-            &mut self.candidates,
-        );
-        // Bodies near the ground plane (the plane comes last: the anchor has the largest index).
+        // Bodies near the ground plane (the plane comes last: the anchor has the largest
+        // index). Listed first, as the broad phase reserves its pairs' room once, after
+        // them; the list is sorted at the end.
         if let Some(g) = &self.ground {
             for i in 0..n {
                 if info[i].fixed {
@@ -275,6 +265,18 @@ impl Contacts {
                 }
             }
         }
+        // Pairs judged as the traversal finds them, not sorted first and filtered after:
+        // most overlaps are a figure's jointed neighbours or between sleeping bodies.
+        let excluded = &self.excluded;
+        Reused::default().overlapping_pairs_where(
+            &self.aabbs,
+            |a, b| {
+                (awake[a as usize] || awake[b as usize])
+                    && may_collide(info, a as usize, b as usize)
+                    && excluded.binary_search(&(a, b)).is_err()
+            },
+            &mut self.candidates,
+        );
         // Sleeping pairs stay in the cache as they are (islands need them).
         for p in &self.pairs {
             if !awake[p.a as usize] && !awake[p.b as usize] {
