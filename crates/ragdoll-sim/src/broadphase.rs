@@ -130,8 +130,9 @@ impl Part {
 }
 
 impl Reused {
-    /// [`overlapping_pairs`] of `aabbs`, on the trees refitted to them when they have
-    /// as many leaves, else on new ones.
+    /// [`overlapping_pairs`] of `aabbs`, on the trees refitted to them when the boxes
+    /// and the pool's threads cut them into the same runs as last time, else on new
+    /// ones.
     pub fn overlapping_pairs(&mut self, aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
         self.overlapping_pairs_where(aabbs, |_, _| true, out);
     }

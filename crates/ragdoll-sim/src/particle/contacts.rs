@@ -194,10 +194,11 @@ impl Filter {
         sorted.sort_unstable();
         sorted.dedup();
         // Rows up to the last bone with a partner: a scene without joints holds none.
-        let rows = sorted
-            .last()
-            .map_or(0, |&(lo, _)| lo as usize + 1)
-            .min(bones);
+        debug_assert!(
+            sorted.iter().all(|&(_, hi)| (hi as usize) < bones),
+            "an excluded pair names a bone past the world's {bones}"
+        );
+        let rows = sorted.last().map_or(0, |&(lo, _)| lo as usize + 1);
         let mut first = vec![0u32; if rows > 0 { rows + 1 } else { 0 }];
         for &(lo, _) in &sorted {
             first[lo as usize + 1] += 1;
