@@ -92,8 +92,11 @@ impl Part {
         }
     }
 
-    /// Moves the leaves to `run` (as many boxes as the tree has) and refits the tree.
-    fn refit(&mut self, run: &[Aabb]) {
+    /// Moves the leaves to the run's boxes in `aabbs` (as many as the tree has) and
+    /// refits the tree.
+    fn refit(&mut self, aabbs: &[Aabb]) {
+        let start = self.start as usize;
+        let run = &aabbs[start..start + self.tree.leaf_count() as usize];
         for (i, aabb) in run.iter().enumerate() {
             self.tree.update_partially_if_present(*aabb, i as u32, 0.0);
         }
@@ -167,30 +170,33 @@ impl Reused {
             }
             self.parts[0].self_pairs(&keep, out);
         } else {
-            if reusable {
-                self.parts.par_iter_mut().for_each(|part| {
-                    let s = part.start as usize;
-                    let e = s + part.tree.leaf_count() as usize;
-                    part.refit(&aabbs[s..e]);
-                });
+            // Each run's tree, refitted or built, and the pairs within it, in one task.
+            let own = |part: &mut Part| {
+                let mut pairs = Vec::new();
+                part.self_pairs(&keep, &mut pairs);
+                pairs
+            };
+            let found: Vec<Vec<(u32, u32)>> = if reusable {
+                self.parts
+                    .par_iter_mut()
+                    .map(|part| {
+                        part.refit(aabbs);
+                        own(part)
+                    })
+                    .collect()
             } else {
-                self.parts = (0..k)
+                let (parts, found) = (0..k)
                     .into_par_iter()
                     .map(|p| {
                         let (s, e) = run(p);
-                        Part::build(aabbs, s, e)
+                        let mut part = Part::build(aabbs, s, e);
+                        let pairs = own(&mut part);
+                        (part, pairs)
                     })
-                    .collect();
-            }
-            let found: Vec<Vec<(u32, u32)>> = self
-                .parts
-                .par_iter_mut()
-                .map(|part| {
-                    let mut pairs = Vec::new();
-                    part.self_pairs(&keep, &mut pairs);
-                    pairs
-                })
-                .collect();
+                    .unzip();
+                self.parts = parts;
+                found
+            };
             let parts = &self.parts;
             let crossing: Vec<Vec<(u32, u32)>> = (0..k)
                 .flat_map(|p| (p + 1..k).map(move |q| (p, q)))
