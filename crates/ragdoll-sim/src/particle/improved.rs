@@ -228,6 +228,15 @@ fn velocity_from_particles(b: &mut Bone, arms: &[Vec3A; 4], vk: &[Vec3A; 4]) {
 /// that turns within a frame brings a corner the frame-start manifold did not have.
 const DETECTIONS_PER_FRAME: u32 = 4;
 
+/// How much the first detection of a frame loosens the bones' boxes for the broad phase
+/// of all of the frame's detections (m; see [`Reused`]): each later detection then only
+/// looks up the few bones that moved out of their loosened box. Each box is already
+/// loosened by how far the bone can move in the rest of the frame at its velocity; this
+/// covers the velocity joints and contacts give it meanwhile. Measured on the
+/// 1000-human pile at its busiest (16 000 bones): at a later detection 955 boxes left
+/// their box with no extra loosening, 417 with 5 mm, 189 with 1 cm and 68 with 2 cm.
+const DETECTION_FAT: f32 = 0.01;
+
 /// Gauss–Seidel passes (contacts, then joints) per substep. An impact pushes a limb one
 /// way and its joint pulls it back; a second pass halves the gap an impact leaves
 /// (human, scene 8: 4.0 → 1.9 mm), and lets friction correct the slip the joints
@@ -363,15 +372,17 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     record_frame_starts(w);
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
-    // The broad phase's tree, built at the first detection and refitted at the others.
-    let mut tree = Reused::default();
+    // The broad phase's trees and candidate pairs, from the first detection's boxes
+    // loosened by `DETECTION_FAT`, for all of the frame's detections.
+    let mut tree = Reused::fattened(DETECTION_FAT);
     let mut sub = 0;
     while sub < n_sub {
         let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
         detect(w, &mut tree, rest_of_frame);
         if wake_touched(w) {
             // The woken figures' own contacts (with the ground, with each other) were
-            // skipped while they slept.
+            // skipped while they slept, and so were their pairs in the broad phase.
+            tree.forget();
             detect(w, &mut tree, rest_of_frame);
         }
         let count = every.min(n_sub - sub);
