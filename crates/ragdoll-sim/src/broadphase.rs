@@ -56,8 +56,8 @@ pub fn overlapping_pairs(aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
 /// refitting the trees and traversing them again, as before, cost about 1.3 ms a
 /// detection on two threads.
 ///
-/// On a pool of several threads, many boxes are cut into runs of consecutive indices,
-/// a tree each ([`parts`]): the trees are built and traversed against themselves on all
+/// Many boxes are cut into runs of consecutive indices, a tree each, two runs per
+/// thread ([`parts`]): the trees are built and traversed against themselves on all
 /// threads, then against each other. parry builds a tree on one thread, and at 16 000
 /// bones building and traversing one tree was the largest serial part of a particle
 /// frame. A scene's bodies are numbered figure by figure and its figures placed in
