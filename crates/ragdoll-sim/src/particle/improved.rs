@@ -38,8 +38,8 @@ use rayon::prelude::*;
 /// `|v_a − v_b| + |ω_a| r_a + |ω_b| r_b`, so limbs falling side by side make none
 /// (a falling stack made a speculative point for every box it held).
 ///
-/// `tree` is the broad phase's tree from the step's earlier detections, refitted rather
-/// than built again.
+/// `tree` is the broad phase of the frame's detections: the trees and candidate pairs
+/// of its first detection, which the later ones reuse ([`Reused`]).
 fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let g = w.settings.gravity.length();
     let reach = speculative_margin(g, dt);
