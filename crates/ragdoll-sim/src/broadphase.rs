@@ -49,15 +49,15 @@ pub fn overlapping_pairs(aabbs: &[Aabb], out: &mut Vec<(u32, u32)>) {
 /// the call's pairs are the candidates whose boxes overlap now. A box that left its fat
 /// box is looked up in the trees (its partners that stayed are found by their fat
 /// boxes) and against the other boxes that left (a small tree of their own). The pairs
-/// are the boxes' own, sorted: the same as from new trees. When more than one in
-/// [`ESCAPED_FOR_REBUILD`] of the boxes left, the trees are built again around the
-/// boxes as they are. Measured on the 1000-human pile: with 1 cm of fat, 189 of its
+/// are the boxes' own, sorted: the same as from new trees. When more than one in 16 of
+/// the boxes left (`ESCAPED_FOR_REBUILD`), the trees are built again around the boxes
+/// as they are. Measured on the 1000-human pile: with 1 cm of fat, 189 of its
 /// 16 000 boxes on average had left theirs by a later detection of the same frame in
 /// its busiest second, 12 in the first and none from the third on; refitting the trees
 /// and traversing them again, as before, cost about 1.3 ms a detection on two threads.
 ///
 /// Many boxes are cut into runs of consecutive indices, a tree each, two runs per
-/// thread ([`parts`]): the trees are built and traversed against themselves on all
+/// thread (`parts`): the trees are built and traversed against themselves on all
 /// threads, then against each other. parry builds a tree on one thread, and at 16 000
 /// bones building and traversing one tree was the largest serial part of a particle
 /// frame. A scene's bodies are numbered figure by figure and its figures placed in
