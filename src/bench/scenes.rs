@@ -8,7 +8,7 @@
 //! - test 12: "the number of boxes are 9": three such figures dropped onto each other, so
 //!   the iterations have joints and contacts to work on.
 //!
-//! Sleeping is off in all of them (see [`base_scene`]). The pile of humans for the scale
+//! Sleeping is off in all of them (see `base_scene`). The pile of humans for the scale
 //! table is the built-in `pile` scene (scene 10), with its own settings.
 
 use glam::{Quat, Vec3};
