@@ -8,9 +8,8 @@
 //! threads allocate at once (the parallel narrow phase), do not share the counters'
 //! cache line (measured: within this machine's noise, the 1000-human pile on two
 //! threads 19.9 -> 19.4 ms a frame, medians of three alternations). The `ragdoll-lab`
-//! binary installs it as its
-//! `#[global_allocator]`; a library user who does not install it gets an error from
-//! this bench instead of zeros.
+//! binary installs it as its `#[global_allocator]`; a library user who does not
+//! install it gets an error from this bench instead of zeros.
 //!
 //! What is counted: every heap byte a method holds after it has been built from the
 //! scene and stepped [`STEPS`] frames (so contact caches, islands and scratch buffers

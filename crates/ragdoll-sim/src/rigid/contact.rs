@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{Reused, speculative_margin};
+use crate::broadphase::{overlapping_pairs_where, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -268,7 +268,7 @@ impl Contacts {
         // Pairs judged as the traversal finds them, not sorted first and filtered after:
         // most overlaps are a figure's jointed neighbours or between sleeping bodies.
         let excluded = &self.excluded;
-        Reused::default().overlapping_pairs_where(
+        overlapping_pairs_where(
             &self.aabbs,
             |a, b| {
                 (awake[a as usize] || awake[b as usize])
