@@ -299,9 +299,10 @@ struct Lever {
 impl Lever {
     /// The lever of side `s` for a correction along `n` at world point `p` (`None` for
     /// a pure rotation about `n`), with its generalised inverse mass; no lever for a
-    /// static side.
+    /// static side. `n` need not be a unit vector: `n2` is `|n|²`, and the inverse mass
+    /// returned is `|n|²` times the unit direction's (every term is quadratic in `n`).
     #[inline]
-    fn of(bones: &[Bone], s: Side, p: Option<Vec3A>, n: Vec3A) -> (Option<Lever>, f32) {
+    fn of(bones: &[Bone], s: Side, p: Option<Vec3A>, n: Vec3A, n2: f32) -> (Option<Lever>, f32) {
         let Some(i) = s else {
             return (None, 0.0);
         };
@@ -310,7 +311,7 @@ impl Lever {
             return (None, 0.0);
         }
         let (axis, linear) = match p {
-            Some(p) => ((p - b.center()).cross(n), b.inv_mass()),
+            Some(p) => ((p - b.center()).cross(n), b.inv_mass() * n2),
             None => (n, 0.0),
         };
         let local = b.rot.inverse() * axis;
@@ -343,13 +344,13 @@ impl Lever {
 /// every correction of the solver would otherwise pay.
 pub(crate) fn rotate_local(q: Quat, theta_local: Vec3A) -> Quat {
     let dq = q * Quat::from_xyzw(theta_local.x, theta_local.y, theta_local.z, 0.0);
-    Quat::from_xyzw(
-        q.x + 0.5 * dq.x,
-        q.y + 0.5 * dq.y,
-        q.z + 0.5 * dq.z,
-        q.w + 0.5 * dq.w,
-    )
-    .normalize()
+    let r = q + dq * 0.5;
+    let d = r.length_squared() - 1.0;
+    if d.abs() < 4e-3 {
+        r * (1.0 - d * (0.5 - 0.375 * d))
+    } else {
+        r.normalize()
+    }
 }
 
 /// A correction between two sides along a unit direction (or a turn about it), its
@@ -366,22 +367,39 @@ pub(crate) struct Correction {
 impl Correction {
     /// Moving point `pa` of side `a` along unit `n` and `pb` of `b` against it.
     #[inline]
-    pub fn along(bones: &[Bone], (a, pa): (Side, Vec3A), (b, pb): (Side, Vec3A), n: Vec3A) -> Self {
-        let (a, wa) = Lever::of(bones, a, Some(pa), n);
-        let (b, wb) = Lever::of(bones, b, Some(pb), n);
+    pub fn along(bones: &[Bone], pa: (Side, Vec3A), pb: (Side, Vec3A), n: Vec3A) -> Self {
+        Correction::along_scaled(bones, pa, pb, n, 1.0)
+    }
+
+    /// [`Correction::along`] a direction `d` of squared length `d2`, not normalised: `w`
+    /// is `d2` times the unit direction's and [`Correction::apply`]'s `λ` is per unit of
+    /// `d`. A correction of length `c` along `d / |d|` is then `λ = c / (|d| w_unit)`,
+    /// and a caller that knows `c / |d|` (a constraint whose error is `d` itself) never
+    /// waits for a square root and a division to normalise `d` before the levers.
+    #[inline]
+    pub fn along_scaled(
+        bones: &[Bone],
+        (a, pa): (Side, Vec3A),
+        (b, pb): (Side, Vec3A),
+        d: Vec3A,
+        d2: f32,
+    ) -> Self {
+        let (a, wa) = Lever::of(bones, a, Some(pa), d, d2);
+        let (b, wb) = Lever::of(bones, b, Some(pb), d, d2);
         Correction {
             a,
             b,
-            n,
+            n: d,
             w: wa + wb,
         }
     }
 
-    /// Turning side `a` about unit `n` and `b` against it; no point moves along `n`.
+    /// Turning side `a` about `n` and `b` against it; no point moves along `n`. For a
+    /// unit `n`, `w` is the inverse inertia about it; otherwise `|n|²` times that.
     #[inline]
     pub fn turning(bones: &[Bone], a: Side, b: Side, n: Vec3A) -> Self {
-        let (a, wa) = Lever::of(bones, a, None, n);
-        let (b, wb) = Lever::of(bones, b, None, n);
+        let (a, wa) = Lever::of(bones, a, None, n, 1.0);
+        let (b, wb) = Lever::of(bones, b, None, n, 1.0);
         Correction {
             a,
             b,
@@ -417,6 +435,12 @@ impl Correction {
 /// XPBD positional constraint between two sides (Müller et al. 2020, eq. 2–5): moves
 /// the points so that `pa − pb` changes by `delta`, splitting by generalised inverse
 /// mass; `alpha_tilde` = compliance / h². Returns the Lagrange multiplier λ (≥ 0).
+///
+/// With `c = |delta|`, `λ = c / (w + α̃)` along `delta / c`, which is `μ = λ / c =
+/// c² / (W + α̃ c²)` along `delta` itself, `W = c² w` ([`Correction::along_scaled`]):
+/// the levers start from `delta` at once instead of after a square root and a
+/// division, which sat on the dependency chain of every contact and joint (each
+/// correction waits for the last one's turn of the same bone).
 pub(crate) fn positional(
     bones: &mut [Bone],
     a: Side,
@@ -426,32 +450,56 @@ pub(crate) fn positional(
     delta: Vec3A,
     alpha_tilde: f32,
 ) -> f32 {
-    let c = delta.length();
+    let c2 = delta.length_squared();
+    if c2 < 1e-18 {
+        return 0.0;
+    }
+    let corr = Correction::along_scaled(bones, (a, pa), (b, pb), delta, c2);
+    let den = corr.w + alpha_tilde * c2;
+    if den <= 0.0 {
+        return 0.0;
+    }
+    let mu = c2 / den;
+    corr.apply(bones, mu);
+    mu * c2.sqrt()
+}
+
+/// [`positional`] along a known unit direction `n` by `c > 0`: `pa − pb` changes by
+/// `n c`. Returns λ.
+pub(crate) fn positional_along(
+    bones: &mut [Bone],
+    (a, pa): (Side, Vec3A),
+    (b, pb): (Side, Vec3A),
+    n: Vec3A,
+    c: f32,
+) -> f32 {
     if c < 1e-9 {
         return 0.0;
     }
-    let corr = Correction::along(bones, (a, pa), (b, pb), delta / c);
-    if corr.w + alpha_tilde <= 0.0 {
+    let corr = Correction::along(bones, (a, pa), (b, pb), n);
+    if corr.w <= 0.0 {
         return 0.0;
     }
-    let lambda = c / (corr.w + alpha_tilde);
+    let lambda = c / corr.w;
     corr.apply(bones, lambda);
     lambda
 }
 
 /// XPBD angular constraint: rotates side `a` relative to `b` by the rotation vector
-/// `dphi` (split by generalised inverse inertia).
+/// `dphi` (split by generalised inverse inertia). As in [`positional`], the turn is
+/// `μ = φ² / (W + α̃ φ²)` about `dphi` itself, `W = φ² w` the inverse inertia about it
+/// unnormalised, rather than `φ / (w + α̃)` about `dphi / φ`.
 pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3A, alpha_tilde: f32) {
-    let angle = dphi.length();
-    if angle < 1e-9 {
+    let angle2 = dphi.length_squared();
+    if angle2 < 1e-18 {
         return;
     }
-    let corr = Correction::turning(bones, a, b, dphi / angle);
-    if corr.w + alpha_tilde <= 0.0 {
+    let corr = Correction::turning(bones, a, b, dphi);
+    let den = corr.w + alpha_tilde * angle2;
+    if den <= 0.0 {
         return;
     }
-    let lambda = angle / (corr.w + alpha_tilde);
-    corr.apply(bones, lambda);
+    corr.apply(bones, angle2 / den);
 }
 
 /// Orientation of a side (identity for the world).

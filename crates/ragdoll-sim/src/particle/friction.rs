@@ -16,7 +16,7 @@
 //! any velocity the position projection created: pushing out of a penetration must not
 //! add energy.
 
-use super::bone::{Bone, Correction, Side, positional, side_world};
+use super::bone::{Bone, Correction, Side, positional_along, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::{Vec3, Vec3A};
 
@@ -48,7 +48,7 @@ pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoin
         if c.touched_at.is_none() {
             c.touched_at = Some(Vec3::from(start_offset(bones, m, c, pa, pb)));
         }
-        c.lambda_n += positional(bones, Some(m.a), m.b, pa, pb, -m.n * depth, 0.0);
+        c.lambda_n += positional_along(bones, (Some(m.a), pa), (m.b, pb), -m.n, depth);
     }
 }
 
@@ -122,8 +122,9 @@ pub(crate) fn solve_friction(
     let drift = c
         .touched_at
         .map_or(Vec3A::ZERO, |t| tangential(pa - pb) - sub - Vec3A::from(t));
-    // Corrections move pa − pb against the slip.
-    let against = |d: Vec3A| Correction::along(bones, (a, pa), (m.b, pb), -d.normalize_or_zero());
+    // Corrections move pa − pb against the slip `d`, along `−d` itself (not normalised:
+    // `Correction::along_scaled`, whose `w` is `|d|²` times the unit direction's).
+    let against = |d: Vec3A, d2: f32| Correction::along_scaled(bones, (a, pa), (m.b, pb), -d, d2);
     // Static friction takes back the slip and a share of the drift when the cone allows
     // both; kinetic friction (or a static one that cannot afford the drift) acts on the
     // substep's slip alone, so it only ever opposes the motion it sees.
@@ -132,21 +133,27 @@ pub(crate) fn solve_friction(
     } else {
         sub
     };
-    let corr_pulled = against(pulled);
-    let (slip_t, corr) = if corr_pulled.w > 0.0 && pulled.length() <= allowed * corr_pulled.w {
-        (pulled, corr_pulled)
-    } else if pulled == sub {
-        (sub, corr_pulled)
+    let pulled2 = pulled.length_squared();
+    let corr_pulled = against(pulled, pulled2);
+    // Static when the whole slip fits the cone: `|d| / w ≤ allowed`, that is
+    // `|d|³ ≤ allowed W` with `W = |d|² w`.
+    let fits = |d2: f32, w: f32| w > 0.0 && d2 * d2.sqrt() <= allowed * w;
+    let (len2, corr) = if fits(pulled2, corr_pulled.w) || pulled == sub {
+        (pulled2, corr_pulled)
     } else {
-        (sub, against(sub))
+        let sub2 = sub.length_squared();
+        (sub2, against(sub, sub2))
     };
-    let len = slip_t.length();
+    let len = len2.sqrt();
     if len < 1e-9 || corr.w <= 0.0 {
         return 0.0;
     }
-    // λ = |correction| / w, the correction being the slip or as much as the cone allows.
-    let lt = (len / corr.w).min(allowed);
-    corr.apply(bones, lt);
+    // λ = |correction| / w_unit, the correction being the slip or as much as the cone
+    // allows: per unit of the slip vector, `len / (len w_unit) = len² / W`, or
+    // `allowed / len`.
+    let mu = (len2 / corr.w).min(allowed / len);
+    corr.apply(bones, mu);
+    let lt = mu * len;
     c.lambda_t += lt;
     lt
 }
