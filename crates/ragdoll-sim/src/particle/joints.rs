@@ -114,7 +114,7 @@ fn swing_limit(f: &RestFrames, a: Side, b: Side, s: &SwingDesc) -> SwingLimit {
         } => SwingLimit {
             shaft_a: f.local_dir(a, shaft),
             axis_b: f.local_dir(b, axis),
-            kind: Swing::Cone { half_angle },
+            kind: Swing::cone(half_angle),
         },
         SwingDesc::Pyramid {
             axis,

@@ -17,6 +17,10 @@ pub(crate) enum Swing {
     Cone {
         /// Half-angle (rad).
         half_angle: f32,
+        /// `cos` of the half-angle pulled in by [`INSIDE_MARGIN`] (`+∞` for a cone that
+        /// narrow: no inside): a shaft whose cosine to the axis exceeds it is inside the
+        /// cone, known without the `acos` ([`Swing::cone`]).
+        cos_inside: f32,
     },
     /// Shaft within two half-angles measured in the planes (axis, u) and (axis, v).
     Pyramid {
@@ -29,6 +33,21 @@ pub(crate) enum Swing {
         /// Second pyramid direction, body2 frame.
         v: Vec3,
     },
+}
+
+impl Swing {
+    /// A cone of half-angle `half_angle` (rad), with its quick inside test.
+    pub fn cone(half_angle: f32) -> Swing {
+        let inner = half_angle - INSIDE_MARGIN;
+        Swing::Cone {
+            half_angle,
+            cos_inside: if inner > INSIDE_MARGIN && inner < std::f32::consts::PI {
+                inner.cos()
+            } else {
+                f32::INFINITY
+            },
+        }
+    }
 }
 
 /// A swing limit: shaft (body1 frame) against axis (body2 frame).
@@ -201,8 +220,18 @@ impl SwingLimit {
     fn target(&self, bones: &[Bone], a: Side, b: Side) -> Option<(Vec3, f32)> {
         let (s, ax, qb) = self.dirs(bones, a, b);
         match self.kind {
-            Swing::Cone { half_angle } => {
-                let phi = s.dot(ax).clamp(-1.0, 1.0).acos();
+            Swing::Cone {
+                half_angle,
+                cos_inside,
+            } => {
+                // Most shafts are well inside their cone most of the time: told from
+                // the cosine, the `acos` only for a shaft near or past the cone (the same
+                // result: `acos` is decreasing, and the margin far exceeds its rounding).
+                let c = s.dot(ax);
+                if c > cos_inside {
+                    return None;
+                }
+                let phi = c.clamp(-1.0, 1.0).acos();
                 (phi > half_angle).then(|| {
                     let mut n = s.cross(ax);
                     if n.length_squared() < 1e-12 {
@@ -235,7 +264,9 @@ impl SwingLimit {
     pub fn violation(&self, bones: &[Bone], a: Side, b: Side) -> f32 {
         let (s, ax, qb) = self.dirs(bones, a, b);
         match self.kind {
-            Swing::Cone { half_angle } => (s.dot(ax).clamp(-1.0, 1.0).acos() - half_angle).max(0.0),
+            Swing::Cone { half_angle, .. } => {
+                (s.dot(ax).clamp(-1.0, 1.0).acos() - half_angle).max(0.0)
+            }
             Swing::Pyramid { h1, h2, u, v } => {
                 let (u, v) = (qb * u, qb * v);
                 let (x, y, z) = (s.dot(u), s.dot(v), s.dot(ax));
@@ -320,6 +351,61 @@ mod tests {
     /// measured angle is outside its range, and does pass by one well inside: over
     /// rotations of every twist and swing, for hinge, twist and cone-like ranges, a 0°
     /// range and a whole turn.
+    #[test]
+    fn cone_quick_inside_test_agrees_with_the_acos() {
+        use super::{Swing, SwingLimit};
+        let axis = Vec3::new(-0.2, 0.9, 0.4).normalize();
+        let across = axis.any_orthonormal_vector();
+        let mut seed = 0x1234_5678_u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32
+        };
+        let (mut passed, mut well_inside) = (0, 0);
+        for deg in [0.0f32, 0.01, 1.0, 30.0, 45.0, 90.0, 135.0, 179.99, 180.0] {
+            let h = deg.to_radians();
+            let limit = SwingLimit {
+                shaft_a: Vec3::ZERO,
+                axis_b: axis,
+                kind: Swing::cone(h),
+            };
+            for k in 0..20_000 {
+                // Half the shafts within 5e-4 rad of the cone, where a margin turned the
+                // wrong way would show; half anywhere.
+                let angle = if k % 2 == 0 {
+                    h + (next() * 2.0 - 1.0) * 5e-4
+                } else {
+                    next() * std::f32::consts::PI
+                };
+                let about = Quat::from_axis_angle(axis, next() * std::f32::consts::TAU);
+                let shaft = about * (Quat::from_axis_angle(across, angle) * axis);
+                let limit = SwingLimit {
+                    shaft_a: shaft,
+                    ..limit
+                };
+                // The solver's answer against the measured angle's, for the world as
+                // both sides (no bones: their frames are the identity).
+                let measured = shaft.dot(axis).clamp(-1.0, 1.0).acos() > h;
+                assert_eq!(
+                    limit.target(&[], None, None).is_some(),
+                    measured,
+                    "{deg} deg cone, shaft at {angle} rad"
+                );
+                let Swing::Cone { cos_inside, .. } = limit.kind else {
+                    unreachable!()
+                };
+                if angle < h - 1e-3 {
+                    well_inside += 1;
+                    passed += usize::from(shaft.dot(axis) > cos_inside);
+                }
+            }
+        }
+        assert!(well_inside > 30_000, "{well_inside}");
+        assert_eq!(passed, well_inside, "well inside yet measured");
+    }
+
     #[test]
     fn quick_inside_test_agrees_with_the_measured_angle() {
         use super::AngleLimit;

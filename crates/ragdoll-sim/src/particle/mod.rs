@@ -474,7 +474,7 @@ impl Method for ParticleWorld {
             let (a, b) = j.anchors(&self.bones);
             let limit = match j.swing {
                 Some(s) => match s.kind {
-                    limits::Swing::Cone { half_angle } => LimitShape::Cone {
+                    limits::Swing::Cone { half_angle, .. } => LimitShape::Cone {
                         axis: bone::side_rot(&self.bones, j.b) * s.axis_b,
                         half_angle,
                     },
