@@ -303,10 +303,20 @@ impl Joint {
                 // Align the axes: rotate body1 by the rotation taking its axis onto body2's.
                 let ta = side_rot(bones, a) * Vec3A::from(axis_a);
                 let tb = side_rot(bones, b) * Vec3A::from(axis_b);
+                // The turn is `asin(s)` about `c / s`, `s = |c|`: `c asin(s) / s`, whose
+                // ratio is `1 + s²/6 + 3 s⁴/40 + …` — for the small misalignment a
+                // hinge has at every substep, from `s²` without a square root, `asin`
+                // or division (the next term, `5 s⁶/112`, is below 5e-14 there).
                 let c = ta.cross(tb);
-                let s = c.length();
-                if s > 1e-9 {
-                    angular(bones, a, b, c / s * s.asin(), 0.0);
+                let s2 = c.length_squared();
+                if s2 > 1e-18 {
+                    let ratio = if s2 < 1e-4 {
+                        1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0))
+                    } else {
+                        let s = s2.sqrt();
+                        s.asin() / s
+                    };
+                    angular(bones, a, b, c * ratio, 0.0);
                 }
             }
             JointType::Universal { shaft_a, shaft_b } => {
