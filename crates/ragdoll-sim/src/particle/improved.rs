@@ -197,14 +197,84 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 
 /// Contacts, manifold by manifold: each point's normal correction, then its friction
 /// against the manifold's Coulomb cone so far.
+///
+/// Up to [`SIDE_BY_SIDE`] consecutive manifolds with no bone in common are solved side
+/// by side, point by point: none reads what another writes (the ground and other static
+/// sides are never written), so each gets the same bits as in turn, but the processor
+/// has independent chains of corrections to overlap. Within a manifold every correction
+/// waits for the last one's turn of the same bone, and a pass over a pile's contacts
+/// was mostly that waiting.
 fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
-    for m in manifolds {
-        let group = &mut points[m.range()];
-        let mut spent: f32 = group.iter().map(|c| c.lambda_t).sum();
-        for k in 0..group.len() {
-            solve_normal(bones, m, &mut group[k]);
-            let normal: f32 = group.iter().map(|c| c.lambda_n).sum();
-            spent += solve_friction(bones, m, &mut group[k], normal, spent);
+    let mut k = 0;
+    while k < manifolds.len() {
+        let mut end = k + 1;
+        while end < manifolds.len()
+            && end - k < SIDE_BY_SIDE
+            && manifolds[k..end]
+                .iter()
+                .all(|m| share_no_bone(m, &manifolds[end]))
+        {
+            end += 1;
+        }
+        let group = &manifolds[k..end];
+        // A manifold's points follow the last one's (`ContactSet::push`, `Batch::gather`).
+        let mut rest = &mut points[group[0].start as usize..];
+        let mut solves: [Option<ManifoldSolve>; SIDE_BY_SIDE] = Default::default();
+        for (slot, m) in solves.iter_mut().zip(group) {
+            let (mine, after) = std::mem::take(&mut rest).split_at_mut(m.range().len());
+            *slot = Some(ManifoldSolve::new(m, mine));
+            rest = after;
+        }
+        let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
+        for i in 0..longest {
+            for s in solves.iter_mut().flatten() {
+                s.normal(bones, i);
+            }
+            for s in solves.iter_mut().flatten() {
+                s.friction(bones, i);
+            }
+        }
+        k = end;
+    }
+}
+
+/// Most manifolds [`contact_pass`] solves side by side.
+const SIDE_BY_SIDE: usize = 4;
+
+/// Whether two manifolds touch different bones (they may share the ground).
+fn share_no_bone(m: &Manifold, n: &Manifold) -> bool {
+    let bone = |s: Option<usize>, t: Option<usize>| s.is_some() && s == t;
+    let (ma, na) = (Some(m.a), Some(n.a));
+    !(ma == na || bone(ma, n.b) || bone(m.b, na) || bone(m.b, n.b))
+}
+
+/// One manifold's points in a contact pass, and the friction its cone has spent.
+struct ManifoldSolve<'a> {
+    m: &'a Manifold,
+    points: &'a mut [ContactPoint],
+    spent: f32,
+}
+
+impl<'a> ManifoldSolve<'a> {
+    fn new(m: &'a Manifold, points: &'a mut [ContactPoint]) -> Self {
+        let spent = points.iter().map(|c| c.lambda_t).sum();
+        ManifoldSolve { m, points, spent }
+    }
+
+    /// Point `i`'s normal correction (none past the manifold's last point).
+    #[inline(always)]
+    fn normal(&mut self, bones: &mut [Bone], i: usize) {
+        if let Some(c) = self.points.get_mut(i) {
+            solve_normal(bones, self.m, c);
+        }
+    }
+
+    /// Point `i`'s friction against the manifold's cone so far.
+    #[inline(always)]
+    fn friction(&mut self, bones: &mut [Bone], i: usize) {
+        if i < self.points.len() {
+            let normal: f32 = self.points.iter().map(|c| c.lambda_n).sum();
+            self.spent += solve_friction(bones, self.m, &mut self.points[i], normal, self.spent);
         }
     }
 }
