@@ -201,9 +201,11 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 /// Up to [`SIDE_BY_SIDE`] consecutive manifolds with no bone in common are solved side
 /// by side, point by point: none reads what another writes (the ground and other static
 /// sides are never written), so each gets the same bits as in turn, but the processor
-/// has independent chains of corrections to overlap. Within a manifold every correction
-/// waits for the last one's turn of the same bone, and a pass over a pile's contacts
-/// was mostly that waiting.
+/// has independent chains of corrections to overlap (within a manifold every correction
+/// waits for the last one's turn of the same bone). Measured, that gains a few percent
+/// of a pass: it is bound by its work more than by the wait. Detection order already
+/// deals most points into such groups (93 % in fours on a pile of 300), the layout for
+/// solving a group in SIMD lanes.
 fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
     let mut k = 0;
     while k < manifolds.len() {

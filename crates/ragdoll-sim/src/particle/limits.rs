@@ -351,18 +351,22 @@ mod tests {
     /// measured angle is outside its range, and does pass by one well inside: over
     /// rotations of every twist and swing, for hinge, twist and cone-like ranges, a 0°
     /// range and a whole turn.
+    /// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run.
+    fn uniform(mut seed: u32) -> impl FnMut() -> f32 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32
+        }
+    }
+
     #[test]
     fn cone_quick_inside_test_agrees_with_the_acos() {
         use super::{Swing, SwingLimit};
         let axis = Vec3::new(-0.2, 0.9, 0.4).normalize();
         let across = axis.any_orthonormal_vector();
-        let mut seed = 0x1234_5678_u32;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
-        };
+        let mut next = uniform(0x1234_5678_u32);
         let (mut passed, mut well_inside) = (0, 0);
         for deg in [0.0f32, 0.01, 1.0, 30.0, 45.0, 90.0, 135.0, 179.99, 180.0] {
             let h = deg.to_radians();
@@ -419,13 +423,7 @@ mod tests {
             (d(-170.0), d(-160.0)),
         ];
         let axis = Vec3::new(0.3, -0.8, 0.5).normalize();
-        let mut seed = 0x9e37_79b9_u32;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
-        };
+        let mut next = uniform(0x9e37_79b9_u32);
         let (mut passed, mut well_inside) = (0, 0);
         for (min, max) in ranges {
             let limit = AngleLimit {
