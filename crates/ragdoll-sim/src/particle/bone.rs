@@ -344,7 +344,7 @@ impl Lever {
 /// every correction of the solver would otherwise pay.
 ///
 /// The sum `r` has `|r|² = 1 + d` with `d` of order `|θ|²/4`: it is scaled by
-/// `(1 + d)^(−1/2) ≈ 1 − d/2 + 3d²/8` (error `5|d|³/16`, below 2e-8 for `|d| < 4e-3`)
+/// `(1 + d)^(−1/2) ≈ 1 − d/2 + 3d²/8` (error about `5|d|³/16`, 2e-8 at `|d| = 4e-3`)
 /// rather than divided by a square root, which sat on the chain of every correction of
 /// the bone; a larger turn is normalised exactly.
 pub(crate) fn rotate_local(q: Quat, theta_local: Vec3A) -> Quat {

@@ -136,8 +136,9 @@ pub(crate) fn solve_friction(
     let pulled2 = pulled.length_squared();
     let corr_pulled = against(pulled, pulled2);
     // Static when the whole slip fits the cone: `|d| / w ≤ allowed`, that is
-    // `|d|³ ≤ allowed W` with `W = |d|² w`.
-    let fits = |d2: f32, w: f32| w > 0.0 && d2 * d2.sqrt() <= allowed * w;
+    // `|d|³ ≤ allowed W` with `W = |d|² w`. No slip at all (a drift taken back that
+    // cancels the substep's slip exactly) fits: there is nothing to correct.
+    let fits = |d2: f32, w: f32| d2 == 0.0 || (w > 0.0 && d2 * d2.sqrt() <= allowed * w);
     let (len2, corr) = if fits(pulled2, corr_pulled.w) || pulled == sub {
         (pulled2, corr_pulled)
     } else {

@@ -222,6 +222,7 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
         // A manifold's points follow the last one's (`ContactSet::push`, `Batch::gather`).
         let mut rest = &mut points[group[0].start as usize..];
         let mut solves: [Option<ManifoldSolve>; SIDE_BY_SIDE] = Default::default();
+        debug_assert!(group.windows(2).all(|p| p[0].end == p[1].start));
         for (slot, m) in solves.iter_mut().zip(group) {
             let (mine, after) = std::mem::take(&mut rest).split_at_mut(m.range().len());
             *slot = Some(ManifoldSolve::new(m, mine));
