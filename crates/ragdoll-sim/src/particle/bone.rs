@@ -94,6 +94,19 @@ impl Bone {
         self.still_anchor = (Vec3::from(self.center()), self.rot);
     }
 
+    /// Takes `from`'s motion: all that the improved solver's substeps write of a bone
+    /// (its frame, the substep's start and displacement, its velocities), a quarter of
+    /// its bytes. A batch of islands returns its bones to the world through this
+    /// (`islands`); `particle_threads` checks the result is the serial one bit for bit.
+    pub fn take_motion(&mut self, from: &Bone) {
+        self.com = from.com;
+        self.dcom = from.dcom;
+        self.rot = from.rot;
+        self.prev_rot = from.prev_rot;
+        self.lin_vel = from.lin_vel;
+        self.ang_vel = from.ang_vel;
+    }
+
     /// Inverse mass seen by the solver.
     pub fn inv_mass(&self) -> f32 {
         if self.is_static() {
