@@ -18,7 +18,8 @@
 
 use super::bone::Bone;
 use super::contacts::{
-    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, shape_pair,
+    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair,
+    reaches_ground, shape_pair,
 };
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
@@ -27,6 +28,7 @@ use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use glam::{Vec3, Vec3A};
+use parry3d::bounding_volume::Aabb;
 use parry3d::query::ContactManifold;
 use rayon::prelude::*;
 
@@ -64,19 +66,7 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
     let bones = &w.bones;
-    // The ground needs no broad phase: its contacts are found beside it (on a thread
-    // the tree's build leaves free), then appended after the pairs' in the order the
-    // serial loop made them.
-    let ((), ground_contacts) = rayon::join(
-        || broad_phase_on(tree, bones, &margins, &w.filter, &mut pairs),
-        || {
-            let mut set = ContactSet::default();
-            if let Some(ground) = &w.settings.ground {
-                ground_contacts(bones, ground, &margins, &mut set);
-            }
-            set
-        },
-    );
+    let boxes = broad_phase_on(tree, bones, &margins, &w.filter, &mut pairs);
     narrow_phase(
         &pairs,
         &mut w.manifolds,
@@ -96,17 +86,27 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
             });
         },
     );
-    contacts.append(&ground_contacts);
+    // The ground needs no broad phase: the bones whose boxes reach it, after the pairs.
+    if let Some(ground) = &w.settings.ground {
+        ground_contacts(bones, ground, &margins, &boxes, &mut contacts);
+    }
     w.contacts = contacts;
     w.pairs = pairs;
 }
 
-/// Each moving bone's contacts with the ground, `margins[i]` ahead, into `set`.
-fn ground_contacts(bones: &[Bone], ground: &Ground, margins: &[f32], set: &mut ContactSet) {
-    let moving: Vec<usize> = (0..bones.len())
-        .filter(|&i| !bones[i].is_static())
+/// Each moving bone's contacts with the ground, `margins[i]` ahead, into `set`: the
+/// bones whose loosened boxes `boxes` reach it (`reaches_ground`).
+fn ground_contacts(
+    bones: &[Bone],
+    ground: &Ground,
+    margins: &[f32],
+    boxes: &[Aabb],
+    set: &mut ContactSet,
+) {
+    let near: Vec<usize> = (0..bones.len())
+        .filter(|&i| !bones[i].is_static() && reaches_ground(ground, &boxes[i]))
         .collect();
-    narrow_phase(&moving, &mut Vec::new(), set, |&i, scratch, set| {
+    narrow_phase(&near, &mut Vec::new(), set, |&i, scratch, set| {
         let b = &bones[i];
         let mu = (b.friction * ground.friction).sqrt();
         let e = b.restitution.max(ground.restitution);

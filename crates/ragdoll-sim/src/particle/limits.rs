@@ -289,7 +289,7 @@ impl SwingLimit {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ParticleSolver, ParticleWorld};
+    use super::super::{ParticleSolver, ParticleWorld, uniform};
     use crate::scene::af::{AfOptions, load};
     use glam::{Quat, Vec3};
 
@@ -348,16 +348,6 @@ mod tests {
                     sign * grad.dot(d)
                 );
             }
-        }
-    }
-
-    /// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run.
-    fn uniform(mut seed: u32) -> impl FnMut() -> f32 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
         }
     }
 

@@ -314,6 +314,18 @@ fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
     contacts::broad_phase(bones, margin, &Filter::default(), out);
 }
 
+/// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run
+/// (the random cases of the particle method's unit tests).
+#[cfg(test)]
+pub(crate) fn uniform(mut seed: u32) -> impl FnMut() -> f32 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    }
+}
+
 /// The mouse grab in improved mode: a soft XPBD point constraint to the target.
 pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
     let Some(i) = bones.iter().position(|b| b.body == g.body.index()) else {
