@@ -11,11 +11,12 @@
 //! settles under the threshold.
 
 use super::bone::Bone;
-use super::contacts::Manifold;
+use super::contacts::{BONES_PER_TASK, Manifold};
 use super::islands::{find, union};
 use super::joints::Joint;
 use crate::scene::SleepSettings;
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// [`update`] for a world in which every bone is fixed or asleep and nothing is held:
 /// every sleeping bone counts as slow and still, so its timers grow by `dt`, and its
@@ -47,49 +48,57 @@ pub(crate) fn update(
 ) {
     newly_asleep.clear();
     let n = bones.len();
-    for b in bones.iter_mut() {
-        if b.fixed {
-            continue;
-        }
-        let slow = b.asleep
-            || (b.lin_vel.length() < s.linear_velocity && b.ang_vel.length() < s.angular_velocity);
-        b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
-        let (p, q) = b.still_anchor;
-        let turned = (b.rot * q.inverse()).to_axis_angle().1;
-        let turned = turned.min(std::f32::consts::TAU - turned);
-        if b.asleep
-            || ((Vec3::from(b.center()) - p).length() <= s.translation && turned <= s.rotation)
-        {
-            b.still_time += dt;
-        } else {
-            b.still_anchor = (Vec3::from(b.center()), b.rot);
-            b.still_time = 0.0;
-        }
-    }
+    // Each bone's rest timers, on all threads (a turn angle each: a serial millisecond
+    // of a 1000-human frame on two threads).
+    bones
+        .par_iter_mut()
+        .with_min_len(BONES_PER_TASK)
+        .for_each(|b| {
+            if b.fixed {
+                return;
+            }
+            let slow = b.asleep
+                || (b.lin_vel.length() < s.linear_velocity
+                    && b.ang_vel.length() < s.angular_velocity);
+            b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
+            let (p, q) = b.still_anchor;
+            let turned = (b.rot * q.inverse()).to_axis_angle().1;
+            let turned = turned.min(std::f32::consts::TAU - turned);
+            if b.asleep
+                || ((Vec3::from(b.center()) - p).length() <= s.translation && turned <= s.rotation)
+            {
+                b.still_time += dt;
+            } else {
+                b.still_anchor = (Vec3::from(b.center()), b.rot);
+                b.still_time = 0.0;
+            }
+        });
     if let Some(b) = held.and_then(|i| bones.get_mut(i)) {
         b.wake();
     }
     let mut parent: Vec<u32> = (0..n as u32).collect();
-    let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
+    // Dense, for the links below, which ask it of bones all over the array.
+    let is_dynamic: Vec<bool> = bones.iter().map(|b| !b.fixed).collect();
+    let dynamic = |i: usize| is_dynamic[i];
     for j in joints {
         if let (Some(a), Some(b)) = (j.a, j.b)
-            && dynamic(bones, a)
-            && dynamic(bones, b)
+            && dynamic(a)
+            && dynamic(b)
         {
             union(&mut parent, a, b);
         }
     }
     for c in manifolds {
         if let Some(b) = c.b
-            && dynamic(bones, c.a)
-            && dynamic(bones, b)
+            && dynamic(c.a)
+            && dynamic(b)
         {
             union(&mut parent, c.a, b);
         }
     }
     let mut min_time = vec![f32::INFINITY; n];
     for i in 0..n {
-        if dynamic(bones, i) {
+        if dynamic(i) {
             let r = find(&mut parent, i as u32) as usize;
             min_time[r] = min_time[r].min(bones[i].sleep_time.max(bones[i].still_time));
         }
@@ -97,7 +106,7 @@ pub(crate) fn update(
     let forced = s.max_move_time > 0.0 && time >= s.max_move_time as f64;
     let allowed = time >= s.min_move_time as f64;
     for i in 0..n {
-        if !dynamic(bones, i) {
+        if !dynamic(i) {
             continue;
         }
         let r = find(&mut parent, i as u32) as usize;
