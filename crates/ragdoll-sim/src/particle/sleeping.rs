@@ -97,29 +97,29 @@ pub(crate) fn update(
         }
     }
     let mut min_time = vec![f32::INFINITY; n];
-    for i in 0..n {
-        if dynamic(i) {
+    for (i, b) in bones.iter().enumerate() {
+        if !b.fixed {
             let r = find(&mut parent, i as u32) as usize;
-            min_time[r] = min_time[r].min(bones[i].sleep_time.max(bones[i].still_time));
+            min_time[r] = min_time[r].min(b.sleep_time.max(b.still_time));
         }
     }
     let forced = s.max_move_time > 0.0 && time >= s.max_move_time as f64;
     let allowed = time >= s.min_move_time as f64;
-    for i in 0..n {
-        if !dynamic(i) {
+    for (i, b) in bones.iter_mut().enumerate() {
+        if b.fixed {
             continue;
         }
         let r = find(&mut parent, i as u32) as usize;
         let sleep = forced || (allowed && min_time[r] >= s.time);
-        if sleep && !bones[i].asleep {
+        if sleep && !b.asleep {
             newly_asleep.push(i);
         }
-        bones[i].asleep = sleep;
+        b.asleep = sleep;
         if !sleep {
             // A woken island starts its count again.
             if min_time[r] < s.time {
-                bones[i].sleep_time = bones[i].sleep_time.min(min_time[r]);
-                bones[i].still_time = bones[i].still_time.min(min_time[r]);
+                b.sleep_time = b.sleep_time.min(min_time[r]);
+                b.still_time = b.still_time.min(min_time[r]);
             }
         }
     }
