@@ -304,11 +304,14 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[Batch]) {
         });
     // The points, cut into each manifold's run (they follow each other, `ContactSet`).
     let mut rest = &mut w.contacts.points[..];
+    let mut next = 0;
     let runs: Vec<&mut [ContactPoint]> = w
         .contacts
         .manifolds
         .iter()
         .map(|m| {
+            debug_assert_eq!(m.start, next, "a manifold's points follow the last one's");
+            next = m.end;
             let (run, after) = std::mem::take(&mut rest).split_at_mut(m.range().len());
             rest = after;
             run
