@@ -8,6 +8,7 @@
 //! grid whose columns all span the same x. The pairs come out sorted, so what follows
 //! does not depend on the tree's traversal order.
 
+use glam::Vec3;
 use parry3d::bounding_volume::Aabb;
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
@@ -31,6 +32,14 @@ pub const SPECULATIVE_DISTANCE: f32 = 0.005;
 /// gravity alone closes in that time, `g dt²`, and [`SPECULATIVE_DISTANCE`].
 pub fn speculative_margin(g: f32, dt: f32) -> f32 {
     g * dt * dt + SPECULATIVE_DISTANCE
+}
+
+/// How far a box lies above a plane (through `origin`, unit `normal`): the height of
+/// its lowest corner along the normal, `n·(c − o) − |n|·e` over its centre `c` and half
+/// extents `e`; negative when the box reaches below the plane. Both methods find the
+/// bodies near the ground by it, with no broad phase for the plane.
+pub fn box_height_above_plane(aabb: &Aabb, normal: Vec3, origin: Vec3) -> f32 {
+    normal.dot(aabb.center() - origin) - normal.abs().dot(aabb.half_extents())
 }
 
 /// Appends to `out` every pair `(i, j)`, `i < j`, of overlapping boxes, sorted.

@@ -8,7 +8,7 @@
 //! bones.
 
 use super::bone::{Bone, Side};
-use crate::broadphase::Reused;
+use crate::broadphase::{Reused, box_height_above_plane};
 use crate::scene::Ground;
 use glam::{Vec3, Vec3A};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -46,6 +46,24 @@ impl Manifold {
     pub fn range(&self) -> std::ops::Range<usize> {
         self.start as usize..self.end as usize
     }
+}
+
+/// The points of consecutive manifolds, cut into each one's run in order: `points`
+/// starts at the first manifold's first point, and each manifold's points follow the
+/// last one's (`ContactSet::push` and `append`, `Batch::gather` keep them so; debug
+/// builds check it).
+pub(crate) fn point_runs<'a>(
+    manifolds: &'a [Manifold],
+    mut points: &'a mut [ContactPoint],
+) -> impl Iterator<Item = &'a mut [ContactPoint]> + 'a {
+    let mut next = manifolds.first().map_or(0, |m| m.start);
+    manifolds.iter().map(move |m| {
+        debug_assert_eq!(m.start, next, "a manifold's points follow the last one's");
+        next = m.end;
+        let (run, after) = std::mem::take(&mut points).split_at_mut(m.range().len());
+        points = after;
+        run
+    })
 }
 
 /// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
@@ -326,15 +344,19 @@ pub(crate) fn shape_pair(
 const GROUND_SLACK: f32 = 1e-4;
 
 /// Whether a bone whose box loosened by a margin is `aabb` may have contacts with the
-/// ground within that margin ([`ground_pair`]'s `prediction`). Its box's lowest corner
-/// along the normal, `n·c − |n|·e` over the centre `c` and half extents `e`, is below
-/// the plane (within [`GROUND_SLACK`]) if any point of the shape is within the margin
-/// of it: with `x` in the shape, `x − margin n` is in the loosened box. Most bones of a
-/// pile are above it, and parry's manifold query (a support feature, clipping) finds
-/// nothing there at about the cost of finding something.
-pub(crate) fn reaches_ground(ground: &Ground, aabb: &Aabb) -> bool {
-    let lowest = ground.height_of(aabb.center()) - ground.normal().abs().dot(aabb.half_extents());
-    lowest <= GROUND_SLACK
+/// ground within that margin ([`ground_pair`]'s `prediction`): whether the box reaches
+/// the plane (`box_height_above_plane`, within [`GROUND_SLACK`]). With `x` in the shape
+/// and within the margin of the plane, `x − margin n` is in the loosened box and on or
+/// below the plane. Most bones of a pile are above it, and parry's manifold query (a
+/// support feature, clipping) finds nothing there at about the cost of finding
+/// something. `plane` is the ground's normal and a point of it ([`ground_plane`]).
+pub(crate) fn reaches_ground((normal, origin): (Vec3, Vec3), aabb: &Aabb) -> bool {
+    box_height_above_plane(aabb, normal, origin) <= GROUND_SLACK
+}
+
+/// The ground plane's unit normal and a point of it, as `reaches_ground` takes them.
+pub(crate) fn ground_plane(ground: &Ground) -> (Vec3, Vec3) {
+    (ground.normal(), Vec3::new(0.0, ground.height, 0.0))
 }
 
 /// Contacts of a bone with the ground plane. Same `emit` convention, `a` the bone.
@@ -416,7 +438,7 @@ mod tests {
                 b.com = Vec3A::from(plane_point + ground.normal() * above);
                 let margin = next() * 0.05;
                 let aabb = b.shape.get().shape().compute_aabb(&b.parry_pose());
-                let reaches = reaches_ground(&ground, &aabb.loosened(margin));
+                let reaches = reaches_ground(ground_plane(&ground), &aabb.loosened(margin));
                 let mut found = false;
                 ground_pair(
                     &w.bones,

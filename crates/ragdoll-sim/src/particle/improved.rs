@@ -18,8 +18,8 @@
 
 use super::bone::Bone;
 use super::contacts::{
-    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair,
-    reaches_ground, shape_pair,
+    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, ground_plane,
+    point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
 use super::joints::JointSet;
@@ -103,8 +103,9 @@ fn ground_contacts(
     boxes: &[Aabb],
     set: &mut ContactSet,
 ) {
+    let plane = ground_plane(ground);
     let near: Vec<usize> = (0..bones.len())
-        .filter(|&i| !bones[i].is_static() && reaches_ground(ground, &boxes[i]))
+        .filter(|&i| !bones[i].is_static() && reaches_ground(plane, &boxes[i]))
         .collect();
     narrow_phase(&near, &mut Vec::new(), set, |&i, scratch, set| {
         let b = &bones[i];
@@ -219,14 +220,10 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
             end += 1;
         }
         let group = &manifolds[k..end];
-        // A manifold's points follow the last one's (`ContactSet::push`, `Batch::gather`).
-        let mut rest = &mut points[group[0].start as usize..];
         let mut solves: [Option<ManifoldSolve>; SIDE_BY_SIDE] = Default::default();
-        debug_assert!(group.windows(2).all(|p| p[0].end == p[1].start));
-        for (slot, m) in solves.iter_mut().zip(group) {
-            let (mine, after) = std::mem::take(&mut rest).split_at_mut(m.range().len());
-            *slot = Some(ManifoldSolve::new(m, mine));
-            rest = after;
+        let runs = point_runs(group, &mut points[group[0].start as usize..]);
+        for ((slot, m), run) in solves.iter_mut().zip(group).zip(runs) {
+            *slot = Some(ManifoldSolve::new(m, run));
         }
         let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
         for i in 0..longest {

@@ -15,7 +15,7 @@
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
-use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold};
+use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
 use super::improved::{self, Part};
 use super::joints::JointSet;
 use crate::scene::Settings;
@@ -302,21 +302,8 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[Batch]) {
                 bone.take_motion(&stepped[b as usize].bones[i as usize]);
             }
         });
-    // The points, cut into each manifold's run (they follow each other, `ContactSet`).
-    let mut rest = &mut w.contacts.points[..];
-    let mut next = 0;
-    let runs: Vec<&mut [ContactPoint]> = w
-        .contacts
-        .manifolds
-        .iter()
-        .map(|m| {
-            debug_assert_eq!(m.start, next, "a manifold's points follow the last one's");
-            next = m.end;
-            let (run, after) = std::mem::take(&mut rest).split_at_mut(m.range().len());
-            rest = after;
-            run
-        })
-        .collect();
+    let runs: Vec<&mut [ContactPoint]> =
+        point_runs(&w.contacts.manifolds, &mut w.contacts.points).collect();
     runs.into_par_iter()
         .with_min_len(BONES_PER_TASK)
         .zip(&plan.manifold_at)

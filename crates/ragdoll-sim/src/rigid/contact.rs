@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{overlapping_pairs_where, speculative_margin};
+use crate::broadphase::{box_height_above_plane, overlapping_pairs_where, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -256,11 +256,7 @@ impl Contacts {
                 if info[i].fixed {
                     continue;
                 }
-                let aabb = &self.aabbs[i];
-                let c = aabb.center();
-                let e = aabb.half_extents();
-                let reach = g.normal.abs().dot(e);
-                if g.normal.dot(c - g.origin) - reach < 0.0 {
+                if box_height_above_plane(&self.aabbs[i], g.normal, g.origin) < 0.0 {
                     self.candidates.push((i as u32, anchor));
                 }
             }
