@@ -11,10 +11,12 @@
 //! - [`snapshot`]: what a method shows, the same way for both.
 //! - [`metrics`]: energy gain, joint gap, limit violation, penetration.
 //! - [`broadphase`]: the overlapping-box pairs both methods collide.
+//! - `lanes`: vectors and quaternions four to an instruction, for both solvers.
 
 #![warn(missing_docs)]
 
 pub mod broadphase;
+mod lanes;
 pub mod method;
 pub mod metrics;
 pub mod particle;

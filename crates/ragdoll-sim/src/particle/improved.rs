@@ -22,6 +22,7 @@ use super::contacts::{
     point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
+use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
@@ -347,6 +348,8 @@ pub(super) struct Part<'a> {
 
 /// Runs `count` substeps of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
+    let joints = p.joints.entries();
+    let lockstep = Lockstep::new(&joints, p.bones);
     for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
@@ -384,7 +387,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
             contact_pass(p.bones, p.manifolds, p.points);
-            p.joints.solve(p.bones, h);
+            lockstep.solve(&joints, p.bones, h);
             if let Some(g) = p.grab {
                 super::grab_improved(p.bones, g, h);
             }

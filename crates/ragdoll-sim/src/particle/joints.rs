@@ -289,13 +289,9 @@ impl Joint {
         Vec3::new(e.x, e.y, e.z) * 2.0
     }
 
-    /// One XPBD pass over the joint: anchor, axes, then limits. `h` is the substep.
-    pub fn solve(&self, bones: &mut [Bone], h: f32) {
-        self.solve_between(bones, self.a, self.b, h);
-    }
-
-    /// [`Joint::solve`] with body1 and body2 at `a` and `b` of `bones`: a batch of
-    /// islands stepped on its own thread holds its bones under its own indices.
+    /// One XPBD pass over the joint between body1 at `a` and body2 at `b` of `bones`:
+    /// axes, anchor, then limits; `h` is the substep. A batch of islands stepped on its
+    /// own thread holds its bones under its own indices.
     pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
         let inv_h2 = 1.0 / (h * h);
         match self.kind {
@@ -398,20 +394,16 @@ pub(crate) enum JointSet<'a> {
     Batch(&'a [Joint], &'a [(u32, Side, Side)]),
 }
 
-impl JointSet<'_> {
-    /// One pass over every joint of the set, in order.
-    pub fn solve(&self, bones: &mut [Bone], h: f32) {
+impl<'a> JointSet<'a> {
+    /// The set's joints in solving order (the world's), each with its two sides in the
+    /// bones being stepped.
+    pub fn entries(&self) -> Vec<super::joint_lanes::Entry<'a>> {
         match *self {
-            JointSet::All(joints) => {
-                for j in joints {
-                    j.solve(bones, h);
-                }
-            }
-            JointSet::Batch(joints, local) => {
-                for &(k, a, b) in local {
-                    joints[k as usize].solve_between(bones, a, b, h);
-                }
-            }
+            JointSet::All(joints) => joints.iter().map(|j| (j, j.a, j.b)).collect(),
+            JointSet::Batch(joints, local) => local
+                .iter()
+                .map(|&(k, a, b)| (&joints[k as usize], a, b))
+                .collect(),
         }
     }
 }

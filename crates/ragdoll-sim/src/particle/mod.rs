@@ -18,6 +18,7 @@ mod contacts;
 mod friction;
 mod improved;
 mod islands;
+mod joint_lanes;
 mod joints;
 mod limits;
 mod measure;

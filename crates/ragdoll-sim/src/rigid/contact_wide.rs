@@ -22,103 +22,18 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
+use crate::lanes::{Vec3x4, f4};
 use glam::{Mat3, Vec3, Vec3A};
-use std::ops::{Add, AddAssign, Mul, Sub, SubAssign};
+use std::ops::Mul;
 use wide::f32x4;
 
 /// Pairs per bundle: the lanes of an `f32x4`.
-pub const LANES: usize = 4;
+pub const LANES: usize = crate::lanes::LANES;
 /// Points per pair a bundle has room for (a box face on a face or on the ground has 4).
 pub const SLOTS: usize = 4;
 /// Colours tried before a pair is left to the one-by-one solve. A body of a pile touches
 /// up to about a dozen others.
 pub const COLORS: usize = 16;
-
-/// Four `Vec3`s, one per lane, stored as three `f32x4`.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Vec3x4 {
-    x: f32x4,
-    y: f32x4,
-    z: f32x4,
-}
-
-impl Vec3x4 {
-    /// The vectors `f(0) … f(3)` in the four lanes.
-    #[inline]
-    fn from_fn(f: impl Fn(usize) -> Vec3) -> Vec3x4 {
-        let v: [Vec3; LANES] = std::array::from_fn(f);
-        Vec3x4 {
-            x: f32x4::new([v[0].x, v[1].x, v[2].x, v[3].x]),
-            y: f32x4::new([v[0].y, v[1].y, v[2].y, v[3].y]),
-            z: f32x4::new([v[0].z, v[1].z, v[2].z, v[3].z]),
-        }
-    }
-
-    /// Lane `k`.
-    #[inline]
-    fn lane(&self, k: usize) -> Vec3 {
-        Vec3::new(
-            self.x.as_array()[k],
-            self.y.as_array()[k],
-            self.z.as_array()[k],
-        )
-    }
-
-    #[inline]
-    fn dot(self, o: Vec3x4) -> f32x4 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-}
-
-impl Add for Vec3x4 {
-    type Output = Vec3x4;
-    #[inline]
-    fn add(self, o: Vec3x4) -> Vec3x4 {
-        Vec3x4 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-}
-
-impl Sub for Vec3x4 {
-    type Output = Vec3x4;
-    #[inline]
-    fn sub(self, o: Vec3x4) -> Vec3x4 {
-        Vec3x4 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-}
-
-impl Mul<f32x4> for Vec3x4 {
-    type Output = Vec3x4;
-    #[inline]
-    fn mul(self, s: f32x4) -> Vec3x4 {
-        Vec3x4 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-}
-
-impl AddAssign for Vec3x4 {
-    #[inline]
-    fn add_assign(&mut self, o: Vec3x4) {
-        *self = *self + o;
-    }
-}
-
-impl SubAssign for Vec3x4 {
-    #[inline]
-    fn sub_assign(&mut self, o: Vec3x4) {
-        *self = *self - o;
-    }
-}
 
 /// Four 3×3 matrices, one per lane, by columns.
 #[derive(Clone, Copy, Debug)]
@@ -189,12 +104,6 @@ pub(super) struct Bundle {
     inv_mass_b: f32x4,
     friction: f32x4,
     points: [WidePoint; SLOTS],
-}
-
-/// `f(k)` for each lane as an `f32x4`.
-#[inline]
-fn f4(f: impl Fn(usize) -> f32) -> f32x4 {
-    f32x4::new(std::array::from_fn(f))
 }
 
 impl Bundle {

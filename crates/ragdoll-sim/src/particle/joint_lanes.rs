@@ -1,0 +1,563 @@
+//! The joints of four figures solved side by side, one figure to a lane of an `f32x4`.
+//!
+//! A joint pass is Gauss–Seidel: each joint's correction moves its bones before the next
+//! joint reads them, so the joints of one figure form a chain. Two figures share no bone
+//! (a figure is a connected component of the joints), so the chains of four figures can
+//! advance together — joint `k` of each in one instruction — and every figure sees the
+//! same corrections in the same order as when the figures are solved one after another.
+//! A pile of humans is made of figures with the same joints in the same order; those are
+//! dealt four to a group ([`Lockstep::new`]).
+//!
+//! Ball joints and hinges (with a cone swing and an angle range or twist, as the human
+//! and the capsule human carry them) are solved in lanes; any other joint is solved by
+//! its scalar code ([`Joint::solve_between`]), lane after lane. Every ball or hinge goes
+//! through the lanes, in a group or alone in one, and each lane's arithmetic is lane by
+//! lane (`crate::lanes`), so a joint's correction is the same bits whichever figures
+//! share its group: the batches of islands give the serial result on any number of
+//! threads. The lanes compute what [`Joint::solve_between`] computes, in the same order,
+//! with their own (SIMD) rounding.
+
+use super::bone::{Bone, Side};
+use super::joints::{Joint, JointType};
+use super::limits::{Swing, perpendicular};
+use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
+use glam::{Quat, Vec3};
+use wide::f32x4;
+
+/// A joint of a run: the joint and its two sides in the bones being stepped.
+pub(crate) type Entry<'a> = (&'a Joint, Side, Side);
+
+/// What decides whether joint `k` of two figures can share an instruction: the rows it
+/// solves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Shape {
+    /// A ball joint (`hinge` false) or a hinge, with or without a cone swing, with at
+    /// most one angle range.
+    Lanes { hinge: bool, cone: bool, ranges: u8 },
+    /// Solved by its scalar code.
+    Scalar,
+}
+
+impl Shape {
+    fn of(j: &Joint) -> Shape {
+        let hinge = match j.kind {
+            JointType::Ball => false,
+            JointType::Hinge { .. } => true,
+            _ => return Shape::Scalar,
+        };
+        let cone = match j.swing {
+            None => false,
+            Some(s) if matches!(s.kind, Swing::Cone { .. }) => true,
+            Some(_) => return Shape::Scalar,
+        };
+        if j.angle_limits.len() > 1 {
+            return Shape::Scalar;
+        }
+        Shape::Lanes {
+            hinge,
+            cone,
+            ranges: j.angle_limits.len() as u8,
+        }
+    }
+}
+
+/// One step of a joint pass.
+enum Step {
+    /// Entry `i` by its scalar code.
+    Scalar(u32),
+    /// Up to four entries (one per lane, `None` for an empty lane) in lanes, with their
+    /// constant data (`Lockstep::constants`).
+    Lanes([Option<u32>; LANES], u32),
+}
+
+/// The joint pass over a run of joints, in lockstep where figures allow: built once for
+/// the substeps between two collision detections, used by every pass.
+pub(crate) struct Lockstep {
+    steps: Vec<Step>,
+    constants: Vec<Constants>,
+}
+
+impl Lockstep {
+    /// Cuts `entries` (in solving order) into figures — runs of consecutive joints of one
+    /// figure — and deals runs of the same shapes, up to four consecutive ones of
+    /// different figures, into lanes. Solving the steps in order is solving the entries
+    /// in order: a group only interleaves figures, which share no bone.
+    pub fn new(entries: &[Entry], bones: &[Bone]) -> Lockstep {
+        let figure = |&(_, a, b): &Entry| a.or(b).map_or(u32::MAX, |i| bones[i].figure);
+        let shapes: Vec<Shape> = entries.iter().map(|e| Shape::of(e.0)).collect();
+        // Runs of one figure: `start..end` of the entries.
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        for (i, e) in entries.iter().enumerate() {
+            match runs.last_mut() {
+                Some(r) if figure(&entries[r.0]) == figure(e) => r.1 = i + 1,
+                _ => runs.push((i, i + 1)),
+            }
+        }
+        let same = |r: (usize, usize), s: (usize, usize)| {
+            r.1 - r.0 == s.1 - s.0 && shapes[r.0..r.1] == shapes[s.0..s.1]
+        };
+        let mut steps = Vec::with_capacity(entries.len() / LANES + runs.len());
+        let mut constants = Vec::with_capacity(entries.len() / LANES + runs.len());
+        let mut r = 0;
+        while r < runs.len() {
+            let mut group = vec![runs[r]];
+            while r + group.len() < runs.len() && group.len() < LANES {
+                let next = runs[r + group.len()];
+                let f = figure(&entries[next.0]);
+                if !same(runs[r], next) || group.iter().any(|g| figure(&entries[g.0]) == f) {
+                    break;
+                }
+                group.push(next);
+            }
+            let len = runs[r].1 - runs[r].0;
+            for k in 0..len {
+                let lanes: [Option<u32>; LANES] =
+                    std::array::from_fn(|l| group.get(l).map(|g| (g.0 + k) as u32));
+                if shapes[runs[r].0 + k] == Shape::Scalar {
+                    steps.extend(lanes.iter().flatten().map(|&i| Step::Scalar(i)));
+                } else {
+                    steps.push(Step::Lanes(lanes, constants.len() as u32));
+                    constants.push(Constants::new(
+                        &lanes.map(|i| i.map(|i| entries[i as usize])),
+                    ));
+                }
+            }
+            r += group.len();
+        }
+        Lockstep { steps, constants }
+    }
+
+    /// One pass over the joints, `h` the substep.
+    pub fn solve(&self, entries: &[Entry], bones: &mut [Bone], h: f32) {
+        for step in &self.steps {
+            match step {
+                Step::Scalar(i) => {
+                    let (j, a, b) = entries[*i as usize];
+                    j.solve_between(bones, a, b, h);
+                }
+                Step::Lanes(lanes, c) => {
+                    let c = &self.constants[*c as usize];
+                    let sides = |f: fn(&Entry) -> Side| {
+                        lanes.map(|i| i.and_then(|i| f(&entries[i as usize])))
+                    };
+                    let (a, b) = (sides(|e| e.1), sides(|e| e.2));
+                    let mut sa = SideLanes::gather(bones, &a);
+                    let mut sb = SideLanes::gather(bones, &b);
+                    c.solve(&mut sa, &mut sb, h);
+                    sa.scatter(bones, &a);
+                    sb.scatter(bones, &b);
+                }
+            }
+        }
+    }
+}
+
+/// Each lane's bone on one side of its joint (the world, and an empty lane, as a bone
+/// that never moves): what the corrections read and write of it.
+struct SideLanes {
+    com: Vec3x4,
+    dcom: Vec3x4,
+    rot: Quatx4,
+    inv_mass: f32x4,
+    inv_inertia: Vec3x4,
+    /// Lanes whose bone takes corrections.
+    moving: f32x4,
+}
+
+impl SideLanes {
+    fn gather(bones: &[Bone], sides: &[Side; LANES]) -> SideLanes {
+        let bone = |k: usize| sides[k].map(|i| &bones[i]).filter(|b| !b.is_static());
+        let fixed = |k: usize| sides[k].map(|i| &bones[i]);
+        SideLanes {
+            com: Vec3x4::from_fn(|k| fixed(k).map_or(Vec3::ZERO, |b| Vec3::from(b.com))),
+            dcom: Vec3x4::from_fn(|k| fixed(k).map_or(Vec3::ZERO, |b| Vec3::from(b.dcom))),
+            rot: Quatx4::from_fn(|k| fixed(k).map_or(Quat::IDENTITY, |b| b.rot)),
+            inv_mass: f4(|k| bone(k).map_or(0.0, |b| 1.0 / b.mass)),
+            inv_inertia: Vec3x4::from_fn(|k| {
+                bone(k).map_or(Vec3::ZERO, |b| Vec3::from(b.inv_inertia_local))
+            }),
+            moving: f4(|k| {
+                if bone(k).is_some() {
+                    f32::from_bits(u32::MAX)
+                } else {
+                    0.0
+                }
+            }),
+        }
+    }
+
+    fn scatter(&self, bones: &mut [Bone], sides: &[Side; LANES]) {
+        let moving = self.moving.to_bitmask();
+        for (k, s) in sides.iter().enumerate() {
+            if let Some(i) = *s
+                && moving & (1 << k) != 0
+            {
+                let b = &mut bones[i];
+                b.dcom = self.dcom.lane(k).into();
+                b.rot = self.rot.lane(k);
+            }
+        }
+    }
+
+    /// World position of a point given in the bone frame, `com + (dcom + R p)`.
+    fn world(&self, local: Vec3x4) -> Vec3x4 {
+        self.com + (self.dcom + self.rot.rotate(local))
+    }
+
+    fn center(&self) -> Vec3x4 {
+        self.com + self.dcom
+    }
+
+    /// The lever of a correction along `axis`-producing direction: `I⁻¹ (R⁻¹ axis)` in
+    /// the bone frame and the generalised inverse mass `linear + local · turn`
+    /// (`bone::Lever::of`); zero for a bone that takes no correction.
+    fn lever(&self, axis: Vec3x4, linear: f32x4) -> (Vec3x4, f32x4) {
+        let local = self.rot.inverse_rotate(axis);
+        let turn = self.inv_inertia.mul_elem(local);
+        (turn, linear + local.dot(turn))
+    }
+
+    /// Turns the lanes in `mask` by `turn` (bone frame) and moves them by `shift`
+    /// (world): `bone::Lever::apply`.
+    fn apply(&mut self, mask: f32x4, shift: Option<Vec3x4>, turn: Vec3x4) {
+        let mask = mask & self.moving;
+        if let Some(shift) = shift {
+            self.dcom = Vec3x4::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
+        }
+        self.rot = Quatx4::select(mask, self.rot.rotate_local(turn), self.rot);
+    }
+}
+
+/// `bone::positional` in lanes: moves `pa` of `a` and `pb` of `b` so that `pa − pb`
+/// changes by `delta`, `α̃ = 0`, in the lanes of `mask`.
+fn positional(
+    (a, pa): (&mut SideLanes, Vec3x4),
+    (b, pb): (&mut SideLanes, Vec3x4),
+    delta: Vec3x4,
+    mask: f32x4,
+) {
+    let c2 = delta.length_squared();
+    let (ta, wa) = a.lever((pa - a.center()).cross(delta), a.inv_mass * c2);
+    let (tb, wb) = b.lever((pb - b.center()).cross(delta), b.inv_mass * c2);
+    let den = wa + wb;
+    let mask = mask & c2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
+    let mu = c2 / den;
+    a.apply(mask, Some(delta * mu), ta * mu);
+    b.apply(mask, Some(-(delta * mu)), tb * -mu);
+}
+
+/// `bone::angular` in lanes: turns `a` relative to `b` by `dphi`, compliance `α̃`, in
+/// the lanes of `mask`.
+fn angular(a: &mut SideLanes, b: &mut SideLanes, dphi: Vec3x4, alpha: f32x4, mask: f32x4) {
+    let angle2 = dphi.length_squared();
+    let (ta, wa) = a.lever(dphi, f32x4::ZERO);
+    let (tb, wb) = b.lever(dphi, f32x4::ZERO);
+    let den = wa + wb + alpha * angle2;
+    let mask = mask & angle2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
+    let mu = angle2 / den;
+    a.apply(mask, None, ta * mu);
+    b.apply(mask, None, tb * -mu);
+}
+
+/// `f` of each lane of `x` set in `mask`, else 0: the scalar functions of the few lanes
+/// near a limit.
+fn per_lane(mask: f32x4, x: f32x4, f: impl Fn(usize, f32) -> f32) -> f32x4 {
+    let bits = mask.to_bitmask();
+    let x = x.to_array();
+    f4(|k| {
+        if bits & (1 << k) != 0 {
+            f(k, x[k])
+        } else {
+            0.0
+        }
+    })
+}
+
+/// An angle range of a group's joints (`limits::AngleLimit`), in lanes.
+struct RangeLanes {
+    axis_a: Vec3x4,
+    /// `(q_b⁻¹ q_a)` at rest, inverted.
+    rest_inv: Quatx4,
+    min: f32x4,
+    max: f32x4,
+    /// `AngleLimit::inside`.
+    lo: f32x4,
+    hi: f32x4,
+}
+
+/// A cone swing of a group's joints (`limits::SwingLimit`), in lanes.
+struct ConeLanes {
+    shaft_a: Vec3x4,
+    axis_b: Vec3x4,
+    half_angle: f32x4,
+    cos_inside: f32x4,
+}
+
+/// What a group's joints hold constant, in lanes.
+struct Constants {
+    /// Lanes with a joint.
+    active: f32x4,
+    anchor_a: Vec3x4,
+    anchor_b: Vec3x4,
+    /// A hinge's axis in each bone's frame.
+    hinge: Option<(Vec3x4, Vec3x4)>,
+    cone: Option<ConeLanes>,
+    range: Option<RangeLanes>,
+    limit_compliance: f32x4,
+}
+
+impl Constants {
+    /// The constants of up to four joints of one [`Shape`].
+    fn new(lanes: &[Option<Entry>; LANES]) -> Constants {
+        let first = lanes
+            .iter()
+            .flatten()
+            .next()
+            .expect("a group has a joint")
+            .0;
+        let joint = |k: usize| lanes[k].map_or(first, |e| e.0);
+        let v3 = |f: &dyn Fn(&Joint) -> Vec3| Vec3x4::from_fn(|k| f(joint(k)));
+        let s4 = |f: &dyn Fn(&Joint) -> f32| f4(|k| f(joint(k)));
+        let hinge = matches!(first.kind, JointType::Hinge { .. }).then(|| {
+            let axis = |k: usize| match joint(k).kind {
+                JointType::Hinge { axis_a, axis_b } => (axis_a, axis_b),
+                _ => unreachable!("a group's joints share their shape"),
+            };
+            (
+                Vec3x4::from_fn(|k| axis(k).0),
+                Vec3x4::from_fn(|k| axis(k).1),
+            )
+        });
+        let cone = first.swing.is_some().then(|| {
+            let swing = |k: usize| joint(k).swing.expect("a group's joints share their shape");
+            let cone = |k: usize| match swing(k).kind {
+                Swing::Cone {
+                    half_angle,
+                    cos_inside,
+                } => (half_angle, cos_inside),
+                Swing::Pyramid { .. } => unreachable!("a group's joints share their shape"),
+            };
+            ConeLanes {
+                shaft_a: Vec3x4::from_fn(|k| swing(k).shaft_a),
+                axis_b: Vec3x4::from_fn(|k| swing(k).axis_b),
+                half_angle: f4(|k| cone(k).0),
+                cos_inside: f4(|k| cone(k).1),
+            }
+        });
+        let range = (!first.angle_limits.is_empty()).then(|| {
+            let l = |k: usize| &joint(k).angle_limits[0];
+            RangeLanes {
+                axis_a: Vec3x4::from_fn(|k| l(k).axis_a),
+                rest_inv: Quatx4::from_fn(|k| l(k).rest_rel.inverse()),
+                min: f4(|k| l(k).min),
+                max: f4(|k| l(k).max),
+                lo: f4(|k| l(k).inside[0]),
+                hi: f4(|k| l(k).inside[1]),
+            }
+        });
+        Constants {
+            active: f4(|k| {
+                if lanes[k].is_some() {
+                    f32::from_bits(u32::MAX)
+                } else {
+                    0.0
+                }
+            }),
+            anchor_a: v3(&|j| j.anchor_a),
+            anchor_b: v3(&|j| j.anchor_b),
+            hinge,
+            cone,
+            range,
+            limit_compliance: s4(&|j| j.limit_compliance),
+        }
+    }
+
+    /// [`Joint::solve_between`] for the lanes: the hinge's axes, the anchor, the swing,
+    /// the range.
+    fn solve(&self, a: &mut SideLanes, b: &mut SideLanes, h: f32) {
+        let active = self.active;
+        if let Some((axis_a, axis_b)) = self.hinge {
+            // `c asin(s) / s` about the misalignment `c`, `s = |c|`, by its series for a
+            // small `s` (see `Joint::solve_between`).
+            let c = a.rot.rotate(axis_a).cross(b.rot.rotate(axis_b));
+            let s2 = c.length_squared();
+            let small = s2.simd_lt(f32x4::splat(1e-4));
+            let series =
+                f32x4::ONE + s2 * (f32x4::splat(1.0 / 6.0) + s2 * f32x4::splat(3.0 / 40.0));
+            let large = active & !small;
+            let ratio = if large.any() {
+                let exact = per_lane(large, s2, |_, s2| {
+                    let s = s2.sqrt();
+                    s.asin() / s
+                });
+                small.select(series, exact)
+            } else {
+                series
+            };
+            let turn = active & s2.simd_gt(f32x4::splat(1e-18));
+            angular(a, b, c * ratio, f32x4::ZERO, turn);
+        }
+        let (pa, pb) = (a.world(self.anchor_a), b.world(self.anchor_b));
+        positional((a, pa), (b, pb), pb - pa, active);
+        let alpha = self.limit_compliance * f32x4::splat(1.0 / (h * h));
+        if let Some(cone) = &self.cone {
+            self.solve_cone(cone, a, b, alpha);
+        }
+        if let Some(range) = &self.range {
+            self.solve_range(range, a, b, alpha);
+        }
+    }
+
+    /// `SwingLimit::solve` for a cone: the shaft turned back onto the cone, the `acos`
+    /// only in lanes not surely inside.
+    fn solve_cone(&self, cone: &ConeLanes, a: &mut SideLanes, b: &mut SideLanes, alpha: f32x4) {
+        let s = a.rot.rotate(cone.shaft_a);
+        let ax = b.rot.rotate(cone.axis_b);
+        let c = s.dot(ax);
+        let near = self.active & !c.simd_gt(cone.cos_inside);
+        if !near.any() {
+            return;
+        }
+        let phi = per_lane(near, c, |_, c| c.clamp(-1.0, 1.0).acos());
+        let over = near & phi.simd_gt(cone.half_angle);
+        if !over.any() {
+            return;
+        }
+        let mut n = s.cross(ax);
+        let degenerate = over & n.length_squared().simd_lt(f32x4::splat(1e-12));
+        if degenerate.any() {
+            let bits = degenerate.to_bitmask();
+            let p = Vec3x4::from_fn(|k| {
+                if bits & (1 << k) != 0 {
+                    perpendicular(ax.lane(k))
+                } else {
+                    Vec3::ZERO
+                }
+            });
+            n = Vec3x4::select(degenerate, p, n);
+        }
+        let n = n * (f32x4::ONE / n.length_squared().sqrt());
+        angular(a, b, n * (phi - cone.half_angle), alpha, over);
+    }
+
+    /// `AngleLimit::solve`: the twist of `Δ = rest⁻¹ q_b⁻¹ q_a` about the axis clamped
+    /// into the range along its gradient, measured only in lanes not surely inside.
+    fn solve_range(&self, r: &RangeLanes, a: &mut SideLanes, b: &mut SideLanes, alpha: f32x4) {
+        let d = r.rest_inv.mul_quat(b.rot.conjugate().mul_quat(a.rot));
+        let flip = d.w.simd_lt(f32x4::ZERO);
+        let d = Quatx4::select(flip, d.scale(f32x4::splat(-1.0)), d);
+        let y = d.v.dot(r.axis_a);
+        let inside = d.w.simd_gt(f32x4::ZERO) & y.simd_ge(d.w * r.lo) & y.simd_le(d.w * r.hi);
+        let near = self.active & !inside;
+        if !near.any() {
+            return;
+        }
+        let w = d.w;
+        let phi = per_lane(near, y, |k, y| 2.0 * y.atan2(w.as_array()[k]));
+        let n = w * w + y * y;
+        let x = r.axis_a;
+        let grad = (x * (w * w) + x.cross(d.v) * w + d.v * y) * (f32x4::ONE / n);
+        let grad = Vec3x4::select(n.simd_gt(f32x4::splat(1e-12)), grad, x);
+        let j = a.rot.rotate(grad);
+        let target = phi.fast_max(r.min).fast_min(r.max);
+        let j2 = j.length_squared();
+        let fix = near & target.simd_ne(phi) & j2.simd_gt(f32x4::splat(1e-12));
+        angular(a, b, j * ((target - phi) / j2), alpha, fix);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::joints::JointSet;
+    use super::super::{ParticleSolver, ParticleWorld, uniform};
+    use super::*;
+    use crate::scene::af::{AfOptions, load};
+
+    /// The pile of `count` humans (scene 10) with every bone knocked off its rest pose
+    /// (turned by up to 0.6 rad, moved by up to 2 cm) so that anchors, hinge axes,
+    /// cones and ranges all correct something; every fifth bone asleep.
+    fn knocked_pile(count: u32, seed: u32) -> ParticleWorld {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/scenes/pile.af");
+        let opts = AfOptions {
+            count: Some(count),
+            ..AfOptions::default()
+        };
+        let scene = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
+        let mut w =
+            ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"));
+        let mut next = uniform(seed);
+        for (i, b) in w.bones.iter_mut().enumerate() {
+            let turn = Vec3::new(next(), next(), next()) * 1.2 - Vec3::splat(0.6);
+            b.rot = (b.rot * Quat::from_scaled_axis(turn)).normalize();
+            b.dcom = (Vec3::new(next(), next(), next()) * 0.04 - Vec3::splat(0.02)).into();
+            b.asleep = i % 5 == 3;
+        }
+        w
+    }
+
+    fn motion(bones: &[Bone]) -> Vec<(Vec3, Quat)> {
+        bones.iter().map(|b| (Vec3::from(b.dcom), b.rot)).collect()
+    }
+
+    /// The lanes compute what the scalar joint code computes, to rounding: one pass
+    /// over the joints of four knocked-down humans, in lockstep and joint by joint. (It
+    /// fails with any one row — hinge axis, anchor, cone, range — left out of the lanes.)
+    #[test]
+    fn lanes_agree_with_the_scalar_joints() {
+        let h = 1.0 / 1200.0;
+        for seed in [0x2545_f491, 0x9e37_79b9, 0x1234_5678] {
+            let w = knocked_pile(4, seed);
+            let set = JointSet::All(&w.joints);
+            let entries = set.entries();
+            let lockstep = Lockstep::new(&entries, &w.bones);
+            let lanes = lockstep
+                .steps
+                .iter()
+                .filter(|s| matches!(s, Step::Lanes(l, _) if l.iter().all(Option::is_some)))
+                .count();
+            assert_eq!(lanes, w.joints.len() / 4, "four humans, one group");
+            let mut ours = w.bones.clone();
+            lockstep.solve(&entries, &mut ours, h);
+            let mut theirs = w.bones.clone();
+            for &(j, a, b) in &entries {
+                j.solve_between(&mut theirs, a, b, h);
+            }
+            let moved = motion(&w.bones);
+            // Within rounding, carried along each figure's chain of corrections: a
+            // millionth of a bone's change (the knocks are up to 0.7 of it).
+            for (i, ((d, q), (e, r))) in motion(&ours).iter().zip(motion(&theirs)).enumerate() {
+                let change = (r - moved[i].1).length() + e.distance(moved[i].0);
+                let off = (*q - r).length() + d.distance(e);
+                assert!(
+                    off < 1e-5 * (change + 0.1),
+                    "bone {i}: {d} {q} against {e} {r}"
+                );
+                if w.bones[i].asleep {
+                    assert_eq!((*d, *q), moved[i], "a sleeping bone moved");
+                }
+            }
+            assert!(motion(&ours) != moved, "the joints corrected nothing");
+        }
+    }
+
+    /// A figure's corrections are the same bits in a group of four as alone in its
+    /// group: what lets the batches of islands, which group figures differently, give
+    /// the serial result.
+    #[test]
+    fn a_figure_gets_the_same_bits_in_any_group() {
+        let h = 1.0 / 1200.0;
+        let w = knocked_pile(5, 0x0bad_cafe);
+        let set = JointSet::All(&w.joints);
+        let entries = set.entries();
+        let mut together = w.bones.clone();
+        Lockstep::new(&entries, &w.bones).solve(&entries, &mut together, h);
+        // Each figure alone: its joints only, a lockstep of one lane.
+        let mut alone = w.bones.clone();
+        let per_figure = entries.len() / 5;
+        for figure in entries.chunks(per_figure) {
+            Lockstep::new(figure, &alone).solve(figure, &mut alone, h);
+        }
+        assert!(motion(&together) == motion(&alone));
+    }
+}
