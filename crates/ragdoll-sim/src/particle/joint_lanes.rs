@@ -18,10 +18,11 @@
 //! with their own (SIMD) rounding.
 
 use super::bone::{Bone, Side};
+use super::bone_lanes::{SideLanes, angular, mask, per_lane, positional};
 use super::joints::{Joint, JointType};
 use super::limits::{Swing, perpendicular};
 use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use wide::f32x4;
 
 /// A joint of a run: the joint and its two sides in the bones being stepped.
@@ -152,127 +153,6 @@ impl Lockstep {
     }
 }
 
-/// Each lane's bone on one side of its joint (the world, and an empty lane, as a bone
-/// that never moves): what the corrections read and write of it.
-struct SideLanes {
-    com: Vec3x4,
-    dcom: Vec3x4,
-    rot: Quatx4,
-    inv_mass: f32x4,
-    inv_inertia: Vec3x4,
-    /// Lanes whose bone takes corrections.
-    moving: f32x4,
-}
-
-impl SideLanes {
-    fn gather(bones: &[Bone], sides: &[Side; LANES]) -> SideLanes {
-        let bone = |k: usize| sides[k].map(|i| &bones[i]).filter(|b| !b.is_static());
-        let fixed = |k: usize| sides[k].map(|i| &bones[i]);
-        SideLanes {
-            com: Vec3x4::from_fn(|k| fixed(k).map_or(Vec3::ZERO, |b| Vec3::from(b.com))),
-            dcom: Vec3x4::from_fn(|k| fixed(k).map_or(Vec3::ZERO, |b| Vec3::from(b.dcom))),
-            rot: Quatx4::from_fn(|k| fixed(k).map_or(Quat::IDENTITY, |b| b.rot)),
-            inv_mass: f4(|k| bone(k).map_or(0.0, |b| 1.0 / b.mass)),
-            inv_inertia: Vec3x4::from_fn(|k| {
-                bone(k).map_or(Vec3::ZERO, |b| Vec3::from(b.inv_inertia_local))
-            }),
-            moving: f4(|k| {
-                if bone(k).is_some() {
-                    f32::from_bits(u32::MAX)
-                } else {
-                    0.0
-                }
-            }),
-        }
-    }
-
-    fn scatter(&self, bones: &mut [Bone], sides: &[Side; LANES]) {
-        let moving = self.moving.to_bitmask();
-        for (k, s) in sides.iter().enumerate() {
-            if let Some(i) = *s
-                && moving & (1 << k) != 0
-            {
-                let b = &mut bones[i];
-                b.dcom = self.dcom.lane(k).into();
-                b.rot = self.rot.lane(k);
-            }
-        }
-    }
-
-    /// World position of a point given in the bone frame, `com + (dcom + R p)`.
-    fn world(&self, local: Vec3x4) -> Vec3x4 {
-        self.com + (self.dcom + self.rot.rotate(local))
-    }
-
-    fn center(&self) -> Vec3x4 {
-        self.com + self.dcom
-    }
-
-    /// The lever of a correction along `axis`-producing direction: `I⁻¹ (R⁻¹ axis)` in
-    /// the bone frame and the generalised inverse mass `linear + local · turn`
-    /// (`bone::Lever::of`); zero for a bone that takes no correction.
-    fn lever(&self, axis: Vec3x4, linear: f32x4) -> (Vec3x4, f32x4) {
-        let local = self.rot.inverse_rotate(axis);
-        let turn = self.inv_inertia.mul_elem(local);
-        (turn, linear + local.dot(turn))
-    }
-
-    /// Turns the lanes in `mask` by `turn` (bone frame) and moves them by `shift`
-    /// (world): `bone::Lever::apply`.
-    fn apply(&mut self, mask: f32x4, shift: Option<Vec3x4>, turn: Vec3x4) {
-        let mask = mask & self.moving;
-        if let Some(shift) = shift {
-            self.dcom = Vec3x4::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
-        }
-        self.rot = Quatx4::select(mask, self.rot.rotate_local(turn), self.rot);
-    }
-}
-
-/// `bone::positional` in lanes: moves `pa` of `a` and `pb` of `b` so that `pa − pb`
-/// changes by `delta`, `α̃ = 0`, in the lanes of `mask`.
-fn positional(
-    (a, pa): (&mut SideLanes, Vec3x4),
-    (b, pb): (&mut SideLanes, Vec3x4),
-    delta: Vec3x4,
-    mask: f32x4,
-) {
-    let c2 = delta.length_squared();
-    let (ta, wa) = a.lever((pa - a.center()).cross(delta), a.inv_mass * c2);
-    let (tb, wb) = b.lever((pb - b.center()).cross(delta), b.inv_mass * c2);
-    let den = wa + wb;
-    let mask = mask & c2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
-    let mu = c2 / den;
-    a.apply(mask, Some(delta * mu), ta * mu);
-    b.apply(mask, Some(-(delta * mu)), tb * -mu);
-}
-
-/// `bone::angular` in lanes: turns `a` relative to `b` by `dphi`, compliance `α̃`, in
-/// the lanes of `mask`.
-fn angular(a: &mut SideLanes, b: &mut SideLanes, dphi: Vec3x4, alpha: f32x4, mask: f32x4) {
-    let angle2 = dphi.length_squared();
-    let (ta, wa) = a.lever(dphi, f32x4::ZERO);
-    let (tb, wb) = b.lever(dphi, f32x4::ZERO);
-    let den = wa + wb + alpha * angle2;
-    let mask = mask & angle2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
-    let mu = angle2 / den;
-    a.apply(mask, None, ta * mu);
-    b.apply(mask, None, tb * -mu);
-}
-
-/// `f` of each lane of `x` set in `mask`, else 0: the scalar functions of the few lanes
-/// near a limit.
-fn per_lane(mask: f32x4, x: f32x4, f: impl Fn(usize, f32) -> f32) -> f32x4 {
-    let bits = mask.to_bitmask();
-    let x = x.to_array();
-    f4(|k| {
-        if bits & (1 << k) != 0 {
-            f(k, x[k])
-        } else {
-            0.0
-        }
-    })
-}
-
 /// An angle range of a group's joints (`limits::AngleLimit`), in lanes.
 struct RangeLanes {
     axis_a: Vec3x4,
@@ -356,13 +236,7 @@ impl Constants {
             }
         });
         Constants {
-            active: f4(|k| {
-                if lanes[k].is_some() {
-                    f32::from_bits(u32::MAX)
-                } else {
-                    0.0
-                }
-            }),
+            active: mask(|k| lanes[k].is_some()),
             anchor_a: v3(&|j| j.anchor_a),
             anchor_b: v3(&|j| j.anchor_b),
             hinge,
@@ -472,6 +346,7 @@ mod tests {
     use super::super::{ParticleSolver, ParticleWorld, uniform};
     use super::*;
     use crate::scene::af::{AfOptions, load};
+    use glam::Quat;
 
     /// The pile of `count` humans (scene 10) with every bone knocked off its rest pose
     /// (turned by up to 0.6 rad, moved by up to 2 cm) so that anchors, hinge axes,

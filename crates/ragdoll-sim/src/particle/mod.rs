@@ -14,6 +14,7 @@
 //! cores), `measure` (the metrics).
 
 mod bone;
+mod bone_lanes;
 mod contacts;
 mod friction;
 mod improved;

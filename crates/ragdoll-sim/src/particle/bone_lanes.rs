@@ -1,0 +1,202 @@
+//! Bones in SIMD lanes: four constraints' bones on one side, one to a lane, and the
+//! XPBD corrections of `bone.rs` (`Lever`, `Correction`, `positional`, `angular`) four
+//! at a time. The joint pass (`joint_lanes`) solves four figures' joints side by side
+//! with these.
+//!
+//! Every operation is lane by lane (`crate::lanes`), so a constraint's correction is the
+//! same bits whichever constraints share its instruction: the batches of islands, which
+//! group constraints differently, give the serial result on any number of threads.
+
+use super::bone::{Bone, Side};
+use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
+use glam::{Quat, Vec3};
+use wide::f32x4;
+
+/// A lane mask with every lane where `f(k)` holds.
+pub(super) fn mask(f: impl Fn(usize) -> bool) -> f32x4 {
+    f4(|k| if f(k) { f32::from_bits(u32::MAX) } else { 0.0 })
+}
+
+/// `f` of each lane of `x` set in `mask`, else 0: the scalar functions (`acos`, `atan2`,
+/// `asin`) of the few lanes near a limit.
+pub(super) fn per_lane(mask: f32x4, x: f32x4, f: impl Fn(usize, f32) -> f32) -> f32x4 {
+    let bits = mask.to_bitmask();
+    let x = x.to_array();
+    f4(|k| {
+        if bits & (1 << k) != 0 {
+            f(k, x[k])
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Each lane's bone on one side of its constraint (the world, and an empty lane, as a
+/// bone that never moves): what the corrections read and write of it.
+pub(super) struct SideLanes {
+    com: Vec3x4,
+    dcom: Vec3x4,
+    /// The frame now.
+    pub rot: Quatx4,
+    inv_mass: f32x4,
+    inv_inertia: Vec3x4,
+    /// Lanes whose bone takes corrections.
+    moving: f32x4,
+}
+
+impl SideLanes {
+    /// The bones `sides` (the world for `None`), one per lane.
+    pub fn gather(bones: &[Bone], sides: &[Side; LANES]) -> SideLanes {
+        let mut com = [Vec3::ZERO; LANES];
+        let mut dcom = [Vec3::ZERO; LANES];
+        let mut rot = [Quat::IDENTITY; LANES];
+        let mut inv_mass = [0.0; LANES];
+        let mut inv_inertia = [Vec3::ZERO; LANES];
+        let mut moving = [false; LANES];
+        for (k, s) in sides.iter().enumerate() {
+            let Some(i) = *s else { continue };
+            let b = &bones[i];
+            (com[k], dcom[k]) = (b.com.into(), b.dcom.into());
+            rot[k] = b.rot;
+            if !b.is_static() {
+                inv_mass[k] = 1.0 / b.mass;
+                inv_inertia[k] = b.inv_inertia_local.into();
+                moving[k] = true;
+            }
+        }
+        SideLanes {
+            com: Vec3x4::from_fn(|k| com[k]),
+            dcom: Vec3x4::from_fn(|k| dcom[k]),
+            rot: Quatx4::from_fn(|k| rot[k]),
+            inv_mass: f32x4::new(inv_mass),
+            inv_inertia: Vec3x4::from_fn(|k| inv_inertia[k]),
+            moving: mask(|k| moving[k]),
+        }
+    }
+
+    /// Writes the moving lanes' frames back to their bones.
+    pub fn scatter(&self, bones: &mut [Bone], sides: &[Side; LANES]) {
+        let moving = self.moving.to_bitmask();
+        for (k, s) in sides.iter().enumerate() {
+            if let Some(i) = *s
+                && moving & (1 << k) != 0
+            {
+                let b = &mut bones[i];
+                b.dcom = self.dcom.lane(k).into();
+                b.rot = self.rot.lane(k);
+            }
+        }
+    }
+
+    /// World position of a point given in the bone frame, `com + (dcom + R p)`.
+    pub fn world(&self, local: Vec3x4) -> Vec3x4 {
+        self.com + (self.dcom + self.rot.rotate(local))
+    }
+
+    fn center(&self) -> Vec3x4 {
+        self.com + self.dcom
+    }
+
+    /// The lever of a correction whose angular part is `axis` (`(p − c) × n`, or `n`
+    /// for a pure turn): `I⁻¹ (R⁻¹ axis)` in the bone frame and the generalised inverse
+    /// mass `linear + local · turn` (`bone::Lever::of`); zero for a bone that takes no
+    /// correction.
+    fn lever(&self, axis: Vec3x4, linear: f32x4) -> (Vec3x4, f32x4) {
+        let local = self.rot.inverse_rotate(axis);
+        let turn = self.inv_inertia.mul_elem(local);
+        (turn, linear + local.dot(turn))
+    }
+
+    /// Turns the lanes in `mask` by `turn` (bone frame) and moves them by `shift`
+    /// times the inverse mass (world): `bone::Lever::apply`.
+    #[inline]
+    fn apply(&mut self, mask: f32x4, shift: Option<Vec3x4>, turn: Vec3x4) {
+        let mask = mask & self.moving;
+        if let Some(shift) = shift {
+            self.dcom = Vec3x4::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
+        }
+        self.rot = Quatx4::select(mask, self.rot.rotate_local(turn), self.rot);
+    }
+}
+
+/// `bone::Correction` in lanes: a correction between two sides along a direction, its
+/// levers computed once.
+#[derive(Clone, Copy)]
+pub(super) struct Correction {
+    ta: Vec3x4,
+    tb: Vec3x4,
+    /// The direction points move along (`None` for a pure turn).
+    n: Option<Vec3x4>,
+    /// Generalised inverse mass along it.
+    pub w: f32x4,
+}
+
+impl Correction {
+    /// `Correction::along_scaled`: moving `pa` of `a` along `d` (squared length `d2`)
+    /// and `pb` of `b` against it.
+    pub fn along_scaled(
+        (a, pa): (&SideLanes, Vec3x4),
+        (b, pb): (&SideLanes, Vec3x4),
+        d: Vec3x4,
+        d2: f32x4,
+    ) -> Correction {
+        let (ta, wa) = a.lever((pa - a.center()).cross(d), a.inv_mass * d2);
+        let (tb, wb) = b.lever((pb - b.center()).cross(d), b.inv_mass * d2);
+        Correction {
+            ta,
+            tb,
+            n: Some(d),
+            w: wa + wb,
+        }
+    }
+
+    /// `Correction::turning`: turning `a` about `n` and `b` against it.
+    pub fn turning(a: &SideLanes, b: &SideLanes, n: Vec3x4) -> Correction {
+        let (ta, wa) = a.lever(n, f32x4::ZERO);
+        let (tb, wb) = b.lever(n, f32x4::ZERO);
+        Correction {
+            ta,
+            tb,
+            n: None,
+            w: wa + wb,
+        }
+    }
+
+    /// Applies the multiplier `λ` in the lanes of `mask`: `pa − pb` changes by `n λ w`.
+    #[inline]
+    pub fn apply(&self, a: &mut SideLanes, b: &mut SideLanes, lambda: f32x4, mask: f32x4) {
+        let shift = self.n.map(|n| n * lambda);
+        a.apply(mask, shift, self.ta * lambda);
+        b.apply(mask, shift.map(|s| -s), self.tb * -lambda);
+    }
+}
+
+/// `bone::positional` with `α̃ = 0` in lanes: moves `pa` of `a` and `pb` of `b` so that
+/// `pa − pb` changes by `delta`, in the lanes of `mask`.
+pub(super) fn positional(
+    (a, pa): (&mut SideLanes, Vec3x4),
+    (b, pb): (&mut SideLanes, Vec3x4),
+    delta: Vec3x4,
+    mask: f32x4,
+) {
+    let c2 = delta.length_squared();
+    let corr = Correction::along_scaled((a, pa), (b, pb), delta, c2);
+    let mask = mask & c2.simd_ge(f32x4::splat(1e-18)) & corr.w.simd_gt(f32x4::ZERO);
+    corr.apply(a, b, c2 / corr.w, mask);
+}
+
+/// `bone::angular` in lanes: turns `a` relative to `b` by `dphi`, compliance `α̃`, in
+/// the lanes of `mask`.
+pub(super) fn angular(
+    a: &mut SideLanes,
+    b: &mut SideLanes,
+    dphi: Vec3x4,
+    alpha: f32x4,
+    mask: f32x4,
+) {
+    let angle2 = dphi.length_squared();
+    let corr = Correction::turning(a, b, dphi);
+    let den = corr.w + alpha * angle2;
+    let mask = mask & angle2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
+    corr.apply(a, b, angle2 / den, mask);
+}
