@@ -280,21 +280,6 @@ impl<'a> ManifoldSolve<'a> {
     }
 }
 
-/// The bone's velocity from its particles' velocities `v_k` over the substep:
-/// `v = Σ m v_k / M` and `ω = I⁻¹ Σ m r_k × v_k` (angular momentum over inertia).
-///
-/// `arms` are the particles relative to the frame origin, `R rest_k`.
-fn velocity_from_particles(b: &mut Bone, arms: &[Vec3A; 4], vk: &[Vec3A; 4]) {
-    let vc = (vk[0] + vk[1] + vk[2] + vk[3]) * 0.25;
-    let m = b.mass * 0.25;
-    let mut l = Vec3A::ZERO;
-    for (arm, v) in arms.iter().zip(vk) {
-        l += arm.cross(*v - vc) * m;
-    }
-    b.lin_vel = vc;
-    b.ang_vel = b.inv_inertia_mul(l);
-}
-
 /// Collision detection runs this many times per frame (every few substeps): a limb
 /// that turns within a frame brings a corner the frame-start manifold did not have.
 const DETECTIONS_PER_FRAME: u32 = 4;
@@ -399,12 +384,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 b.ang_vel = Vec3A::ZERO;
                 continue;
             }
-            // `Bone::displacement` of each particle, its arm kept for the momentum.
-            let arms: [Vec3A; 4] = std::array::from_fn(|k| b.rot * Vec3A::from(b.rest[k]));
-            let vk: [Vec3A; 4] = std::array::from_fn(|k| {
-                (b.dcom + (arms[k] - b.prev_rot * Vec3A::from(b.rest[k]))) / h
-            });
-            velocity_from_particles(b, &arms, &vk);
+            (b.lin_vel, b.ang_vel) = b.substep_velocity(h);
             b.com += b.dcom;
             b.dcom = Vec3A::ZERO;
         }
