@@ -101,15 +101,18 @@ impl Lockstep {
         let mut constants = Vec::with_capacity(entries.len() / LANES + runs.len());
         let mut r = 0;
         while r < runs.len() {
-            let mut group = vec![runs[r]];
-            while r + group.len() < runs.len() && group.len() < LANES {
-                let next = runs[r + group.len()];
+            // Up to four runs from `r` on: `runs[r..r + count]`.
+            let mut count = 1;
+            while r + count < runs.len() && count < LANES {
+                let next = runs[r + count];
                 let f = figure(&entries[next.0]);
-                if !same(runs[r], next) || group.iter().any(|g| figure(&entries[g.0]) == f) {
+                let taken = &runs[r..r + count];
+                if !same(runs[r], next) || taken.iter().any(|g| figure(&entries[g.0]) == f) {
                     break;
                 }
-                group.push(next);
+                count += 1;
             }
+            let group = &runs[r..r + count];
             let len = runs[r].1 - runs[r].0;
             for k in 0..len {
                 let lanes: [Option<u32>; LANES] =
@@ -123,7 +126,7 @@ impl Lockstep {
                     ));
                 }
             }
-            r += group.len();
+            r += count;
         }
         Lockstep { steps, constants }
     }
