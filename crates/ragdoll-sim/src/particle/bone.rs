@@ -636,15 +636,8 @@ mod tests {
     /// random axes in a substep from random frames.
     #[test]
     fn substep_velocity_is_the_particles_momentum() {
-        use super::super::{ParticleSolver, ParticleWorld, uniform};
-        use crate::scene::af::{AfOptions, load};
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/human.af");
-        let scene = load(&path, &AfOptions::default())
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
-        let w =
-            ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"));
+        use super::super::{scene_world, uniform};
+        let w = scene_world("human.af", None);
         let mut next = uniform(0x5eed_1234);
         let h = 1.0 / 1200.0;
         for case in 0..800 {

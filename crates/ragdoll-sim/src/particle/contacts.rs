@@ -405,21 +405,13 @@ mod tests {
     /// margins up to 5 cm.
     #[test]
     fn ground_test_keeps_every_bone_that_touches() {
-        use super::super::{ParticleSolver, ParticleWorld, uniform};
-        use crate::scene::af::{AfOptions, load};
+        use super::super::{scene_world, uniform};
         use glam::Quat;
         for (file, seed) in [
             ("human.af", 0x2545_f491_u32),
             ("capsule-human.af", 0x9e37_79b9),
         ] {
-            let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../assets/scenes")
-                .join(file);
-            let scene = load(&path, &AfOptions::default())
-                .unwrap_or_else(|e| panic!("{e}"))
-                .desc;
-            let mut w = ParticleWorld::new(&scene, ParticleSolver::Improved)
-                .unwrap_or_else(|e| panic!("{e}"));
+            let mut w = scene_world(file, None);
             let mut next = uniform(seed);
             let (mut touching, mut ruled_out) = (0, 0);
             for case in 0..3000 {

@@ -346,24 +346,15 @@ impl Constants {
 #[cfg(test)]
 mod tests {
     use super::super::joints::JointSet;
-    use super::super::{ParticleSolver, ParticleWorld, uniform};
+    use super::super::{ParticleWorld, scene_world, uniform};
     use super::*;
-    use crate::scene::af::{AfOptions, load};
     use glam::Quat;
 
     /// The pile of `count` humans (scene 10) with every bone knocked off its rest pose
     /// (turned by up to 0.6 rad, moved by up to 2 cm) so that anchors, hinge axes,
     /// cones and ranges all correct something; every fifth bone asleep.
     fn knocked_pile(count: u32, seed: u32) -> ParticleWorld {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/pile.af");
-        let opts = AfOptions {
-            count: Some(count),
-            ..AfOptions::default()
-        };
-        let scene = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
-        let mut w =
-            ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"));
+        let mut w = scene_world("pile.af", Some(count));
         let mut next = uniform(seed);
         for (i, b) in w.bones.iter_mut().enumerate() {
             let turn = Vec3::new(next(), next(), next()) * 1.2 - Vec3::splat(0.6);

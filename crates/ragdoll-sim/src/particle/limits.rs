@@ -289,8 +289,7 @@ impl SwingLimit {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ParticleSolver, ParticleWorld, uniform};
-    use crate::scene::af::{AfOptions, load};
+    use super::super::{scene_world, uniform};
     use glam::{Quat, Vec3};
 
     /// `AngleLimit::angle`'s `J` is the twist angle's gradient: turning body1 by a small
@@ -299,13 +298,7 @@ mod tests {
     /// 30°, where `J` is far from the axis.
     #[test]
     fn twist_gradient_matches_finite_differences() {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/capsule-human.af");
-        let scene = load(&path, &AfOptions::default())
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
-        let mut w =
-            ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"));
+        let mut w = scene_world("capsule-human.af", None);
         let joint = w
             .joints
             .iter()

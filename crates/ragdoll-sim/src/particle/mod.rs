@@ -316,6 +316,23 @@ fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
     contacts::broad_phase(bones, margin, &Filter::default(), out);
 }
 
+/// The improved world of a shipped scene, `assets/scenes/{file}`, with `count` figures
+/// where the scene takes a count (the pile): the worlds of the particle method's unit
+/// tests.
+#[cfg(test)]
+pub(crate) fn scene_world(file: &str, count: Option<u32>) -> ParticleWorld {
+    use crate::scene::af::{AfOptions, load};
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/scenes")
+        .join(file);
+    let opts = AfOptions {
+        count,
+        ..AfOptions::default()
+    };
+    let scene = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
+    ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run
 /// (the random cases of the particle method's unit tests).
 #[cfg(test)]
