@@ -218,7 +218,9 @@ impl Bone {
     /// `ω = R I⁻¹ Rᵀ L = −(M / 2h) R I⁻¹ (w (tr D − D) u + (D u) × u)`: one quaternion
     /// product and one rotation, where the particles' form took ten rotations. (A turn
     /// `θ` over the substep gives `u ≈ −θ_local / 2`, `ω = I⁻¹ (M/4)(tr D − D) θ / h`:
-    /// the particles' own inertia times the turn rate.)
+    /// the turn rate, as the particles' inertia `(M/4)(tr D − D)` is the bone's — except
+    /// for a needle, whose particles keep a floor of volume (`placement`), as the
+    /// particles' form had it too.)
     pub fn substep_velocity(&self, h: f32) -> (Vec3A, Vec3A) {
         let q = self.rot.inverse() * self.prev_rot;
         let (u, w) = (Vec3A::new(q.x, q.y, q.z), q.w);

@@ -264,7 +264,8 @@ impl Constants {
             let large = active & !small;
             let ratio = if large.any() {
                 let exact = per_lane(large, s2, |_, s2| {
-                    let s = s2.sqrt();
+                    // Unit axes 90° apart can round to `s² > 1`, where `asin` is NaN.
+                    let s = s2.min(1.0).sqrt();
                     s.asin() / s
                 });
                 small.select(series, exact)
@@ -428,5 +429,58 @@ mod tests {
             Lockstep::new(figure, &alone).solve(figure, &mut alone, h);
         }
         assert!(motion(&together) == motion(&alone));
+    }
+
+    /// A hinge whose axes are a right angle apart (their cross product rounding to a
+    /// length above one, where `asin` is NaN) is turned back, not poisoned: scalar and
+    /// lanes stay finite and agree (the review of 2026-11-25 found NaN frames there).
+    #[test]
+    fn hinge_at_a_right_angle_stays_finite() {
+        let h = 1.0 / 1200.0;
+        let mut w = scene_world("human.af", None);
+        let (k, axis_a, axis_b) = w
+            .joints
+            .iter()
+            .enumerate()
+            .find_map(|(k, j)| match j.kind {
+                JointType::Hinge { axis_a, axis_b } => Some((k, axis_a, axis_b)),
+                _ => None,
+            })
+            .expect("the human has hinges");
+        let (a, b) = (
+            w.joints[k].a.expect("a bone"),
+            w.joints[k].b.expect("a bone"),
+        );
+        let mut next = uniform(0x0dd_ba11);
+        let mut over = 0;
+        for _ in 0..3000 {
+            let turn = Vec3::new(next(), next(), next()) * 6.0 - Vec3::splat(3.0);
+            w.bones[b].rot = Quat::from_scaled_axis(turn).normalize();
+            let tb = w.bones[b].rot * axis_b;
+            let p = tb.any_orthonormal_pair();
+            let angle = next() * std::f32::consts::TAU;
+            let target = p.0 * angle.cos() + p.1 * angle.sin();
+            let ta = w.bones[a].rot * axis_a;
+            w.bones[a].rot = (Quat::from_rotation_arc(ta, target) * w.bones[a].rot).normalize();
+            // As the scalar hinge measures it.
+            let ta = w.bones[a].rot * glam::Vec3A::from(axis_a);
+            let c = ta.cross(w.bones[b].rot * glam::Vec3A::from(axis_b));
+            over += usize::from(c.length_squared() > 1.0);
+            let entries = [(&w.joints[k], Some(a), Some(b))];
+            let mut scalar = w.bones.clone();
+            w.joints[k].solve_between(&mut scalar, Some(a), Some(b), h);
+            let mut lanes = w.bones.clone();
+            Lockstep::new(&entries, &w.bones).solve(&entries, &mut lanes, h);
+            for i in [a, b] {
+                assert!(
+                    scalar[i].rot.is_finite() && lanes[i].rot.is_finite(),
+                    "NaN frame"
+                );
+                // `asin` is steep at one: a rounding of `s` moves the turn by up to
+                // 1e-7 / √(1 − s²), about 3e-4 of it here.
+                assert!((scalar[i].rot - lanes[i].rot).length() < 1e-3);
+            }
+        }
+        assert!(over > 0, "no pose rounded past a right angle");
     }
 }

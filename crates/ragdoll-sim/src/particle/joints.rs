@@ -309,7 +309,8 @@ impl Joint {
                     let ratio = if s2 < 1e-4 {
                         1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0))
                     } else {
-                        let s = s2.sqrt();
+                        // Unit axes 90° apart can round to `s² > 1`, where `asin` is NaN.
+                        let s = s2.min(1.0).sqrt();
                         s.asin() / s
                     };
                     angular(bones, a, b, c * ratio, 0.0);
