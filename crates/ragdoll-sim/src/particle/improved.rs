@@ -1,16 +1,18 @@
 //! The improved solver loop: substepped XPBD over particulated, rigidly projected bones
 //! (Macklin et al. 2019, "Small steps in physics simulation"; Müller et al. 2020).
 //!
-//! Per frame: one collision detection with a speculative margin. Per substep `h`
-//! ([`substeps`]: the scene's substeps × iterations):
+//! Per frame: collision detection with a speculative margin, [`DETECTIONS_PER_FRAME`]
+//! times. Per substep `h` ([`substeps`]: the scene's substeps × iterations):
 //! 1. integrate every particle (`v += g h`, `x += v h`: Verlet in velocity form);
 //! 2. shape-match each bone to the rigid frame that best fits its particles — the
 //!    six sticks held exactly, with linear and angular momentum kept (steps 1–2 in
 //!    closed form, [`Bone::advance`], which keeps them to second order in `h |ω|`);
-//! 3. one Gauss–Seidel pass over contacts, joints and limits, each a rigid correction
-//!    of the bone frames weighted by generalised inverse mass (contacts first, so a
-//!    joint is what holds last);
-//! 4. derive the velocities from the particles' displacements, `v = (x − x_prev)/h`;
+//! 3. [`PASSES`] Gauss–Seidel passes over contacts, joints and limits, each a rigid
+//!    correction of the bone frames weighted by generalised inverse mass (contacts
+//!    first, so a joint is what holds last; the joints of four figures side by side in
+//!    SIMD lanes, `joint_lanes`);
+//! 4. derive the velocities from the particles' displacements, `v = (x − x_prev)/h`
+//!    (their momentum, in closed form: [`Bone::substep_velocity`]);
 //! 5. the velocity pass: restitution, air friction.
 //!
 //! Energy: every step is a projection or a dissipative velocity change; the only source
