@@ -24,7 +24,7 @@ use super::contacts::{
     point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{point_velocity, solve_friction, solve_normal, solve_velocity};
-use super::joint_lanes::Lockstep;
+use super::joint_lanes::{Entry, Lockstep};
 use super::joints::JointSet;
 use super::{ParticleWorld, islands, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
@@ -328,15 +328,16 @@ pub(super) struct Part<'a> {
     /// Contact manifolds as detected, and their points (`Manifold::range`).
     pub manifolds: &'a [Manifold],
     pub points: &'a mut [ContactPoint],
-    pub joints: JointSet<'a>,
+    /// Its joints in the world's order, with their sides in `bones`
+    /// ([`JointSet::entries`]), and the joint pass over them.
+    pub joints: &'a [Entry<'a>],
+    pub lockstep: &'a Lockstep,
     /// The mouse grab; it acts only where its bone is (see `grab_improved`).
     pub grab: Option<Grab>,
 }
 
 /// Runs `count` substeps of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
-    let joints = p.joints.entries();
-    let lockstep = Lockstep::new(&joints, p.bones);
     for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
@@ -374,7 +375,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
             contact_pass(p.bones, p.manifolds, p.points);
-            lockstep.solve(&joints, p.bones, h);
+            p.lockstep.solve(p.joints, p.bones, h);
             if let Some(g) = p.grab {
                 super::grab_improved(p.bones, g, h);
             }
@@ -431,6 +432,10 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     // The broad phase's trees and candidate pairs, from the first detection's boxes
     // loosened by `DETECTION_FAT`, for all of the frame's detections.
     let mut tree = Reused::fattened(DETECTION_FAT);
+    // The joint passes of the frame's last detection chunk, kept for the next one: the
+    // world's, or each batch's by its joints (its islands seldom change within a frame,
+    // and building a pass for 15 000 joints is about 1 ms).
+    let (mut whole, mut kept) = (None, Vec::new());
     let mut sub = 0;
     while sub < n_sub {
         let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
@@ -443,13 +448,16 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         }
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
-            Some(plan) => islands::run_substeps(w, &plan, count, h, &s),
+            Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept),
             None => {
+                let joints = JointSet::All(&w.joints).entries();
+                let lockstep = whole.get_or_insert_with(|| Lockstep::new(&joints, &w.bones));
                 let mut part = Part {
                     bones: &mut w.bones,
                     manifolds: &w.contacts.manifolds,
                     points: &mut w.contacts.points,
-                    joints: JointSet::All(&w.joints),
+                    joints: &joints,
+                    lockstep,
                     grab: w.grab,
                 };
                 run_substeps(&mut part, count, h, &s);

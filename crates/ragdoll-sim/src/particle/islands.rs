@@ -17,6 +17,7 @@ use super::ParticleWorld;
 use super::bone::{Bone, Side};
 use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
 use super::improved::{self, Part};
+use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
 use crate::scene::Settings;
 use glam::Vec3A;
@@ -315,8 +316,22 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[Batch]) {
         });
 }
 
+/// A batch's joints (world index, sides in the batch) and the joint pass over them,
+/// kept from one detection chunk of a frame to the next.
+pub(super) type KeptPass = (Vec<(u32, Side, Side)>, Lockstep);
+
 /// Runs `count` substeps of length `h`, each of the plan's batches on its own rayon task.
-pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f32, s: &Settings) {
+/// `kept` holds the batches' joint passes of the frame's last chunk: a batch with the
+/// same joints as the one at its place there reuses its pass (the same joints give the
+/// same pass), and `kept` is left holding this chunk's.
+pub(super) fn run_substeps(
+    w: &mut ParticleWorld,
+    plan: &Plan,
+    count: u32,
+    h: f32,
+    s: &Settings,
+    kept: &mut Vec<KeptPass>,
+) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
     // bones no constraint reads.
@@ -327,21 +342,42 @@ pub(super) fn run_substeps(w: &mut ParticleWorld, plan: &Plan, count: u32, h: f3
         b.ang_vel = Vec3A::ZERO;
     }
     let world = &*w;
-    let stepped: Vec<Batch> = plan
+    let mut previous: Vec<Option<KeptPass>> = std::mem::take(kept).into_iter().map(Some).collect();
+    let (stepped, built): (Vec<Batch>, Vec<Option<Lockstep>>) = plan
         .batches
         .par_iter()
-        .map(|m| {
+        .enumerate()
+        .map(|(i, m)| {
             let mut batch = Batch::gather(m, &plan.local, world);
+            let joints = JointSet::Batch(&world.joints, &batch.joints).entries();
+            let reused = previous[..]
+                .get(i)
+                .and_then(Option::as_ref)
+                .filter(|(j, _)| *j == batch.joints)
+                .map(|(_, l)| l);
+            let built = reused
+                .is_none()
+                .then(|| Lockstep::new(&joints, &batch.bones));
             let mut part = Part {
                 bones: &mut batch.bones,
                 manifolds: &batch.manifolds,
                 points: &mut batch.points,
-                joints: JointSet::Batch(&world.joints, &batch.joints),
+                joints: &joints,
+                lockstep: reused.or(built.as_ref()).expect("a pass, kept or built"),
                 grab: world.grab,
             };
             improved::run_substeps(&mut part, count, h, s);
-            batch
+            (batch, built)
+        })
+        .unzip();
+    scatter(w, plan, &stepped);
+    *kept = stepped
+        .into_iter()
+        .zip(built)
+        .enumerate()
+        .map(|(i, (batch, built))| match built {
+            Some(lockstep) => (batch.joints, lockstep),
+            None => previous[i].take().expect("a kept pass was reused"),
         })
         .collect();
-    scatter(w, plan, &stepped);
 }
