@@ -350,7 +350,7 @@ pub(super) fn run_substeps(
         .map(|(i, m)| {
             let mut batch = Batch::gather(m, &plan.local, world);
             let joints = JointSet::Batch(&world.joints, &batch.joints).entries();
-            let reused = previous[..]
+            let reused = previous
                 .get(i)
                 .and_then(Option::as_ref)
                 .filter(|(j, _)| *j == batch.joints)

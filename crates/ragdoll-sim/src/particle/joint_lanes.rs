@@ -19,7 +19,7 @@
 
 use super::bone::{Bone, Side};
 use super::bone_lanes::{SideLanes, angular, mask, per_lane, positional};
-use super::joints::{Joint, JointType};
+use super::joints::{HINGE_SERIES_BELOW, Joint, JointType, hinge_turn_ratio};
 use super::limits::{Swing, perpendicular};
 use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
 use glam::Vec3;
@@ -75,6 +75,8 @@ enum Step {
 /// the substeps between two collision detections, used by every pass.
 pub(crate) struct Lockstep {
     steps: Vec<Step>,
+    /// How many entries it was built for (`solve` takes the same ones).
+    entries: usize,
     constants: Vec<Constants>,
 }
 
@@ -128,11 +130,17 @@ impl Lockstep {
             }
             r += count;
         }
-        Lockstep { steps, constants }
+        Lockstep {
+            steps,
+            constants,
+            entries: entries.len(),
+        }
     }
 
-    /// One pass over the joints, `h` the substep.
+    /// One pass over the joints, `h` the substep; `entries` are the ones it was built
+    /// from.
     pub fn solve(&self, entries: &[Entry], bones: &mut [Bone], h: f32) {
+        debug_assert_eq!(entries.len(), self.entries, "a pass over other joints");
         for step in &self.steps {
             match step {
                 Step::Scalar(i) => {
@@ -254,20 +262,16 @@ impl Constants {
     fn solve(&self, a: &mut SideLanes, b: &mut SideLanes, h: f32) {
         let active = self.active;
         if let Some((axis_a, axis_b)) = self.hinge {
-            // `c asin(s) / s` about the misalignment `c`, `s = |c|`, by its series for a
-            // small `s` (see `Joint::solve_between`).
+            // `c asin(s) / s` about the misalignment `c`, `s = |c|`: `hinge_turn_ratio`,
+            // its series in lanes.
             let c = a.rot.rotate(axis_a).cross(b.rot.rotate(axis_b));
             let s2 = c.length_squared();
-            let small = s2.simd_lt(f32x4::splat(1e-4));
+            let small = s2.simd_lt(f32x4::splat(HINGE_SERIES_BELOW));
             let series =
                 f32x4::ONE + s2 * (f32x4::splat(1.0 / 6.0) + s2 * f32x4::splat(3.0 / 40.0));
             let large = active & !small;
             let ratio = if large.any() {
-                let exact = per_lane(large, s2, |_, s2| {
-                    // Unit axes 90° apart can round to `s² > 1`, where `asin` is NaN.
-                    let s = s2.min(1.0).sqrt();
-                    s.asin() / s
-                });
+                let exact = per_lane(large, s2, |_, s2| hinge_turn_ratio(s2));
                 small.select(series, exact)
             } else {
                 series

@@ -299,21 +299,11 @@ impl Joint {
                 // Align the axes: rotate body1 by the rotation taking its axis onto body2's.
                 let ta = side_rot(bones, a) * Vec3A::from(axis_a);
                 let tb = side_rot(bones, b) * Vec3A::from(axis_b);
-                // The turn is `asin(s)` about `c / s`, `s = |c|`: `c asin(s) / s`, whose
-                // ratio is `1 + s²/6 + 3 s⁴/40 + …` — for the small misalignment a
-                // hinge has at every substep, from `s²` without a square root, `asin`
-                // or division (the next term, `5 s⁶/112`, is below 5e-14 there).
+                // The turn is `asin(s)` about `c / s`, `s = |c|`: `c asin(s) / s`.
                 let c = ta.cross(tb);
                 let s2 = c.length_squared();
                 if s2 > 1e-18 {
-                    let ratio = if s2 < 1e-4 {
-                        1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0))
-                    } else {
-                        // Unit axes 90° apart can round to `s² > 1`, where `asin` is NaN.
-                        let s = s2.min(1.0).sqrt();
-                        s.asin() / s
-                    };
-                    angular(bones, a, b, c * ratio, 0.0);
+                    angular(bones, a, b, c * hinge_turn_ratio(s2), 0.0);
                 }
             }
             JointType::Universal { shaft_a, shaft_b } => {
@@ -382,6 +372,24 @@ impl Joint {
         for l in &self.angle_limits {
             l.solve(bones, a, b, alpha);
         }
+    }
+}
+
+/// Below this `s²` a hinge's [`hinge_turn_ratio`] is its series.
+pub(super) const HINGE_SERIES_BELOW: f32 = 1e-4;
+
+/// `asin(s) / s` from `s²`: the ratio of a hinge's turn to its misalignment `c`, `s =
+/// |c|`. For the small misalignment a hinge has at every substep it is the series `1 +
+/// s²/6 + 3 s⁴/40 + …`, from `s²` without a square root, `asin` or division (the next
+/// term, `5 s⁶/112`, is below 5e-14 there); the lanes (`joint_lanes`) evaluate the same
+/// series four at a time and call this for the rest.
+pub(super) fn hinge_turn_ratio(s2: f32) -> f32 {
+    if s2 < HINGE_SERIES_BELOW {
+        1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0))
+    } else {
+        // Unit axes 90° apart can round to `s² > 1`, where `asin` is NaN.
+        let s = s2.min(1.0).sqrt();
+        s.asin() / s
     }
 }
 
