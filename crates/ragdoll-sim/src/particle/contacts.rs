@@ -288,12 +288,11 @@ pub(crate) fn broad_phase_on(
         })
         .unzip();
     let mut pairs = Vec::new();
-    tree.overlapping_pairs_where(
+    // Pairs of two bones at rest are not looked for (`Reused::moving_pairs_where`).
+    tree.moving_pairs_where(
         &aabbs,
-        |i, j| {
-            let (ki, kj) = (keys[i as usize], keys[j as usize]);
-            !(ki.at_rest && kj.at_rest) && filter.collides((i, ki), (j, kj))
-        },
+        |i| keys[i as usize].at_rest,
+        |i, j| filter.collides((i, keys[i as usize]), (j, keys[j as usize])),
         &mut pairs,
     );
     out.extend(pairs.into_iter().map(|(i, j)| (i as usize, j as usize)));

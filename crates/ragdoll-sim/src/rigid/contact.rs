@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{box_height_above_plane, overlapping_pairs_where, speculative_margin};
+use crate::broadphase::{box_height_above_plane, moving_pairs_where, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::Shape;
 use glam::{Quat, Vec3};
@@ -262,13 +262,14 @@ impl Contacts {
             }
         }
         // Pairs judged as the traversal finds them, not sorted first and filtered after:
-        // most overlaps are a figure's jointed neighbours or between sleeping bodies.
+        // most overlaps are a figure's jointed neighbours. Pairs of two resting bodies
+        // are not looked for at all (`moving_pairs_where`).
         let excluded = &self.excluded;
-        overlapping_pairs_where(
+        moving_pairs_where(
             &self.aabbs,
+            |a| !awake[a as usize],
             |a, b| {
-                (awake[a as usize] || awake[b as usize])
-                    && may_collide(info, a as usize, b as usize)
+                may_collide(info, a as usize, b as usize)
                     && excluded.binary_search(&(a, b)).is_err()
             },
             &mut self.candidates,
