@@ -433,8 +433,8 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     // loosened by `DETECTION_FAT`, for all of the frame's detections.
     let mut tree = Reused::fattened(DETECTION_FAT);
     // The joint passes of the frame's last detection chunk, kept for the next one: the
-    // world's, or each batch's by its joints (its islands seldom change within a frame,
-    // and building a pass for 15 000 joints is about 1 ms).
+    // world's, or each batch's with the batch itself (its islands seldom change within
+    // a frame, and building a pass for 15 000 joints is about 1 ms).
     let (mut whole, mut kept) = (None, Vec::new());
     let mut sub = 0;
     while sub < n_sub {
