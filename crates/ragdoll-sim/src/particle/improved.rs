@@ -472,7 +472,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     sleeping::update(
         &mut w.bones,
         held,
-        &w.joints,
+        &w.links,
         &w.contacts.manifolds,
         &s.sleep,
         dt,

@@ -94,7 +94,7 @@ impl Plan {
         let is_static: Vec<bool> = bones.iter().map(Bone::is_static).collect();
         let moving = |s: Side| s.filter(|&i| !is_static[i]);
         let mut parent: Vec<u32> = (0..n as u32).collect();
-        let links = w.joints.iter().map(|j| (j.a, j.b));
+        let links = w.links.iter().map(|l| l.sides());
         let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a), m.b));
         for (a, b) in links.chain(touching) {
             if let (Some(a), Some(b)) = (moving(a), moving(b)) {
@@ -123,7 +123,14 @@ impl Plan {
             .iter()
             .map(|m| pair_root(Some(m.a), m.b))
             .collect();
-        let joint_root: Vec<u32> = w.joints.iter().map(|j| pair_root(j.a, j.b)).collect();
+        let joint_root: Vec<u32> = w
+            .links
+            .iter()
+            .map(|l| {
+                let (a, b) = l.sides();
+                pair_root(a, b)
+            })
+            .collect();
 
         // Work per island, at its root: per substep a bone, a contact point and a joint
         // cost about the same.
@@ -239,8 +246,8 @@ impl Batch {
             [Some(c.a), c.b]
         });
         let joint_sides = m.joints.iter().flat_map(|&k| {
-            let j = &w.joints[k as usize];
-            [j.a, j.b]
+            let (a, b) = w.links[k as usize].sides();
+            [a, b]
         });
         let mut statics: Vec<u32> = contact_sides
             .chain(joint_sides)
@@ -291,8 +298,8 @@ impl Batch {
             });
         }
         let joints = m.joints.iter().map(|&k| {
-            let j = &w.joints[k as usize];
-            (k, renumber(j.a), renumber(j.b))
+            let (a, b) = w.links[k as usize].sides();
+            (k, renumber(a), renumber(b))
         });
         let same_joints = self.joints.iter().copied().eq(joints.clone());
         if !same_joints {

@@ -40,7 +40,7 @@ use crate::snapshot::{
 use bone::{Bone, EDGES};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
-use joints::{Joint, RestFrames};
+use joints::{Joint, Link, RestFrames};
 use parry3d::query::{ContactManifold, Ray};
 use parry3d::shape::SharedShape;
 use particles::Particles;
@@ -82,6 +82,8 @@ pub struct ParticleWorld {
     frame_starts: Vec<(Vec3, Quat)>,
     bones: Vec<Bone>,
     joints: Vec<Joint>,
+    /// Each joint's sides, packed ([`Link`]).
+    links: Vec<Link>,
     filter: Filter,
     contacts: ContactSet,
     pairs: Vec<(usize, usize)>,
@@ -105,6 +107,7 @@ impl ParticleWorld {
             frame_starts: Vec::new(),
             bones: Vec::new(),
             joints: Vec::new(),
+            links: Vec::new(),
             filter: Filter::default(),
             contacts: ContactSet::default(),
             pairs: Vec::new(),
@@ -147,6 +150,7 @@ impl ParticleWorld {
                 excluded.push((c.body1.index(), b));
             }
         }
+        w.links = w.joints.iter().map(Link::of).collect();
         excluded.extend(w.rest_overlaps());
         w.filter = Filter::new(w.bones.len(), &excluded);
         // Built by pushing, these arrays have up to twice the room they use; they keep

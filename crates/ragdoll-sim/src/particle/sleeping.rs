@@ -13,7 +13,7 @@
 use super::bone::Bone;
 use super::contacts::{BONES_PER_TASK, Manifold};
 use super::islands::{find, union};
-use super::joints::Joint;
+use super::joints::Link;
 use crate::scene::SleepSettings;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -39,7 +39,7 @@ pub(crate) fn advance_at_rest(bones: &mut [Bone], dt: f32) {
 pub(crate) fn update(
     bones: &mut [Bone],
     held: Option<usize>,
-    joints: &[Joint],
+    links: &[Link],
     manifolds: &[Manifold],
     s: &SleepSettings,
     dt: f32,
@@ -80,8 +80,8 @@ pub(crate) fn update(
     // Dense, for the links below, which ask it of bones all over the array.
     let is_dynamic: Vec<bool> = bones.iter().map(|b| !b.fixed).collect();
     let dynamic = |i: usize| is_dynamic[i];
-    for j in joints {
-        if let (Some(a), Some(b)) = (j.a, j.b)
+    for l in links {
+        if let (Some(a), Some(b)) = l.sides()
             && dynamic(a)
             && dynamic(b)
         {
