@@ -167,8 +167,12 @@ fn narrow_phase<T: Sync>(
 /// `(x(t) − x(t−dt))/dt` (`measure`).
 fn record_frame_starts(w: &mut ParticleWorld) {
     w.frame_starts.clear();
-    w.frame_starts
-        .extend(w.bones.iter().map(|b| (Vec3::from(b.com), b.rot)));
+    w.frame_starts.par_extend(
+        w.bones
+            .par_iter()
+            .with_min_len(BONES_PER_TASK)
+            .map(|b| (Vec3::from(b.com), b.rot)),
+    );
 }
 
 /// Wakes every sleeping figure a moving bone touches, before the substeps that would
@@ -177,15 +181,22 @@ fn record_frame_starts(w: &mut ParticleWorld) {
 /// hit. (The end of the frame would wake it anyway: contacts join sleep islands.)
 /// Returns whether any bone woke.
 fn wake_touched(w: &mut ParticleWorld) -> bool {
-    let mut figures = Vec::new();
-    for m in &w.contacts.manifolds {
-        let Some(b) = m.b else { continue };
-        let (a, b) = (&w.bones[m.a], &w.bones[b]);
-        if a.fixed || b.fixed || a.asleep == b.asleep {
-            continue;
-        }
-        figures.push(if a.asleep { a.figure } else { b.figure });
-    }
+    // On all threads: each manifold reads two bones from anywhere in the array (5 % of
+    // the serial step's own time on a 1000-human pile, perf).
+    let bones = &w.bones;
+    let mut figures: Vec<u32> = w
+        .contacts
+        .manifolds
+        .par_iter()
+        .with_min_len(BONES_PER_TASK)
+        .filter_map(|m| {
+            let (a, b) = (&bones[m.a], &bones[m.b?]);
+            if a.fixed || b.fixed || a.asleep == b.asleep {
+                return None;
+            }
+            Some(if a.asleep { a.figure } else { b.figure })
+        })
+        .collect();
     if figures.is_empty() {
         return false;
     }

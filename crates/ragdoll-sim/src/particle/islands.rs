@@ -374,13 +374,18 @@ pub(super) fn run_substeps(
 ) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
-    // bones no constraint reads.
-    for b in w.bones.iter_mut().filter(|b| b.is_static()) {
-        b.prev_rot = b.rot;
-        b.dcom = Vec3A::ZERO;
-        b.lin_vel = Vec3A::ZERO;
-        b.ang_vel = Vec3A::ZERO;
-    }
+    // bones no constraint reads. On all threads: a pass over every bone, on one it was
+    // a fifth of the serial step's own time on a 1000-human pile (perf).
+    w.bones
+        .par_iter_mut()
+        .with_min_len(BONES_PER_TASK)
+        .filter(|b| b.is_static())
+        .for_each(|b| {
+            b.prev_rot = b.rot;
+            b.dcom = Vec3A::ZERO;
+            b.lin_vel = Vec3A::ZERO;
+            b.ang_vel = Vec3A::ZERO;
+        });
     let world = &*w;
     let mut previous = std::mem::take(kept).into_iter();
     let before: Vec<Option<Kept>> = plan.batches.iter().map(|_| previous.next()).collect();
