@@ -704,5 +704,16 @@ mod tests {
                 assert_eq!(b, want_moved, "{n} boxes, after moving");
             });
         }
+        // One box moving among boxes at rest: a tree of one leaf.
+        let boxes = scattered(300, 0.0);
+        let lone = |i: u32| i != 17;
+        let mut found = Vec::new();
+        moving_pairs_where(&boxes, lone, |_, _| true, &mut found);
+        let touching: Vec<u32> = (0..300)
+            .filter(|&j| j != 17 && boxes[j as usize].intersects(&boxes[17]))
+            .collect();
+        assert!(!touching.is_empty());
+        let want: Vec<(u32, u32)> = touching.iter().map(|&j| (j.min(17), j.max(17))).collect();
+        assert_eq!(found, want, "one moving box");
     }
 }
