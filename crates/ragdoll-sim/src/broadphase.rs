@@ -169,8 +169,9 @@ impl Split {
 /// frame, each time with boxes that moved a little.
 ///
 /// The first call builds trees from the moving boxes loosened by `fat`
-/// ([`Reused::fattened`]) and keeps every pair of a fat moving box and a box that
-/// overlap and that `keep` accepts: the candidates. A later call needs no tree
+/// ([`Reused::fattened`]) and keeps the pairs that `keep` accepts of two moving boxes
+/// whose fat boxes overlap and of a box at rest (as it is) and a moving one whose fat
+/// box it overlaps: the candidates. A later call needs no tree
 /// traversal while the boxes stay inside their fat boxes, as most do (Box2D's enlarged
 /// AABBs): two boxes that overlap now and stay inside their fat boxes have overlapping
 /// fat boxes, so their pair is a candidate, and the call's pairs are the candidates
@@ -316,8 +317,10 @@ impl Reused {
     }
 
     /// [`Self::overlapping_pairs_where`] without the pairs of two boxes at rest
-    /// (`resting(i)`; see the free [`moving_pairs_where`]). A box at rest must stay
-    /// where it is until [`Reused::forget`].
+    /// (`resting(i)`; see the free [`moving_pairs_where`]). Which boxes are at rest is
+    /// read when the trees are built: until [`Reused::forget`] the same boxes must be
+    /// at rest, and a box at rest may shrink (the particle step loosens its boxes less
+    /// as the frame goes on) but not move out of where it was.
     pub fn moving_pairs_where(
         &mut self,
         aabbs: &[Aabb],

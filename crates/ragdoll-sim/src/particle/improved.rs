@@ -461,6 +461,8 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         match islands::Plan::new(w, threads) {
             Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept),
             None => {
+                // The kept batches' copies of the bones stepped here are stale now.
+                kept.clear();
                 let joints = JointSet::All(&w.joints).entries();
                 let lockstep = whole.get_or_insert_with(|| Lockstep::new(&joints, &w.bones));
                 let mut part = Part {
