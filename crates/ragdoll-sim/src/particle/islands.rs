@@ -319,7 +319,8 @@ impl Batch {
     }
 }
 
-/// Whether two copies of a bone are in the same state, to the bit (a debug check).
+/// Whether two copies of a bone are in the same state, to the bit (the check of the
+/// kept copies in debug builds and unit tests).
 fn same_motion(a: &Bone, b: &Bone) -> bool {
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let state = |b: &Bone| {
