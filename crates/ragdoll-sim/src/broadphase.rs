@@ -141,11 +141,12 @@ impl Split {
                 let mut found = Vec::new();
                 for &r in chunk {
                     let query = &query_boxes[r as usize];
+                    // parry tests every node on the way, the leaf's own box too.
                     for part in &parts {
                         for leaf in part.tree.intersect_aabb(query) {
                             let m = moving[(part.start + leaf) as usize];
                             let pair = (r.min(m), r.max(m));
-                            if query.intersects(&tree_boxes[m as usize]) && keep(pair.0, pair.1) {
+                            if keep(pair.0, pair.1) {
                                 found.push(pair);
                             }
                         }

@@ -432,10 +432,8 @@ pub(super) fn run_substeps(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::super::text_world;
     use crate::method::Method;
-    use crate::particle::ParticleSolver;
-    use crate::scene::af::{AfOptions, parse};
 
     /// A box thrown up lands on a sleeping one beside another sleeping one: the first
     /// wakes their figures between two detection chunks of a frame, and the one it
@@ -447,16 +445,13 @@ mod tests {
     fn a_bone_that_woke_between_chunks_is_copied_again() {
         let text = include_str!("islands_wake_chain.af");
         let path = std::path::Path::new("islands_wake_chain.af");
-        let scene = parse(text, path, &AfOptions::default())
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut w = ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap();
+                let mut w = text_world(text, path, None);
                 for _ in 0..150 {
                     w.step();
                 }

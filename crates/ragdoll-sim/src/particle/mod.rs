@@ -325,15 +325,25 @@ fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
 /// tests.
 #[cfg(test)]
 pub(crate) fn scene_world(file: &str, count: Option<u32>) -> ParticleWorld {
-    use crate::scene::af::{AfOptions, load};
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../assets/scenes")
         .join(file);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+    text_world(&text, &path, count)
+}
+
+/// The improved solver's world of the `.af` text `text` (`path` names it and anchors
+/// its relative paths), `count` figures where the scene repeats one; panics on error.
+#[cfg(test)]
+pub(crate) fn text_world(text: &str, path: &std::path::Path, count: Option<u32>) -> ParticleWorld {
+    use crate::scene::af::{AfOptions, parse};
     let opts = AfOptions {
         count,
         ..AfOptions::default()
     };
-    let scene = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
+    let scene = parse(text, path, &opts)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc;
     ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"))
 }
 
