@@ -37,6 +37,16 @@ impl JointSolve for BallJoint {
         }
     }
 
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.point.weigh(&self.frame, s);
+        if let Some(sw) = &mut self.swing {
+            sw.update(&self.frame, s);
+        }
+        if let Some(t) = &mut self.twist {
+            t.update(&self.frame, s);
+        }
+    }
+
     fn warm_start(&self, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(sw) = &self.swing {

@@ -25,6 +25,10 @@ impl JointSolve for FixedJoint {
         self.point.prepare(&self.frame, s);
     }
 
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.point.weigh(&self.frame, s);
+    }
+
     fn warm_start(&self, s: &mut BodyStates) {
         self.lock.warm_start(&self.frame, s);
         self.point.warm_start(&self.frame, s);

@@ -38,6 +38,14 @@ impl JointSolve for HingeJoint {
         }
     }
 
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.point.weigh(&self.frame, s);
+        self.align.weigh(&self.frame, s);
+        if let Some(l) = &mut self.limit {
+            l.update(&self.frame, s);
+        }
+    }
+
     fn warm_start(&self, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(l) = &self.limit {

@@ -129,8 +129,14 @@ impl PointPart {
         self.ra = Vec3A::from(ra);
         self.rb = Vec3A::from(rb);
         self.c = Vec3A::from((s.com[f.b] + rb) - (s.com[f.a] + ra));
-        let (ta, ka) = point_response(s, f.a, ra);
-        let (tb, kb) = point_response(s, f.b, rb);
+        self.weigh(f, s);
+    }
+
+    /// The turns and `K⁻¹` for the offsets of the last [`PointPart::prepare`] and the
+    /// inertias now: all that changes when only the inertias were refreshed since.
+    pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
+        let (ta, ka) = point_response(s, f.a, Vec3::from(self.ra));
+        let (tb, kb) = point_response(s, f.b, Vec3::from(self.rb));
         self.turn_a = ta;
         self.turn_b = tb;
         self.k_inv = invert_symmetric(ka + kb).map(Mat3A::from);
@@ -372,13 +378,21 @@ impl AlignPart {
         let (da, db, u, v) = self.basis(f, s);
         let e = db.cross(da);
         let (u, v, e) = (Vec3A::from(u), Vec3A::from(v), Vec3A::from(e));
+        self.u = u;
+        self.v = v;
+        self.error = [u.dot(e), v.dot(e)];
+        self.weigh(f, s);
+    }
+
+    /// The turns and the effective mass for the rows of the last [`AlignPart::prepare`]
+    /// and the inertias now: all that changes when only the inertias were refreshed
+    /// since.
+    pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
+        let (u, v) = (self.u, self.v);
         let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
         self.turn = [ia * u, ia * v, ib * u, ib * v];
         let [au, av, bu, bv] = self.turn;
         let (k11, k12, k22) = (u.dot(au + bu), u.dot(av + bv), v.dot(av + bv));
-        self.u = u;
-        self.v = v;
-        self.error = [u.dot(e), v.dot(e)];
         self.k = [k11, k12, k22, k11 * k22 - k12 * k12];
     }
 

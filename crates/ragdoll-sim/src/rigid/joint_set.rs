@@ -22,6 +22,13 @@ pub trait JointSolve {
     fn frame(&self) -> &JointFrame;
     /// Recomputes limit rows from the current pose, once per substep.
     fn prepare(&mut self, s: &BodyStates);
+    /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
+    /// has moved since, only the inertias were refreshed): the point and alignment rows,
+    /// which that pass prepared on this pose, only re-weigh their turns and effective
+    /// masses with the new inertias (the same bits as preparing them anew, for less).
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.prepare(s);
+    }
     /// Re-applies the accumulated impulses.
     fn warm_start(&self, s: &mut BodyStates);
     /// One Gauss–Seidel update; `use_bias` false in the relax pass.
@@ -249,6 +256,11 @@ impl JointSet {
     /// Per-substep preparation of joints touching an awake body.
     pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
         for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.prepare(s) });
+    }
+
+    /// [`JointSolve::prepare_after_relax`] of joints touching an awake body.
+    pub fn prepare_after_relax(&mut self, s: &BodyStates, awake: &[bool]) {
+        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.prepare_after_relax(s) });
     }
 
     /// Warm start of joints touching an awake body.

@@ -157,11 +157,14 @@ pub fn solve(
 ) {
     let mut contacts = ContactConstraints::build(pairs, s, awake);
     for sub in 0..p.substeps {
-        if sub > 0 {
-            update_inertia(s, motion, awake);
-        }
         integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
-        joints.prepare(s, awake);
+        if sub == 0 {
+            joints.prepare(s, awake);
+        } else {
+            // The pose is the one the last relax pass prepared the joints on.
+            update_inertia(s, motion, awake);
+            joints.prepare_after_relax(s, awake);
+        }
         joints.warm_start(s, awake);
         contacts.prepare_substep(s);
         contacts.warm_start(s);
