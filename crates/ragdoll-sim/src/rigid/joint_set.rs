@@ -20,7 +20,9 @@ use crate::snapshot::{JointInstance, LimitShape};
 pub trait JointSolve {
     /// Bodies and anchor.
     fn frame(&self) -> &JointFrame;
-    /// Recomputes limit rows from the current pose, once per substep.
+    /// Evaluates the rows (anchors, errors, effective masses, limit rows) on the current
+    /// pose and inertias, at a step's first substep (later substeps call
+    /// [`JointSolve::prepare_after_relax`]).
     fn prepare(&mut self, s: &BodyStates);
     /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
     /// has moved since, only the inertias were refreshed): the point and alignment rows,

@@ -249,8 +249,9 @@ impl Swing {
             ..
         } = self
         {
-            // A shaft inside the cone has `C ≥ 0` and nothing to project: a dot product
-            // tells, where measuring the row takes an arccosine and a normalisation.
+            // A shaft inside the cone has `C ≥ 0` (to rounding, far within the slop) and
+            // nothing to project: a dot product tells, where measuring the row takes an
+            // arccosine and a normalisation.
             if (s.rot[f.b] * *axis_b).dot(s.rot[f.a] * *shaft_a) >= *cos_half {
                 return;
             }

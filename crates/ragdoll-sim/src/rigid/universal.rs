@@ -48,6 +48,18 @@ impl UniversalJoint {
         );
         row
     }
+
+    /// The cross row, the swing and the axis ranges on the current pose and inertias.
+    fn set_angular_rows(&mut self, s: &BodyStates) {
+        let f = self.frame;
+        self.cross_row = self.cross_row_now(s);
+        if let Some(sw) = &mut self.swing {
+            sw.update(&f, s);
+        }
+        if let Some(r) = &mut self.ranges {
+            r.iter_mut().for_each(|l| l.update(&f, s));
+        }
+    }
 }
 
 impl JointSolve for UniversalJoint {
@@ -56,15 +68,13 @@ impl JointSolve for UniversalJoint {
     }
 
     fn prepare(&mut self, s: &BodyStates) {
-        let f = &self.frame;
-        self.point.prepare(f, s);
-        self.cross_row = self.cross_row_now(s);
-        if let Some(sw) = &mut self.swing {
-            sw.update(f, s);
-        }
-        if let Some(r) = &mut self.ranges {
-            r.iter_mut().for_each(|l| l.update(f, s));
-        }
+        self.point.prepare(&self.frame, s);
+        self.set_angular_rows(s);
+    }
+
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.point.weigh(&self.frame, s);
+        self.set_angular_rows(s);
     }
 
     fn warm_start(&self, s: &mut BodyStates) {
