@@ -200,6 +200,15 @@ impl Quatx4 {
         v + t * self.w + self.v.cross(t)
     }
 
+    /// `v` rotated by the unit quaternion with glam's `Quat * Vec3` operations, in its
+    /// order: `v (w² − u·u) + u (2 v·u) + (u × v)(2w)`, so a lane holds glam's bits.
+    #[inline]
+    pub fn rotate_as_glam(self, v: Vec3x4) -> Vec3x4 {
+        let two = f32x4::splat(2.0);
+        let u = self.v;
+        (v * (self.w * self.w - u.dot(u)) + u * (v.dot(u) * two)) + u.cross(v) * (self.w * two)
+    }
+
     /// `v` rotated by the inverse of the unit quaternion.
     #[inline]
     pub fn inverse_rotate(self, v: Vec3x4) -> Vec3x4 {

@@ -73,7 +73,8 @@ pub(super) struct PointConstraint {
     /// `s₀ − n·(p_b − p_a)` at build time: the separation now is this plus
     /// `n·(p_b − p_a)` for the anchors' current world positions.
     pub(super) base_separation: f32,
-    /// Separation at the start of the substep's biased iterations.
+    /// Separation at the start of the substep's biased iterations: set only for the
+    /// pairs solved one by one (a bundle forms its own in its lanes).
     pub(super) separation: f32,
     /// `r_a × n`, `r_b × n`.
     pub(super) ja_n: Vec3,
@@ -251,16 +252,14 @@ impl ContactConstraints {
     /// Per substep, once the world inverse inertias are refreshed: each row's
     /// `I⁻¹ (r × d)`, the rolling mass, and the separation the biased iterations share
     /// (between the velocity and the position integration the bodies do not move). The
-    /// bundled pairs' `I⁻¹ (r × d)` are formed in their lanes (`Bundle::refresh`), so
-    /// here only for the pairs solved one by one.
+    /// bundled pairs' `I⁻¹ (r × d)` and separations are formed in their lanes
+    /// (`Bundle::refresh`), so here only for the pairs solved one by one.
     pub fn prepare_substep(&mut self, s: &BodyStates) {
-        for pc in &self.pairs {
+        for &i in &self.single {
+            let pc = &mut self.pairs[i as usize];
             for p in &mut self.points[pc.start..pc.start + pc.count] {
                 p.separation = current_separation(pc, p, s);
             }
-        }
-        for &i in &self.single {
-            let pc = &mut self.pairs[i as usize];
             let (ia, ib) = (s.inv_inertia[pc.a], s.inv_inertia[pc.b]);
             for p in &mut self.points[pc.start..pc.start + pc.count] {
                 p.ia_n = ia * p.ja_n;
@@ -274,7 +273,7 @@ impl ContactConstraints {
             }
         }
         for bundle in &mut self.bundles {
-            bundle.refresh(&self.points, Some(s));
+            bundle.refresh(s, true);
         }
     }
 
@@ -322,13 +321,14 @@ impl ContactConstraints {
         if !use_bias {
             // The relax pass comes after the positions moved. The velocity solve does not
             // move them, so every point's separation is evaluated once, up front.
-            for pc in &self.pairs {
+            for &i in &self.single {
+                let pc = &self.pairs[i as usize];
                 for p in &mut self.points[pc.start..pc.start + pc.count] {
                     p.separation = current_separation(pc, p, s);
                 }
             }
             for bundle in &mut self.bundles {
-                bundle.refresh(&self.points, None);
+                bundle.refresh(s, false);
             }
         }
         for &i in &self.single {

@@ -22,7 +22,7 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
-use crate::lanes::{Vec3x4, f4};
+use crate::lanes::{Quatx4, Vec3x4, f4};
 use glam::{Mat3, Vec3, Vec3A};
 use std::ops::Mul;
 use wide::f32x4;
@@ -84,6 +84,11 @@ struct WidePoint {
     tangent_impulse: [f32x4; 2],
     max_normal_impulse: f32x4,
     separation: f32x4,
+    /// The anchors in the bodies' frames and the separation at build time less
+    /// `n·(p_b − p_a)` (see [`PointConstraint`]), for the separation now.
+    local_a: Vec3x4,
+    local_b: Vec3x4,
+    base_separation: f32x4,
 }
 
 /// Up to [`LANES`] pairs of one colour, solved side by side.
@@ -142,6 +147,9 @@ impl Bundle {
                 tangent_mass: [s4(|p| p.tangent_mass[0]), s4(|p| p.tangent_mass[1])],
                 normal_impulse: s4(|p| p.normal_impulse),
                 tangent_impulse: [s4(|p| p.tangent_impulse[0]), s4(|p| p.tangent_impulse[1])],
+                local_a: v3(|p| p.local_a),
+                local_b: v3(|p| p.local_b),
+                base_separation: s4(|p| p.base_separation),
                 ..WidePoint::default()
             };
         }
@@ -159,19 +167,30 @@ impl Bundle {
         (j < self.count[k]).then(|| &points[self.start[k] + j])
     }
 
-    /// Takes the separations from the scalar points and, given the bodies (`inertia`),
-    /// forms what changes every substep with the inertia, `I⁻¹ J` of every row, in the
-    /// lanes: after `ContactConstraints::prepare_substep`, and before the relax pass
-    /// (separations only). Each lane's product is glam's `Mat3 * Vec3`, column by
-    /// column in the same order, so the lanes hold the scalar solver's bits.
-    pub(super) fn refresh(&mut self, points: &[PointConstraint], inertia: Option<&BodyStates>) {
-        let empty = PointConstraint::default();
-        for j in 0..self.slots {
-            let l: [&PointConstraint; LANES] =
-                std::array::from_fn(|k| self.point(points, k, j).unwrap_or(&empty));
-            self.points[j].separation = f4(|k| l[k].separation);
+    /// Forms each point's separation on the bodies' poses now (the scalar
+    /// `current_separation`, the anchors rotated with glam's operations:
+    /// `Quatx4::rotate_as_glam`) and, with `inertia`, what changes every substep with the
+    /// inertia, `I⁻¹ J` of every row, in the lanes: at each substep's preparation, and
+    /// before the relax pass (separations only). Each lane's product is glam's `Mat3 *
+    /// Vec3`, column by column in the same order, so the lanes hold the scalar solver's
+    /// bits.
+    pub(super) fn refresh(&mut self, s: &BodyStates, inertia: bool) {
+        let (com_a, com_b) = (
+            Vec3x4::from_fn(|k| s.com[self.a[k]]),
+            Vec3x4::from_fn(|k| s.com[self.b[k]]),
+        );
+        let (rot_a, rot_b) = (
+            Quatx4::from_fn(|k| s.rot[self.a[k]]),
+            Quatx4::from_fn(|k| s.rot[self.b[k]]),
+        );
+        for w in &mut self.points[..self.slots] {
+            let pa = com_a + rot_a.rotate_as_glam(w.local_a);
+            let pb = com_b + rot_b.rotate_as_glam(w.local_b);
+            w.separation = w.base_separation + self.normal.dot(pb - pa);
         }
-        let Some(s) = inertia else { return };
+        if !inertia {
+            return;
+        }
         let ia = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]]));
         let ib = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]]));
         for w in &mut self.points[..self.slots] {
