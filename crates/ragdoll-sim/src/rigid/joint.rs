@@ -628,17 +628,25 @@ impl FrictionMotor {
     }
 
     /// Re-applies the accumulated impulse.
+    #[inline]
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         if self.max_torque > 0.0 {
             f.apply_angular(s, self.impulse);
         }
     }
 
-    /// One update; friction is solved without bias, the same in both passes.
+    /// One update; friction is solved without bias, the same in both passes. Inlined so
+    /// that a joint without friction (most) pays only the test, not a call, in every
+    /// iteration.
+    #[inline]
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext) {
-        if self.max_torque <= 0.0 {
-            return;
+        if self.max_torque > 0.0 {
+            self.hold(f, s, ctx);
         }
+    }
+
+    /// [`FrictionMotor::solve`] of a motor with a positive cap.
+    fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext) {
         let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
             return;
         };
