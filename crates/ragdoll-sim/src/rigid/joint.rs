@@ -535,11 +535,17 @@ impl AxisRow {
         }
     }
 
-    /// One update of the row.
+    /// One update of the row. Inlined so that a row far from its bound (most limit rows:
+    /// a range has two, at most one of them near) costs the test, not a call.
+    #[inline]
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        if !self.active {
-            return;
+        if self.active {
+            self.solve_active(f, s, ctx, use_bias);
         }
+    }
+
+    /// [`AxisRow::solve`] of an active row.
+    fn solve_active(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let k = self.k;
         if !(k > 1e-20) {
             return;
