@@ -545,7 +545,13 @@ impl AxisRow {
     }
 
     /// [`AxisRow::solve`] of an active row.
-    fn solve_active(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve_active(
+        &mut self,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         let k = self.k;
         if !(k > 1e-20) {
             return;
