@@ -22,6 +22,18 @@ pub struct BallJoint {
     pub friction: FrictionMotor,
 }
 
+impl BallJoint {
+    /// The swing and twist rows on the current pose and inertias.
+    fn update_limits(&mut self, s: &BodyStates) {
+        if let Some(sw) = &mut self.swing {
+            sw.update(&self.frame, s);
+        }
+        if let Some(t) = &mut self.twist {
+            t.update(&self.frame, s);
+        }
+    }
+}
+
 impl JointSolve for BallJoint {
     fn frame(&self) -> &JointFrame {
         &self.frame
@@ -29,22 +41,12 @@ impl JointSolve for BallJoint {
 
     fn prepare(&mut self, s: &BodyStates) {
         self.point.prepare(&self.frame, s);
-        if let Some(sw) = &mut self.swing {
-            sw.update(&self.frame, s);
-        }
-        if let Some(t) = &mut self.twist {
-            t.update(&self.frame, s);
-        }
+        self.update_limits(s);
     }
 
     fn prepare_after_relax(&mut self, s: &BodyStates) {
         self.point.weigh(&self.frame, s);
-        if let Some(sw) = &mut self.swing {
-            sw.update(&self.frame, s);
-        }
-        if let Some(t) = &mut self.twist {
-            t.update(&self.frame, s);
-        }
+        self.update_limits(s);
     }
 
     fn warm_start(&self, s: &mut BodyStates) {

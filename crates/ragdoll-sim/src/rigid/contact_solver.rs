@@ -255,11 +255,9 @@ impl ContactConstraints {
     /// bundled pairs' `I⁻¹ (r × d)` and separations are formed in their lanes
     /// (`Bundle::refresh`), so here only for the pairs solved one by one.
     pub fn prepare_substep(&mut self, s: &BodyStates) {
+        self.separate_singles(s);
         for &i in &self.single {
             let pc = &mut self.pairs[i as usize];
-            for p in &mut self.points[pc.start..pc.start + pc.count] {
-                p.separation = current_separation(pc, p, s);
-            }
             let (ia, ib) = (s.inv_inertia[pc.a], s.inv_inertia[pc.b]);
             for p in &mut self.points[pc.start..pc.start + pc.count] {
                 p.ia_n = ia * p.ja_n;
@@ -274,6 +272,17 @@ impl ContactConstraints {
         }
         for bundle in &mut self.bundles {
             bundle.refresh(s, true);
+        }
+    }
+
+    /// The separations now of the points of the pairs solved one by one (a bundle forms
+    /// its own: `Bundle::refresh`).
+    fn separate_singles(&mut self, s: &BodyStates) {
+        for &i in &self.single {
+            let pc = &self.pairs[i as usize];
+            for p in &mut self.points[pc.start..pc.start + pc.count] {
+                p.separation = current_separation(pc, p, s);
+            }
         }
     }
 
@@ -321,12 +330,7 @@ impl ContactConstraints {
         if !use_bias {
             // The relax pass comes after the positions moved. The velocity solve does not
             // move them, so every point's separation is evaluated once, up front.
-            for &i in &self.single {
-                let pc = &self.pairs[i as usize];
-                for p in &mut self.points[pc.start..pc.start + pc.count] {
-                    p.separation = current_separation(pc, p, s);
-                }
-            }
+            self.separate_singles(s);
             for bundle in &mut self.bundles {
                 bundle.refresh(s, false);
             }

@@ -25,6 +25,15 @@ pub struct HingeJoint {
     pub friction: FrictionMotor,
 }
 
+impl HingeJoint {
+    /// The range rows on the current pose and inertias.
+    fn update_limit(&mut self, s: &BodyStates) {
+        if let Some(l) = &mut self.limit {
+            l.update(&self.frame, s);
+        }
+    }
+}
+
 impl JointSolve for HingeJoint {
     fn frame(&self) -> &JointFrame {
         &self.frame
@@ -33,17 +42,13 @@ impl JointSolve for HingeJoint {
     fn prepare(&mut self, s: &BodyStates) {
         self.point.prepare(&self.frame, s);
         self.align.prepare(&self.frame, s);
-        if let Some(l) = &mut self.limit {
-            l.update(&self.frame, s);
-        }
+        self.update_limit(s);
     }
 
     fn prepare_after_relax(&mut self, s: &BodyStates) {
         self.point.weigh(&self.frame, s);
         self.align.weigh(&self.frame, s);
-        if let Some(l) = &mut self.limit {
-            l.update(&self.frame, s);
-        }
+        self.update_limit(s);
     }
 
     fn warm_start(&self, s: &mut BodyStates) {
