@@ -7,7 +7,7 @@
 //! result is the same bits whatever the other lanes hold: a constraint solved in a lane
 //! gets the same numbers whichever constraints share its instruction, or none.
 
-use glam::{Quat, Vec3};
+use glam::{Mat3, Quat, Vec3};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 use wide::f32x4;
 
@@ -152,6 +152,37 @@ impl SubAssign for Vec3x4 {
     #[inline]
     fn sub_assign(&mut self, o: Vec3x4) {
         *self = *self - o;
+    }
+}
+
+/// Four 3×3 matrices, one per lane, by columns.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Mat3x4 {
+    pub cols: [Vec3x4; 3],
+}
+
+impl Mat3x4 {
+    /// The matrices `f(0) … f(3)` in the four lanes.
+    #[inline]
+    pub fn from_fn(f: impl Fn(usize) -> Mat3) -> Mat3x4 {
+        let m: [Mat3; LANES] = std::array::from_fn(f);
+        Mat3x4 {
+            cols: [
+                Vec3x4::from_fn(|k| m[k].x_axis),
+                Vec3x4::from_fn(|k| m[k].y_axis),
+                Vec3x4::from_fn(|k| m[k].z_axis),
+            ],
+        }
+    }
+}
+
+impl Mul<Vec3x4> for Mat3x4 {
+    type Output = Vec3x4;
+    /// `x_axis v.x + y_axis v.y + z_axis v.z`, summed in glam's order.
+    #[inline]
+    fn mul(self, v: Vec3x4) -> Vec3x4 {
+        let [c0, c1, c2] = self.cols;
+        c0 * v.x + c1 * v.y + c2 * v.z
     }
 }
 

@@ -22,9 +22,8 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
-use crate::lanes::{Quatx4, Vec3x4, f4};
+use crate::lanes::{Mat3x4, Quatx4, Vec3x4, f4};
 use glam::{Mat3, Vec3, Vec3A};
-use std::ops::Mul;
 use wide::f32x4;
 
 /// Pairs per bundle: the lanes of an `f32x4`.
@@ -34,37 +33,6 @@ pub const SLOTS: usize = 4;
 /// Colours tried before a pair is left to the one-by-one solve. A body of a pile touches
 /// up to about a dozen others.
 pub const COLORS: usize = 16;
-
-/// Four 3×3 matrices, one per lane, by columns.
-#[derive(Clone, Copy, Debug)]
-struct Mat3x4 {
-    cols: [Vec3x4; 3],
-}
-
-impl Mat3x4 {
-    /// The matrices `f(0) … f(3)` in the four lanes.
-    #[inline]
-    fn from_fn(f: impl Fn(usize) -> Mat3) -> Mat3x4 {
-        let m: [Mat3; LANES] = std::array::from_fn(f);
-        Mat3x4 {
-            cols: [
-                Vec3x4::from_fn(|k| m[k].x_axis),
-                Vec3x4::from_fn(|k| m[k].y_axis),
-                Vec3x4::from_fn(|k| m[k].z_axis),
-            ],
-        }
-    }
-}
-
-impl Mul<Vec3x4> for Mat3x4 {
-    type Output = Vec3x4;
-    /// `x_axis v.x + y_axis v.y + z_axis v.z`, summed in glam's order.
-    #[inline]
-    fn mul(self, v: Vec3x4) -> Vec3x4 {
-        let [c0, c1, c2] = self.cols;
-        c0 * v.x + c1 * v.y + c2 * v.z
-    }
-}
 
 /// One point slot of a bundle: the rows of each lane's point at that slot (see
 /// [`PointConstraint`] for each field's meaning).

@@ -487,8 +487,8 @@ pub struct AxisRow {
     /// How a unit impulse along the axis turns each body, `I_a⁻¹ axis` and `I_b⁻¹ axis`,
     /// and the row's `k = axisᵀ (I_a⁻¹ + I_b⁻¹) axis`: fixed from [`AxisRow::set`] to
     /// the end of the substep, as the inertias are.
-    turn: [Vec3A; 2],
-    k: f32,
+    pub(super) turn: [Vec3A; 2],
+    pub(super) k: f32,
 }
 
 impl AxisRow {

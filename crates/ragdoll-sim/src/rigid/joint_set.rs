@@ -8,6 +8,7 @@ use super::hinge::HingeJoint;
 use super::joint::{
     AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind,
 };
+use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
 use super::slider::SliderJoint;
 use super::soft::StepContext;
@@ -62,29 +63,43 @@ pub struct JointSet {
     pub slider: Vec<SliderJoint>,
     /// Springs.
     pub spring: Vec<SpringJoint>,
+    /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), built with the
+    /// set; `None` (and in the arrays gathered for one island) solves each joint alone.
+    pub lanes: Option<JointLanes>,
 }
 
-/// Runs `$body` with `$j` bound to every joint of every type.
-macro_rules! for_each_joint {
+/// Runs `$body` with `$j` bound to every joint, mutably (fields, not the solve trait).
+macro_rules! for_each_joint_mut {
     ($set:expr, $j:ident => $body:expr) => {{
-        for $j in $set.ball.iter_mut() {
+        $set.ball.iter_mut().for_each(|$j| $body);
+        $set.hinge.iter_mut().for_each(|$j| $body);
+        $set.universal.iter_mut().for_each(|$j| $body);
+        $set.fixed.iter_mut().for_each(|$j| $body);
+        $set.slider.iter_mut().for_each(|$j| $body);
+        $set.spring.iter_mut().for_each(|$j| $body);
+    }};
+}
+
+/// Runs `$body` with `$list` bound to each type's array, ball joints and hinges only
+/// when `$balls` / `$hinges` (solved in lanes) are false.
+macro_rules! for_each_type {
+    ($set:expr, $balls:expr, $hinges:expr, $list:ident => $body:expr) => {{
+        if !$balls {
+            let $list = &mut $set.ball;
             $body
         }
-        for $j in $set.hinge.iter_mut() {
+        if !$hinges {
+            let $list = &mut $set.hinge;
             $body
         }
-        for $j in $set.universal.iter_mut() {
-            $body
-        }
-        for $j in $set.fixed.iter_mut() {
-            $body
-        }
-        for $j in $set.slider.iter_mut() {
-            $body
-        }
-        for $j in $set.spring.iter_mut() {
-            $body
-        }
+        let $list = &mut $set.universal;
+        $body
+        let $list = &mut $set.fixed;
+        $body
+        let $list = &mut $set.slider;
+        $body
+        let $list = &mut $set.spring;
+        $body
     }};
 }
 
@@ -232,6 +247,7 @@ impl JointSet {
                 }
             }
         }
+        set.lanes = JointLanes::plan(&set.ball, &set.hinge, s.len(), anchor);
         set
     }
 
@@ -255,24 +271,101 @@ impl JointSet {
         for_each_joint_ref!(self, j => { let fr = j.frame(); f(fr.a, fr.b) });
     }
 
-    /// Per-substep preparation of joints touching an awake body.
+    /// The first substep's preparation of joints touching an awake body (the lanes also
+    /// take the joints' impulses, see [`JointSet::end_substeps`]).
     pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
-        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.prepare(s) });
+        let (balls, hinges) = self.in_lanes();
+        if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
+            lanes.prepare(&mut self.ball, &mut self.hinge, s, awake);
+        }
+        for_each_type!(self, balls, hinges, list => for j in list.iter_mut() {
+            if touches_awake(j.frame(), awake) {
+                j.prepare(s)
+            }
+        });
     }
 
     /// [`JointSolve::prepare_after_relax`] of joints touching an awake body.
     pub fn prepare_after_relax(&mut self, s: &BodyStates, awake: &[bool]) {
-        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.prepare_after_relax(s) });
+        let (balls, hinges) = self.in_lanes();
+        if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
+            lanes.prepare_after_relax(&mut self.ball, &mut self.hinge, s);
+        }
+        for_each_type!(self, balls, hinges, list => for j in list.iter_mut() {
+            if touches_awake(j.frame(), awake) {
+                j.prepare_after_relax(s)
+            }
+        });
     }
 
-    /// Warm start of joints touching an awake body.
+    /// Warm start of joints touching an awake body, type by type in the solve order.
     pub fn warm_start(&self, s: &mut BodyStates, awake: &[bool]) {
-        for_each_joint_ref!(self, j => if touches_awake(j.frame(), awake) { j.warm_start(s) });
+        let (balls, hinges) = self.in_lanes();
+        match self.lanes.as_ref().filter(|_| balls) {
+            Some(l) => l.warm_start_balls(s),
+            None => warm_start_each(&self.ball, s, awake),
+        }
+        match self.lanes.as_ref().filter(|_| hinges) {
+            Some(l) => l.warm_start_hinges(s),
+            None => warm_start_each(&self.hinge, s, awake),
+        }
+        warm_start_each(&self.universal, s, awake);
+        warm_start_each(&self.fixed, s, awake);
+        warm_start_each(&self.slider, s, awake);
+        warm_start_each(&self.spring, s, awake);
     }
 
-    /// One iteration over joints touching an awake body.
+    /// One iteration over joints touching an awake body, type by type.
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
-        for_each_joint!(self, j => if touches_awake(j.frame(), awake) { j.solve(s, ctx, use_bias) });
+        let (balls, hinges) = self.in_lanes();
+        match self.lanes.as_mut().filter(|_| balls) {
+            Some(l) => l.solve_balls(s, ctx, use_bias),
+            None => solve_each(&mut self.ball, s, awake, ctx, use_bias),
+        }
+        match self.lanes.as_mut().filter(|_| hinges) {
+            Some(l) => l.solve_hinges(s, ctx, use_bias),
+            None => solve_each(&mut self.hinge, s, awake, ctx, use_bias),
+        }
+        solve_each(&mut self.universal, s, awake, ctx, use_bias);
+        solve_each(&mut self.fixed, s, awake, ctx, use_bias);
+        solve_each(&mut self.slider, s, awake, ctx, use_bias);
+        solve_each(&mut self.spring, s, awake, ctx, use_bias);
+    }
+
+    /// After a solve's substeps: the lanes hand their accumulated impulses back to the
+    /// joints, for the next step's warm start (which may solve them one island at a
+    /// time, one by one).
+    pub fn end_substeps(&mut self) {
+        if let Some(lanes) = self
+            .lanes
+            .as_ref()
+            .filter(|l| l.fits(&self.ball, &self.hinge))
+        {
+            lanes.finish(&mut self.ball, &mut self.hinge);
+        }
+    }
+
+    /// Whether the ball joints and the hinges are solved in lanes: when there are lanes
+    /// and they were dealt from these arrays (an island's gathered arrays have none).
+    fn in_lanes(&self) -> (bool, bool) {
+        self.lanes
+            .as_ref()
+            .filter(|l| l.fits(&self.ball, &self.hinge))
+            .map_or((false, false), |l| (l.has_balls(), l.has_hinges()))
+    }
+
+    /// Moves references to the static anchor from index `old` to `new` (a body was
+    /// inserted before it), in the joints and in their lanes.
+    pub fn retarget_anchor(&mut self, old: usize, new: usize) {
+        let fix = |b: &mut usize| {
+            if *b == old {
+                *b = new;
+            }
+        };
+        for_each_joint_mut!(self, j => fix(&mut j.frame.b));
+        if let Some(lanes) = &mut self.lanes {
+            lanes.retarget_anchor(old, new);
+        }
     }
 
     /// One position-projection pass over joints that can move: touching an awake body
@@ -361,6 +454,30 @@ impl JointSet {
                 anchor2,
                 limit: LimitShape::None,
             });
+        }
+    }
+}
+
+/// Warm start of `joints` touching an awake body, one by one.
+fn warm_start_each<J: JointSolve>(joints: &[J], s: &mut BodyStates, awake: &[bool]) {
+    for j in joints {
+        if touches_awake(j.frame(), awake) {
+            j.warm_start(s);
+        }
+    }
+}
+
+/// One iteration over `joints` touching an awake body, one by one.
+fn solve_each<J: JointSolve>(
+    joints: &mut [J],
+    s: &mut BodyStates,
+    awake: &[bool],
+    ctx: &StepContext,
+    use_bias: bool,
+) {
+    for j in joints {
+        if touches_awake(j.frame(), awake) {
+            j.solve(s, ctx, use_bias);
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::scene::{AngleRange, LimitStyle, SwingLimit, TwistLimit};
 use glam::{Quat, Vec3};
 
 /// Rows further than this from their bound (rad) are not solved.
-const MARGIN: f32 = 0.25;
+pub(super) const MARGIN: f32 = 0.25;
 /// Cone half-angles below this (rad) are solved as an exact alignment.
 const TIGHT_CONE: f32 = 1e-3;
 

@@ -25,6 +25,7 @@ pub mod integrate;
 pub mod island;
 pub mod joint;
 pub mod joint_set;
+pub mod joint_wide;
 pub mod limits;
 pub mod parallel;
 pub mod project;

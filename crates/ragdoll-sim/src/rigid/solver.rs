@@ -176,6 +176,7 @@ pub fn solve(
         joints.solve(s, awake, &p.ctx, false);
         contacts.solve(s, &p.ctx, false);
     }
+    joints.end_substeps();
     contacts.end_substeps();
     contacts.restitution(s, p.restitution_threshold);
     project::project_positions(s, joints, &contacts, awake, p.sleep);

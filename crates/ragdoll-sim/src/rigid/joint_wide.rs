@@ -1,0 +1,938 @@
+//! Ball joints and hinges four at a time in SIMD lanes, as the contacts are in
+//! [`super::contact_wide`]: a world of many figures has the same joints many times, and
+//! four figures' joints share an instruction.
+//!
+//! A joint's solve reads the velocities of its two bodies and writes them, so
+//! Gauss–Seidel order matters only between joints that share a body. `schedule` deals
+//! a joint type's joints, in their solve order, into bundles of up to four (`LANES`) in
+//! which no body appears twice, each joint in a later bundle than every earlier joint on its
+//! bodies: every body meets its joints in the same order as one by one, and a bundle's
+//! joints touch disjoint bodies, so solving its lanes at once is solving them in any
+//! order. Each lane repeats the scalar joint's arithmetic — the same operations in the
+//! same order (`crate::lanes` keeps glam's order of sums and products) — and a lane
+//! whose scalar update would do nothing (a row far from its bound, a singular effective
+//! mass, a joint between sleeping bodies) keeps its old values by a select. So a world
+//! solved in lanes has the one-by-one solve's bits, which the nine scenes' traces check.
+//!
+//! The rows live in the lanes for a whole solve: prepared there from the bodies' poses
+//! and inertias, warm-started, iterated, prepared again and relaxed there. Only the limit
+//! angles are measured one joint at a time (an arctangent or arccosine and the unwrapping
+//! memory) and their rows copied in. The accumulated impulses are taken from the joints
+//! when a solve starts and handed back when its substeps end, so a step solved island by
+//! island on other threads (one by one) continues from them. Loading rows prepared one
+//! by one into lanes at every substep cost more than the lanes saved (eighth session:
+//! 0.63 → 0.67 ms a frame); preparing them in the lanes is what pays.
+//!
+//! Only the common shapes are bundled: hinges with a hard range and no friction, ball
+//! joints with a hard cone, no twist limit and no friction (a pile's humans). A type
+//! with any other joint is solved one by one, as are the other joint types.
+
+// `!(k > ε)` on purpose, as in the scalar joints: NaN must skip the row too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::ball::BallJoint;
+use super::body::BodyStates;
+use super::hinge::HingeJoint;
+use super::joint::{AxisRow, RowKind};
+use super::limits::{MARGIN, Swing};
+use super::soft::{Softness, StepContext};
+use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4, f4};
+use glam::{Mat3, Vec3, Vec3A};
+use wide::f32x4;
+
+/// No joint in this lane.
+const EMPTY: u32 = u32::MAX;
+
+/// Deals joints, given by their two bodies in solve order, into bundles of up to
+/// [`LANES`] with no body twice, each joint placed in the first bundle with room after
+/// the bundles of the earlier joints on its bodies (list scheduling). `anchor` (the
+/// world) is never written and orders nothing. Returns each bundle's joint indices,
+/// [`EMPTY`] for an unused lane, in the order to solve them.
+fn schedule(
+    joints: impl Iterator<Item = [usize; 2]>,
+    bodies: usize,
+    anchor: usize,
+) -> Vec<[u32; LANES]> {
+    // `after[i]`: the first bundle a joint on body i may join.
+    let mut after = vec![0usize; bodies.max(anchor + 1)];
+    let mut bundles: Vec<[u32; LANES]> = Vec::new();
+    let mut filled: Vec<usize> = Vec::new();
+    // Bundles before this one are full.
+    let mut first_open = 0;
+    for (j, pair) in joints.enumerate() {
+        let moving = pair.iter().filter(|&&i| i != anchor);
+        let needs = moving.clone().map(|&i| after[i]).max().unwrap_or(0);
+        let mut at = needs.max(first_open);
+        while at < bundles.len() && filled[at] == LANES {
+            at += 1;
+        }
+        if at == bundles.len() {
+            bundles.push([EMPTY; LANES]);
+            filled.push(0);
+        }
+        bundles[at][filled[at]] = j as u32;
+        filled[at] += 1;
+        for &i in moving {
+            after[i] = at + 1;
+        }
+        while first_open < bundles.len() && filled[first_open] == LANES {
+            first_open += 1;
+        }
+    }
+    bundles
+}
+
+/// A lane mask from a per-lane condition (all bits set where true).
+fn mask(f: impl Fn(usize) -> bool) -> f32x4 {
+    f32x4::new(std::array::from_fn(|k| {
+        if f(k) { f32::from_bits(u32::MAX) } else { 0.0 }
+    }))
+}
+
+/// Whether lane `k` of a mask is set.
+#[inline]
+fn is_set(m: f32x4, k: usize) -> bool {
+    m.as_array()[k].to_bits() != 0
+}
+
+/// The soft coefficients of a pass, in lanes: the joint softness in the biased
+/// iterations, [`Softness::RIGID`] in the relax pass (the scalar `bilateral`).
+struct Soft {
+    bias_rate: f32x4,
+    mass_scale: f32x4,
+    impulse_scale: f32x4,
+    inv_h: f32x4,
+    use_bias: bool,
+}
+
+impl Soft {
+    fn new(ctx: &StepContext, use_bias: bool) -> Soft {
+        let s = if use_bias { ctx.joint } else { Softness::RIGID };
+        Soft {
+            bias_rate: f32x4::splat(s.bias_rate),
+            mass_scale: f32x4::splat(s.mass_scale),
+            impulse_scale: f32x4::splat(s.impulse_scale),
+            inv_h: f32x4::splat(ctx.inv_h),
+            use_bias,
+        }
+    }
+}
+
+/// The velocities of a bundle's bodies: linear and angular of each lane's a and b.
+struct Velocities {
+    va: Vec3x4,
+    wa: Vec3x4,
+    vb: Vec3x4,
+    wb: Vec3x4,
+}
+
+/// The poses and world inverse inertias of a bundle's bodies.
+struct Bodies {
+    rot_a: Quatx4,
+    rot_b: Quatx4,
+    com_a: Vec3x4,
+    com_b: Vec3x4,
+    ia: Mat3x4,
+    ib: Mat3x4,
+}
+
+/// The world inverse inertias of a bundle's bodies.
+struct Inertias {
+    ia: Mat3x4,
+    ib: Mat3x4,
+}
+
+/// A bundle's joints and bodies, and what holds for a whole solve.
+#[derive(Clone, Copy, Debug)]
+struct Lanes {
+    /// The joint in each lane, [`EMPTY`] for none.
+    joints: [u32; LANES],
+    /// Body a and b of each lane (an unused lane repeats lane 0's and writes nothing).
+    a: [usize; LANES],
+    b: [usize; LANES],
+    /// Set in the lanes whose joint the scalar solve would solve this step: a joint
+    /// there, touching an awake body.
+    live: f32x4,
+    inv_mass_a: f32x4,
+    inv_mass_b: f32x4,
+}
+
+impl Lanes {
+    fn new(joints: [u32; LANES], frame: impl Fn(usize) -> [usize; 2]) -> Lanes {
+        let body = |k: usize| {
+            frame(if joints[k] == EMPTY {
+                0
+            } else {
+                joints[k] as usize
+            })
+        };
+        Lanes {
+            joints,
+            a: std::array::from_fn(|k| body(k)[0]),
+            b: std::array::from_fn(|k| body(k)[1]),
+            live: f32x4::ZERO,
+            inv_mass_a: f32x4::ZERO,
+            inv_mass_b: f32x4::ZERO,
+        }
+    }
+
+    /// Whether lane `k` holds a joint.
+    fn used(&self, k: usize) -> bool {
+        self.joints[k] != EMPTY
+    }
+
+    /// The sleep state and inverse masses of this step.
+    fn begin(&mut self, s: &BodyStates, awake: &[bool]) {
+        let (a, b) = (self.a, self.b);
+        self.live = mask(|k| self.used(k) && (awake[a[k]] || awake[b[k]]));
+        self.inv_mass_a = f4(|k| s.inv_mass[a[k]]);
+        self.inv_mass_b = f4(|k| s.inv_mass[b[k]]);
+    }
+
+    fn bodies(&self, s: &BodyStates) -> Bodies {
+        let (a, b) = (self.a, self.b);
+        let Inertias { ia, ib } = self.inertias(s);
+        Bodies {
+            rot_a: Quatx4::from_fn(|k| s.rot[a[k]]),
+            rot_b: Quatx4::from_fn(|k| s.rot[b[k]]),
+            com_a: Vec3x4::from_fn(|k| s.com[a[k]]),
+            com_b: Vec3x4::from_fn(|k| s.com[b[k]]),
+            ia,
+            ib,
+        }
+    }
+
+    fn inertias(&self, s: &BodyStates) -> Inertias {
+        Inertias {
+            ia: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]])),
+            ib: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]])),
+        }
+    }
+
+    fn gather(&self, s: &BodyStates) -> Velocities {
+        let (a, b) = (self.a, self.b);
+        Velocities {
+            va: Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[a[k]])),
+            wa: Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[a[k]])),
+            vb: Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[b[k]])),
+            wb: Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[b[k]])),
+        }
+    }
+
+    /// Writes the live lanes' moving bodies back (static and sleeping bodies, which the
+    /// scalar solve leaves as they are, are not written; no body is in two lanes).
+    fn scatter(&self, s: &mut BodyStates, v: &Velocities) {
+        for k in 0..LANES {
+            if !is_set(self.live, k) {
+                continue;
+            }
+            let (a, b) = (self.a[k], self.b[k]);
+            if self.inv_mass_a.as_array()[k] > 0.0 {
+                s.lin_vel[a] = Vec3A::from(v.va.lane(k));
+                s.ang_vel[a] = Vec3A::from(v.wa.lane(k));
+            }
+            if self.inv_mass_b.as_array()[k] > 0.0 {
+                s.lin_vel[b] = Vec3A::from(v.vb.lane(k));
+                s.ang_vel[b] = Vec3A::from(v.wb.lane(k));
+            }
+        }
+    }
+}
+
+/// Four [`super::joint::PointPart`]s and their anchors.
+#[derive(Clone, Copy, Debug, Default)]
+struct PointX4 {
+    /// The anchor in each body's space (the joints' frames).
+    local_a: Vec3x4,
+    local_b: Vec3x4,
+    impulse: Vec3x4,
+    ra: Vec3x4,
+    rb: Vec3x4,
+    c: Vec3x4,
+    turn_a: Mat3x4,
+    turn_b: Mat3x4,
+    k_inv: Mat3x4,
+    /// Live lanes with an invertible `K`.
+    on: f32x4,
+}
+
+/// `T = I⁻¹ r̂` and the entries of `m⁻¹ 1 + r̂ᵀ T` in lanes (the scalar
+/// `point_response`, the columns of `r̂` with their zeros, products in glam's order).
+#[inline]
+fn point_response(ii: Mat3x4, m: f32x4, r: Vec3x4) -> (Mat3x4, [f32x4; 6]) {
+    let zero = f32x4::ZERO;
+    let c0 = Vec3x4 {
+        x: zero,
+        y: r.z,
+        z: -r.y,
+    };
+    let c1 = Vec3x4 {
+        x: -r.z,
+        y: zero,
+        z: r.x,
+    };
+    let c2 = Vec3x4 {
+        x: r.y,
+        y: -r.x,
+        z: zero,
+    };
+    let t = [ii * c0, ii * c1, ii * c2];
+    let k = [
+        m + c0.dot(t[0]),
+        c0.dot(t[1]),
+        c0.dot(t[2]),
+        m + c1.dot(t[1]),
+        c1.dot(t[2]),
+        m + c2.dot(t[2]),
+    ];
+    (Mat3x4 { cols: t }, k)
+}
+
+/// The scalar `invert_symmetric` in lanes, with the mask of the lanes where it is
+/// defined.
+#[inline]
+fn invert_symmetric(k: [f32x4; 6]) -> (Mat3x4, f32x4) {
+    let [a, b, c, d, e, f] = k;
+    let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
+    let det = a * ca + b * cb + c * cc;
+    let size = det.abs();
+    let ok = size.simd_gt(f32x4::splat(1e-20)) & size.simd_lt(f32x4::splat(f32::INFINITY));
+    let inv = f32x4::ONE / det;
+    let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
+    let col = |x, y, z| Vec3x4 { x, y, z } * inv;
+    (
+        Mat3x4 {
+            cols: [col(ca, cb, cc), col(cb, cd, ce), col(cc, ce, cf)],
+        },
+        ok,
+    )
+}
+
+impl PointX4 {
+    /// The scalar `prepare`: offsets and error on the poses now, then [`PointX4::weigh`].
+    fn prepare(&mut self, l: &Lanes, p: &Bodies) {
+        self.ra = p.rot_a.rotate_as_glam(self.local_a);
+        self.rb = p.rot_b.rotate_as_glam(self.local_b);
+        self.c = (p.com_b + self.rb) - (p.com_a + self.ra);
+        self.weigh(l, p.ia, p.ib);
+    }
+
+    /// The turns and `K⁻¹` for the offsets of the last preparation and the inertias.
+    fn weigh(&mut self, l: &Lanes, ia: Mat3x4, ib: Mat3x4) {
+        let (ta, ka) = point_response(ia, l.inv_mass_a, self.ra);
+        let (tb, kb) = point_response(ib, l.inv_mass_b, self.rb);
+        self.turn_a = ta;
+        self.turn_b = tb;
+        let (k_inv, ok) = invert_symmetric(std::array::from_fn(|j| ka[j] + kb[j]));
+        self.k_inv = k_inv;
+        self.on = l.live & ok;
+    }
+
+    /// Applies `p` on b and `−p` on a in the lanes `on`.
+    #[inline]
+    fn apply(&self, v: &mut Velocities, l: &Lanes, p: Vec3x4, on: f32x4) {
+        v.va = Vec3x4::select(on, v.va - p * l.inv_mass_a, v.va);
+        v.wa = Vec3x4::select(on, v.wa - self.turn_a * p, v.wa);
+        v.vb = Vec3x4::select(on, v.vb + p * l.inv_mass_b, v.vb);
+        v.wb = Vec3x4::select(on, v.wb + self.turn_b * p, v.wb);
+    }
+
+    fn warm_start(&self, v: &mut Velocities, l: &Lanes) {
+        self.apply(v, l, self.impulse, l.live);
+    }
+
+    /// The scalar `solve` (the relax pass prepares first, in [`JointLanes`]).
+    #[inline]
+    fn solve(&mut self, v: &mut Velocities, l: &Lanes, soft: &Soft) {
+        let cdot = (v.vb + v.wb.cross(self.rb)) - (v.va + v.wa.cross(self.ra));
+        let p = (self.k_inv * (cdot + self.c * soft.bias_rate)) * -soft.mass_scale
+            - self.impulse * soft.impulse_scale;
+        self.impulse = Vec3x4::select(self.on, self.impulse + p, self.impulse);
+        self.apply(v, l, p, self.on);
+    }
+}
+
+/// Four [`super::joint::AlignPart`]s and their directions.
+#[derive(Clone, Copy, Debug, Default)]
+struct AlignX4 {
+    /// The direction in each body's space.
+    local_a: Vec3x4,
+    local_b: Vec3x4,
+    impulse: [f32x4; 2],
+    u: Vec3x4,
+    v: Vec3x4,
+    error: [f32x4; 2],
+    /// `k11`, `k12`, `k22`, det.
+    k: [f32x4; 4],
+    /// `I_a⁻¹ u`, `I_a⁻¹ v`, `I_b⁻¹ u`, `I_b⁻¹ v`.
+    turn: [Vec3x4; 4],
+    /// Live lanes with a non-singular effective mass.
+    on: f32x4,
+}
+
+/// glam's `Vec3::any_orthonormal_pair` in lanes (Duff et al., with `signum` as
+/// `copysign(1, z)`).
+#[inline]
+fn any_orthonormal_pair(d: Vec3x4) -> (Vec3x4, Vec3x4) {
+    let sign_bit = f32x4::splat(-0.0);
+    let sign = (d.z & sign_bit) | f32x4::ONE;
+    let a = -f32x4::ONE / (sign + d.z);
+    let b = d.x * d.y * a;
+    (
+        Vec3x4 {
+            x: f32x4::ONE + sign * d.x * d.x * a,
+            y: sign * b,
+            z: -sign * d.x,
+        },
+        Vec3x4 {
+            x: b,
+            y: sign + d.y * d.y * a,
+            z: -d.y,
+        },
+    )
+}
+
+impl AlignX4 {
+    /// The scalar `prepare`: the rows and the error on the poses now, then
+    /// [`AlignX4::weigh`].
+    fn prepare(&mut self, l: &Lanes, p: &Bodies) {
+        let da = p.rot_a.rotate_as_glam(self.local_a);
+        let db = p.rot_b.rotate_as_glam(self.local_b);
+        let (u, v) = any_orthonormal_pair(da);
+        let e = db.cross(da);
+        self.u = u;
+        self.v = v;
+        self.error = [u.dot(e), v.dot(e)];
+        self.weigh(l, p.ia, p.ib);
+    }
+
+    /// The turns and the effective mass for the rows of the last preparation.
+    fn weigh(&mut self, l: &Lanes, ia: Mat3x4, ib: Mat3x4) {
+        let (u, v) = (self.u, self.v);
+        self.turn = [ia * u, ia * v, ib * u, ib * v];
+        let [au, av, bu, bv] = self.turn;
+        let (k11, k12, k22) = (u.dot(au + bu), u.dot(av + bv), v.dot(av + bv));
+        let det = k11 * k22 - k12 * k12;
+        self.k = [k11, k12, k22, det];
+        self.on = l.live & det.abs().simd_gt(f32x4::splat(1e-20));
+    }
+
+    #[inline]
+    fn apply(&self, v: &mut Velocities, [l0, l1]: [f32x4; 2], on: f32x4) {
+        let [au, av, bu, bv] = self.turn;
+        v.wa = Vec3x4::select(on, v.wa + (au * l0 + av * l1), v.wa);
+        v.wb = Vec3x4::select(on, v.wb - (bu * l0 + bv * l1), v.wb);
+    }
+
+    fn warm_start(&self, v: &mut Velocities, l: &Lanes) {
+        self.apply(v, self.impulse, l.live);
+    }
+
+    /// The scalar `solve` (the relax pass prepares first, in [`JointLanes`]).
+    #[inline]
+    fn solve(&mut self, v: &mut Velocities, soft: &Soft) {
+        let w = v.wa - v.wb;
+        let [k11, k12, k22, det] = self.k;
+        let r0 = self.u.dot(w) + soft.bias_rate * self.error[0];
+        let r1 = self.v.dot(w) + soft.bias_rate * self.error[1];
+        let sol0 = (k22 * r0 - k12 * r1) / det;
+        let sol1 = (k11 * r1 - k12 * r0) / det;
+        let [i0, i1] = self.impulse;
+        let l0 = -soft.mass_scale * sol0 - soft.impulse_scale * i0;
+        let l1 = -soft.mass_scale * sol1 - soft.impulse_scale * i1;
+        let on = self.on;
+        self.impulse = [on.select(i0 + l0, i0), on.select(i1 + l1, i1)];
+        self.apply(v, [l0, l1], on);
+    }
+}
+
+/// Four hard-limit [`AxisRow`]s, set one by one (the angle is measured there) and
+/// copied in.
+#[derive(Clone, Copy, Debug, Default)]
+struct RowX4 {
+    impulse: f32x4,
+    axis: Vec3x4,
+    c: f32x4,
+    /// `1/k`.
+    m: f32x4,
+    turn: [Vec3x4; 2],
+    /// Live lanes whose row is active (warm-started).
+    active: f32x4,
+    /// Active lanes with a positive `k` (solved).
+    on: f32x4,
+}
+
+impl RowX4 {
+    /// Copies the rows just set one by one in the live lanes; a row set inactive has
+    /// dropped its impulse.
+    fn copy(&mut self, l: &Lanes, row: impl Fn(usize) -> AxisRow) {
+        let live = (0..LANES).filter(|&k| is_set(l.live, k));
+        if live.clone().all(|k| !row(k).active) {
+            // Most rows are far from their bounds: nothing to solve or warm-start, and
+            // the unused lanes' axes and turns are never read.
+            self.impulse = l.live.select(f32x4::ZERO, self.impulse);
+            self.active = f32x4::ZERO;
+            self.on = f32x4::ZERO;
+            return;
+        }
+        let mut impulse = *self.impulse.as_array();
+        let (mut axis, mut c, mut m) = ([Vec3::ZERO; LANES], [0.0; LANES], [0.0; LANES]);
+        let mut turn = [[Vec3::ZERO; LANES]; 2];
+        let (mut active, mut on) = ([false; LANES], [false; LANES]);
+        for k in (0..LANES).filter(|&k| is_set(l.live, k)) {
+            let r = row(k);
+            axis[k] = r.axis;
+            c[k] = r.c;
+            active[k] = r.active;
+            if r.active {
+                m[k] = 1.0 / r.k;
+                turn[0][k] = Vec3::from(r.turn[0]);
+                turn[1][k] = Vec3::from(r.turn[1]);
+                on[k] = r.k > 1e-20;
+            } else {
+                impulse[k] = 0.0;
+            }
+        }
+        self.impulse = f32x4::new(impulse);
+        self.axis = Vec3x4::from_fn(|k| axis[k]);
+        self.c = f32x4::new(c);
+        self.m = f32x4::new(m);
+        self.turn = turn.map(|t| Vec3x4::from_fn(|k| t[k]));
+        self.active = mask(|k| active[k]);
+        self.on = mask(|k| on[k]);
+    }
+
+    fn warm_start(&self, v: &mut Velocities) {
+        let on = self.active;
+        v.wa = Vec3x4::select(on, v.wa + self.turn[0] * self.impulse, v.wa);
+        v.wb = Vec3x4::select(on, v.wb - self.turn[1] * self.impulse, v.wb);
+    }
+
+    /// The scalar `AxisRow::solve` of a [`RowKind::Limit`] row: past the limit
+    /// (`C ≤ 0`) soft, short of it speculative (the gap may close this substep), the
+    /// impulse never pulling.
+    #[inline]
+    fn solve(&mut self, v: &mut Velocities, soft: &Soft) {
+        let zero = f32x4::ZERO;
+        let one = f32x4::ONE;
+        let cdot = self.axis.dot(v.wa - v.wb);
+        let old = self.impulse;
+        let speculative = self.c.simd_gt(zero);
+        // The scalar row takes its bias as 0 (not 0 · C) in the relax pass.
+        let (bias, mass_scale, impulse_scale) = if soft.use_bias {
+            (soft.bias_rate * self.c, soft.mass_scale, soft.impulse_scale)
+        } else {
+            (zero, one, zero)
+        };
+        let bias = speculative.select(self.c * soft.inv_h, bias);
+        let mass_scale = speculative.select(one, mass_scale);
+        let impulse_scale = speculative.select(zero, impulse_scale);
+        let l = -self.m * mass_scale * (cdot + bias) - impulse_scale * old;
+        let new = (old + l).fast_max(zero);
+        let on = self.on;
+        self.impulse = on.select(new, old);
+        let d = new - old;
+        v.wa = Vec3x4::select(on, v.wa + self.turn[0] * d, v.wa);
+        v.wb = Vec3x4::select(on, v.wb - self.turn[1] * d, v.wb);
+    }
+}
+
+/// Four hinges: range rows, axis alignment, point, in [`HingeJoint`]'s order.
+#[derive(Clone, Debug)]
+struct HingeX4 {
+    lanes: Lanes,
+    limit: [RowX4; 2],
+    align: AlignX4,
+    point: PointX4,
+}
+
+/// Four ball joints: cone row, point, in [`BallJoint`]'s order.
+#[derive(Clone, Debug)]
+struct BallX4 {
+    lanes: Lanes,
+    cone: RowX4,
+    point: PointX4,
+    /// The cones' axes in b and shafts in a.
+    axis_b: Vec3x4,
+    shaft_a: Vec3x4,
+    /// A shaft whose cosine with the axis exceeds this is far inside its cone
+    /// (see [`JointLanes::update_limits`]).
+    cos_far: f32x4,
+}
+
+/// Margin (rad) by which a shaft must be inside the angle at which its cone's row wakes
+/// for the measurement to be skipped: far more than the arccosine's rounding, even at a
+/// cosine near 1, where the angle is least well conditioned (about 3e-4 rad per ulp).
+const FAR_SLACK: f32 = 0.01;
+
+/// A hinge the lanes solve: a hard range, no friction.
+fn hinge_fits(j: &HingeJoint) -> bool {
+    j.friction.max_torque <= 0.0 && j.limit.is_some_and(|l| l.rows[0].kind == RowKind::Limit)
+}
+
+/// A ball joint the lanes solve: a hard cone, no twist limit, no friction.
+fn ball_fits(j: &BallJoint) -> bool {
+    j.friction.max_torque <= 0.0
+        && j.twist.is_none()
+        && matches!(j.swing, Some(Swing::Cone { row, .. }) if row.kind == RowKind::Limit)
+}
+
+/// The cone row of a ball joint that [`ball_fits`].
+fn cone_row(j: &BallJoint) -> AxisRow {
+    match &j.swing {
+        Some(Swing::Cone { row, .. }) => *row,
+        _ => unreachable!("ball_fits checked the cone"),
+    }
+}
+
+fn cone_row_mut(j: &mut BallJoint) -> &mut AxisRow {
+    match &mut j.swing {
+        Some(Swing::Cone { row, .. }) => row,
+        _ => unreachable!("ball_fits checked the cone"),
+    }
+}
+
+/// The world's ball joints and hinges in bundles of four, and their rows while a solve
+/// runs.
+#[derive(Clone, Debug, Default)]
+pub struct JointLanes {
+    /// The ball joints' bundles, empty when they are solved one by one.
+    balls: Vec<BallX4>,
+    /// The hinges' bundles, likewise.
+    hinges: Vec<HingeX4>,
+    /// How many joints of each type the bundles were dealt from.
+    planned: [usize; 2],
+}
+
+impl JointLanes {
+    /// Bundles for the types whose every joint the lanes can solve; `None` when neither
+    /// type has enough joints to fill two bundles.
+    pub fn plan(
+        balls: &[BallJoint],
+        hinges: &[HingeJoint],
+        bodies: usize,
+        anchor: usize,
+    ) -> Option<JointLanes> {
+        let worth = |n: usize| n >= 2 * LANES;
+        let mut lanes = JointLanes {
+            planned: [balls.len(), hinges.len()],
+            ..JointLanes::default()
+        };
+        if worth(balls.len()) && balls.iter().all(ball_fits) {
+            let frame = |j: usize| [balls[j].frame.a, balls[j].frame.b];
+            for joints in schedule((0..balls.len()).map(frame), bodies, anchor) {
+                let l = Lanes::new(joints, frame);
+                let j = |k: usize| &balls[l.joints[if l.used(k) { k } else { 0 }] as usize];
+                let point = PointX4 {
+                    local_a: Vec3x4::from_fn(|k| j(k).frame.local_a),
+                    local_b: Vec3x4::from_fn(|k| j(k).frame.local_b),
+                    ..PointX4::default()
+                };
+                let cone = |k: usize| match j(k).swing {
+                    Some(Swing::Cone {
+                        axis_b,
+                        shaft_a,
+                        half_angle,
+                        ..
+                    }) => (axis_b, shaft_a, half_angle),
+                    _ => unreachable!("ball_fits checked the cone"),
+                };
+                // The row wakes at `C = half − φ < MARGIN`; far inside is
+                // `φ < half − MARGIN − FAR_SLACK`, a cosine above that angle's.
+                let far = |k: usize| {
+                    let angle = cone(k).2 - MARGIN - FAR_SLACK;
+                    if angle > 0.0 {
+                        angle.cos()
+                    } else {
+                        f32::INFINITY
+                    }
+                };
+                lanes.balls.push(BallX4 {
+                    lanes: l,
+                    cone: RowX4::default(),
+                    point,
+                    axis_b: Vec3x4::from_fn(|k| cone(k).0),
+                    shaft_a: Vec3x4::from_fn(|k| cone(k).1),
+                    cos_far: f4(far),
+                });
+            }
+        }
+        if worth(hinges.len()) && hinges.iter().all(hinge_fits) {
+            let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
+            for joints in schedule((0..hinges.len()).map(frame), bodies, anchor) {
+                let l = Lanes::new(joints, frame);
+                let j = |k: usize| &hinges[l.joints[if l.used(k) { k } else { 0 }] as usize];
+                let point = PointX4 {
+                    local_a: Vec3x4::from_fn(|k| j(k).frame.local_a),
+                    local_b: Vec3x4::from_fn(|k| j(k).frame.local_b),
+                    ..PointX4::default()
+                };
+                let align = AlignX4 {
+                    local_a: Vec3x4::from_fn(|k| j(k).align.local_a),
+                    local_b: Vec3x4::from_fn(|k| j(k).align.local_b),
+                    ..AlignX4::default()
+                };
+                lanes.hinges.push(HingeX4 {
+                    lanes: l,
+                    limit: [RowX4::default(); 2],
+                    align,
+                    point,
+                });
+            }
+        }
+        (!lanes.balls.is_empty() || !lanes.hinges.is_empty()).then_some(lanes)
+    }
+
+    /// Whether the ball joints are solved in lanes.
+    pub fn has_balls(&self) -> bool {
+        !self.balls.is_empty()
+    }
+
+    /// Whether the hinges are solved in lanes.
+    pub fn has_hinges(&self) -> bool {
+        !self.hinges.is_empty()
+    }
+
+    /// Moves the lanes' references to the static anchor from index `old` to `new`.
+    pub fn retarget_anchor(&mut self, old: usize, new: usize) {
+        let lanes = self.balls.iter_mut().map(|b| &mut b.lanes);
+        for l in lanes.chain(self.hinges.iter_mut().map(|h| &mut h.lanes)) {
+            for b in &mut l.b {
+                if *b == old {
+                    *b = new;
+                }
+            }
+        }
+    }
+
+    /// Whether these bundles were dealt from joint arrays of these lengths.
+    pub fn fits(&self, balls: &[BallJoint], hinges: &[HingeJoint]) -> bool {
+        self.planned == [balls.len(), hinges.len()]
+    }
+
+    /// The first substep's preparation: the step's sleep states and inverse masses, the
+    /// joints' accumulated impulses, the rows on the poses and inertias now.
+    pub fn prepare(
+        &mut self,
+        balls: &mut [BallJoint],
+        hinges: &mut [HingeJoint],
+        s: &BodyStates,
+        awake: &[bool],
+    ) {
+        for b in &mut self.balls {
+            b.lanes.begin(s, awake);
+            let j = |k: usize| &balls[b.lanes.joints[if b.lanes.used(k) { k } else { 0 }] as usize];
+            b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
+            b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
+            b.point.prepare(&b.lanes, &b.lanes.bodies(s));
+        }
+        for h in &mut self.hinges {
+            h.lanes.begin(s, awake);
+            let j =
+                |k: usize| &hinges[h.lanes.joints[if h.lanes.used(k) { k } else { 0 }] as usize];
+            h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
+            h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
+            for (r, row) in h.limit.iter_mut().enumerate() {
+                row.impulse = f4(|k| limit_rows(j(k))[r].impulse);
+            }
+            let p = h.lanes.bodies(s);
+            h.point.prepare(&h.lanes, &p);
+            h.align.prepare(&h.lanes, &p);
+        }
+        self.update_limits(balls, hinges, s);
+    }
+
+    /// A later substep's preparation, on the pose the relax pass prepared the rows on:
+    /// the turns and effective masses with the inertias now, and the limit rows.
+    pub fn prepare_after_relax(
+        &mut self,
+        balls: &mut [BallJoint],
+        hinges: &mut [HingeJoint],
+        s: &BodyStates,
+    ) {
+        for b in &mut self.balls {
+            let Inertias { ia, ib } = b.lanes.inertias(s);
+            b.point.weigh(&b.lanes, ia, ib);
+        }
+        for h in &mut self.hinges {
+            let Inertias { ia, ib } = h.lanes.inertias(s);
+            h.point.weigh(&h.lanes, ia, ib);
+            h.align.weigh(&h.lanes, ia, ib);
+        }
+        self.update_limits(balls, hinges, s);
+    }
+
+    /// Measures the live joints' limits one by one and copies their rows in.
+    ///
+    /// A cone's row is measured with an arccosine, a normalisation and the row's turns,
+    /// but most shafts are far inside their cones, where the row only sleeps: the cosine
+    /// of the shaft with the axis, formed in the lanes (glam's rotations and dot
+    /// product, the scalar measurement's own cosine), tells those apart and they are set
+    /// asleep as the measurement would (the angle and axis of a sleeping row are never
+    /// read).
+    fn update_limits(
+        &mut self,
+        balls: &mut [BallJoint],
+        hinges: &mut [HingeJoint],
+        s: &BodyStates,
+    ) {
+        for b in &mut self.balls {
+            let (a, bb) = (b.lanes.a, b.lanes.b);
+            let axis = Quatx4::from_fn(|k| s.rot[bb[k]]).rotate_as_glam(b.axis_b);
+            let shaft = Quatx4::from_fn(|k| s.rot[a[k]]).rotate_as_glam(b.shaft_a);
+            let far = axis.dot(shaft).simd_gt(b.cos_far);
+            for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
+                let j = &mut balls[b.lanes.joints[k] as usize];
+                if is_set(far, k) {
+                    let row = cone_row_mut(j);
+                    row.active = false;
+                    row.impulse = 0.0;
+                } else if let Some(sw) = &mut j.swing {
+                    sw.update(&j.frame, s);
+                }
+            }
+            let j = |k: usize| &balls[b.lanes.joints[k] as usize];
+            b.cone.copy(&b.lanes, |k| cone_row(j(k)));
+        }
+        for h in &mut self.hinges {
+            for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
+                let j = &mut hinges[h.lanes.joints[k] as usize];
+                if let Some(l) = &mut j.limit {
+                    l.update(&j.frame, s);
+                }
+            }
+            let j = |k: usize| &hinges[h.lanes.joints[k] as usize];
+            for (r, row) in h.limit.iter_mut().enumerate() {
+                row.copy(&h.lanes, |k| limit_rows(j(k))[r]);
+            }
+        }
+    }
+
+    /// Re-applies the accumulated impulses of the ball joints, in their scalar order.
+    pub fn warm_start_balls(&self, s: &mut BodyStates) {
+        for b in &self.balls {
+            let mut v = b.lanes.gather(s);
+            b.cone.warm_start(&mut v);
+            b.point.warm_start(&mut v, &b.lanes);
+            b.lanes.scatter(s, &v);
+        }
+    }
+
+    /// Re-applies the accumulated impulses of the hinges, in their scalar order.
+    pub fn warm_start_hinges(&self, s: &mut BodyStates) {
+        for h in &self.hinges {
+            let mut v = h.lanes.gather(s);
+            h.limit[0].warm_start(&mut v);
+            h.limit[1].warm_start(&mut v);
+            h.align.warm_start(&mut v, &h.lanes);
+            h.point.warm_start(&mut v, &h.lanes);
+            h.lanes.scatter(s, &v);
+        }
+    }
+
+    /// One iteration over the ball joints; the relax pass (`use_bias` false) prepares
+    /// the point rows first, since the positions have moved.
+    pub fn solve_balls(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let soft = Soft::new(ctx, use_bias);
+        for b in &mut self.balls {
+            if !use_bias {
+                b.point.prepare(&b.lanes, &b.lanes.bodies(s));
+            }
+            let mut v = b.lanes.gather(s);
+            b.cone.solve(&mut v, &soft);
+            b.point.solve(&mut v, &b.lanes, &soft);
+            b.lanes.scatter(s, &v);
+        }
+    }
+
+    /// One iteration over the hinges; the relax pass prepares the point and axis rows
+    /// first. (A preparation reads poses and inertias, which the velocity solve does not
+    /// change, so preparing before the range rows' update is preparing after it.)
+    pub fn solve_hinges(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        let soft = Soft::new(ctx, use_bias);
+        for h in &mut self.hinges {
+            if !use_bias {
+                let p = h.lanes.bodies(s);
+                h.align.prepare(&h.lanes, &p);
+                h.point.prepare(&h.lanes, &p);
+            }
+            let mut v = h.lanes.gather(s);
+            h.limit[0].solve(&mut v, &soft);
+            h.limit[1].solve(&mut v, &soft);
+            h.align.solve(&mut v, &soft);
+            h.point.solve(&mut v, &h.lanes, &soft);
+            h.lanes.scatter(s, &v);
+        }
+    }
+
+    /// Hands the accumulated impulses back to the joints (after a solve's substeps), for
+    /// the next step's warm start wherever it is solved.
+    pub fn finish(&self, balls: &mut [BallJoint], hinges: &mut [HingeJoint]) {
+        for b in &self.balls {
+            for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
+                let j = &mut balls[b.lanes.joints[k] as usize];
+                j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
+                cone_row_mut(j).impulse = b.cone.impulse.as_array()[k];
+            }
+        }
+        for h in &self.hinges {
+            for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
+                let j = &mut hinges[h.lanes.joints[k] as usize];
+                j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
+                j.align.impulse = h.align.impulse.map(|i| i.as_array()[k]);
+                let rows = &mut j.limit.as_mut().expect("hinge_fits checked the range").rows;
+                for (row, lanes) in rows.iter_mut().zip(&h.limit) {
+                    row.impulse = lanes.impulse.as_array()[k];
+                }
+            }
+        }
+    }
+}
+
+/// The range rows of a hinge that [`hinge_fits`].
+fn limit_rows(j: &HingeJoint) -> [AxisRow; 2] {
+    j.limit.as_ref().expect("hinge_fits checked the range").rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every joint is dealt once, no bundle holds a moving body twice, and each body
+    /// meets its joints in their order.
+    #[test]
+    fn schedule_keeps_each_bodys_order() {
+        let anchor = 9;
+        let joints: Vec<[usize; 2]> = vec![
+            [0, 1],
+            [1, 2],
+            [3, 4],
+            [5, 6],
+            [7, 8],
+            [2, 3],
+            [0, anchor],
+            [4, anchor],
+            [6, 7],
+            [1, 5],
+        ];
+        let bundles = schedule(joints.iter().copied(), 9, anchor);
+        let mut seen = vec![false; joints.len()];
+        let mut order: Vec<Vec<usize>> = vec![Vec::new(); 10];
+        for bundle in &bundles {
+            let mut bodies = Vec::new();
+            for &j in bundle.iter().filter(|&&j| j != EMPTY) {
+                assert!(!seen[j as usize], "joint {j} dealt twice");
+                seen[j as usize] = true;
+                for &i in joints[j as usize].iter().filter(|&&i| i != anchor) {
+                    assert!(!bodies.contains(&i), "body {i} twice in one bundle");
+                    bodies.push(i);
+                    order[i].push(j as usize);
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "a joint was not dealt");
+        for (i, js) in order.iter().enumerate() {
+            assert!(js.windows(2).all(|w| w[0] < w[1]), "body {i} meets {js:?}");
+        }
+    }
+}
