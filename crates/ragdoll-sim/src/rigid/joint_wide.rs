@@ -181,7 +181,8 @@ impl Lanes {
         self.joints[k] != EMPTY
     }
 
-    /// The sleep state and inverse masses of this step.
+    /// The sleep state and inverse masses of this step. A bundle without a live lane
+    /// (its figures asleep) is skipped by every pass until the next step's `begin`.
     fn begin(&mut self, s: &BodyStates, awake: &[bool]) {
         let (a, b) = (self.a, self.b);
         self.live = mask(|k| self.used(k) && (awake[a[k]] || awake[b[k]]));
@@ -721,6 +722,9 @@ impl JointLanes {
     ) {
         for b in &mut self.balls {
             b.lanes.begin(s, awake);
+            if !b.lanes.live.any() {
+                continue;
+            }
             let j = |k: usize| &balls[b.lanes.joints[if b.lanes.used(k) { k } else { 0 }] as usize];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
@@ -728,6 +732,9 @@ impl JointLanes {
         }
         for h in &mut self.hinges {
             h.lanes.begin(s, awake);
+            if !h.lanes.live.any() {
+                continue;
+            }
             let j =
                 |k: usize| &hinges[h.lanes.joints[if h.lanes.used(k) { k } else { 0 }] as usize];
             h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
@@ -751,10 +758,16 @@ impl JointLanes {
         s: &BodyStates,
     ) {
         for b in &mut self.balls {
+            if !b.lanes.live.any() {
+                continue;
+            }
             let Inertias { ia, ib } = b.lanes.inertias(s);
             b.point.weigh(&b.lanes, ia, ib);
         }
         for h in &mut self.hinges {
+            if !h.lanes.live.any() {
+                continue;
+            }
             let Inertias { ia, ib } = h.lanes.inertias(s);
             h.point.weigh(&h.lanes, ia, ib);
             h.align.weigh(&h.lanes, ia, ib);
@@ -777,6 +790,9 @@ impl JointLanes {
         s: &BodyStates,
     ) {
         for b in &mut self.balls {
+            if !b.lanes.live.any() {
+                continue;
+            }
             let (a, bb) = (b.lanes.a, b.lanes.b);
             let axis = Quatx4::from_fn(|k| s.rot[bb[k]]).rotate_as_glam(b.axis_b);
             let shaft = Quatx4::from_fn(|k| s.rot[a[k]]).rotate_as_glam(b.shaft_a);
@@ -795,6 +811,9 @@ impl JointLanes {
             b.cone.copy(&b.lanes, |k| cone_row(j(k)));
         }
         for h in &mut self.hinges {
+            if !h.lanes.live.any() {
+                continue;
+            }
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
                 if let Some(l) = &mut j.limit {
@@ -811,6 +830,9 @@ impl JointLanes {
     /// Re-applies the accumulated impulses of the ball joints, in their scalar order.
     pub fn warm_start_balls(&self, s: &mut BodyStates) {
         for b in &self.balls {
+            if !b.lanes.live.any() {
+                continue;
+            }
             let mut v = b.lanes.gather(s);
             b.cone.warm_start(&mut v);
             b.point.warm_start(&mut v, &b.lanes);
@@ -821,6 +843,9 @@ impl JointLanes {
     /// Re-applies the accumulated impulses of the hinges, in their scalar order.
     pub fn warm_start_hinges(&self, s: &mut BodyStates) {
         for h in &self.hinges {
+            if !h.lanes.live.any() {
+                continue;
+            }
             let mut v = h.lanes.gather(s);
             h.limit[0].warm_start(&mut v);
             h.limit[1].warm_start(&mut v);
@@ -835,6 +860,9 @@ impl JointLanes {
     pub fn solve_balls(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let soft = Soft::new(ctx, use_bias);
         for b in &mut self.balls {
+            if !b.lanes.live.any() {
+                continue;
+            }
             if !use_bias {
                 b.point.prepare(&b.lanes, &b.lanes.bodies(s));
             }
@@ -851,6 +879,9 @@ impl JointLanes {
     pub fn solve_hinges(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let soft = Soft::new(ctx, use_bias);
         for h in &mut self.hinges {
+            if !h.lanes.live.any() {
+                continue;
+            }
             if !use_bias {
                 let p = h.lanes.bodies(s);
                 h.align.prepare(&h.lanes, &p);
@@ -869,6 +900,9 @@ impl JointLanes {
     /// the next step's warm start wherever it is solved.
     pub fn finish(&self, balls: &mut [BallJoint], hinges: &mut [HingeJoint]) {
         for b in &self.balls {
+            if !b.lanes.live.any() {
+                continue;
+            }
             for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
                 let j = &mut balls[b.lanes.joints[k] as usize];
                 j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
@@ -876,6 +910,9 @@ impl JointLanes {
             }
         }
         for h in &self.hinges {
+            if !h.lanes.live.any() {
+                continue;
+            }
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
                 j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
