@@ -289,9 +289,11 @@ impl ContactConstraints {
     /// After the substeps: the bundles hand their impulses back to the points, which the
     /// restitution pass, the projection and [`ContactConstraints::store_impulses`] read.
     pub fn end_substeps(&mut self) {
-        for bundle in self.bundles.drain(..) {
+        // By reference: draining moved each bundle (2.5 KB) out before writing it back.
+        for bundle in &self.bundles {
             bundle.write_back(&mut self.points);
         }
+        self.bundles.clear();
     }
 
     /// Re-applies the accumulated impulses (last substep's, or last step's carried over).

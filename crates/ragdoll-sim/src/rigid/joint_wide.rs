@@ -137,6 +137,7 @@ struct Bodies {
 }
 
 /// The world inverse inertias of a bundle's bodies.
+#[derive(Clone, Copy, Debug, Default)]
 struct Inertias {
     ia: Mat3x4,
     ib: Mat3x4,
@@ -155,6 +156,10 @@ struct Lanes {
     live: f32x4,
     inv_mass_a: f32x4,
     inv_mass_b: f32x4,
+    /// The bodies' world inverse inertias as the substep's preparation read them: they
+    /// hold until the next substep refreshes them, so the relax pass, which prepares
+    /// the rows again after the positions moved, reads them here.
+    inertia: Inertias,
 }
 
 impl Lanes {
@@ -173,6 +178,7 @@ impl Lanes {
             live: f32x4::ZERO,
             inv_mass_a: f32x4::ZERO,
             inv_mass_b: f32x4::ZERO,
+            inertia: Inertias::default(),
         }
     }
 
@@ -190,9 +196,10 @@ impl Lanes {
         self.inv_mass_b = f4(|k| s.inv_mass[b[k]]);
     }
 
+    /// The poses now, with the inertias of the last [`Lanes::refresh_inertia`].
     fn bodies(&self, s: &BodyStates) -> Bodies {
         let (a, b) = (self.a, self.b);
-        let Inertias { ia, ib } = self.inertias(s);
+        let Inertias { ia, ib } = self.inertia;
         Bodies {
             rot_a: Quatx4::from_fn(|k| s.rot[a[k]]),
             rot_b: Quatx4::from_fn(|k| s.rot[b[k]]),
@@ -203,11 +210,12 @@ impl Lanes {
         }
     }
 
-    fn inertias(&self, s: &BodyStates) -> Inertias {
-        Inertias {
+    /// Reads the bodies' world inverse inertias (refreshed at each substep).
+    fn refresh_inertia(&mut self, s: &BodyStates) {
+        self.inertia = Inertias {
             ia: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]])),
             ib: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]])),
-        }
+        };
     }
 
     fn gather(&self, s: &BodyStates) -> Velocities {
@@ -728,6 +736,7 @@ impl JointLanes {
             let j = |k: usize| &balls[b.lanes.joints[if b.lanes.used(k) { k } else { 0 }] as usize];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
+            b.lanes.refresh_inertia(s);
             b.point.prepare(&b.lanes, &b.lanes.bodies(s));
         }
         for h in &mut self.hinges {
@@ -742,6 +751,7 @@ impl JointLanes {
             for (r, row) in h.limit.iter_mut().enumerate() {
                 row.impulse = f4(|k| limit_rows(j(k))[r].impulse);
             }
+            h.lanes.refresh_inertia(s);
             let p = h.lanes.bodies(s);
             h.point.prepare(&h.lanes, &p);
             h.align.prepare(&h.lanes, &p);
@@ -761,14 +771,16 @@ impl JointLanes {
             if !b.lanes.live.any() {
                 continue;
             }
-            let Inertias { ia, ib } = b.lanes.inertias(s);
+            b.lanes.refresh_inertia(s);
+            let Inertias { ia, ib } = b.lanes.inertia;
             b.point.weigh(&b.lanes, ia, ib);
         }
         for h in &mut self.hinges {
             if !h.lanes.live.any() {
                 continue;
             }
-            let Inertias { ia, ib } = h.lanes.inertias(s);
+            h.lanes.refresh_inertia(s);
+            let Inertias { ia, ib } = h.lanes.inertia;
             h.point.weigh(&h.lanes, ia, ib);
             h.align.weigh(&h.lanes, ia, ib);
         }
