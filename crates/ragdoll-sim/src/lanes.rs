@@ -176,6 +176,54 @@ impl Mat3x4 {
     }
 }
 
+impl Mat3x4 {
+    /// Lane `k`.
+    #[inline]
+    pub fn lane(&self, k: usize) -> Mat3 {
+        Mat3::from_cols(
+            self.cols[0].lane(k),
+            self.cols[1].lane(k),
+            self.cols[2].lane(k),
+        )
+    }
+
+    /// The transpose in each lane (data movement only).
+    #[inline]
+    pub fn transpose(self) -> Mat3x4 {
+        let [a, b, c] = self.cols;
+        Mat3x4 {
+            cols: [
+                Vec3x4 {
+                    x: a.x,
+                    y: b.x,
+                    z: c.x,
+                },
+                Vec3x4 {
+                    x: a.y,
+                    y: b.y,
+                    z: c.y,
+                },
+                Vec3x4 {
+                    x: a.z,
+                    y: b.z,
+                    z: c.z,
+                },
+            ],
+        }
+    }
+}
+
+impl Mul for Mat3x4 {
+    type Output = Mat3x4;
+    /// Column by column, as glam's `Mat3A * Mat3A`.
+    #[inline]
+    fn mul(self, o: Mat3x4) -> Mat3x4 {
+        Mat3x4 {
+            cols: o.cols.map(|c| self * c),
+        }
+    }
+}
+
 impl Mul<Vec3x4> for Mat3x4 {
     type Output = Vec3x4;
     /// `x_axis v.x + y_axis v.y + z_axis v.z`, summed in glam's order.

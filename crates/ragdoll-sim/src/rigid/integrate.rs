@@ -6,18 +6,69 @@
 //! "Numerical methods".
 
 use super::body::{BodyStates, Motions};
-use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
+use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4};
+use glam::{Mat3A, Quat, Vec3, Vec3A};
+use wide::f32x4;
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
 /// constraints use it. Sleeping and fixed bodies keep zero.
+///
+/// Four awake bodies at a time, each lane with glam's operations in their order
+/// (`Mat3A::from_quat`, `Mat3A * Mat3A` column by column), so the same bits as one by one.
 pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[bool]) {
-    for (i, m) in motion.bodies.iter().enumerate() {
-        if !awake[i] {
+    let mut moving = Vec::with_capacity(awake.len());
+    for (i, m) in awake.iter().enumerate().take(motion.bodies.len()) {
+        if *m {
+            moving.push(i);
+        } else {
             states.inv_inertia[i] = Mat3A::ZERO;
-            continue;
         }
-        let r = Mat3A::from_quat(states.rot[i]);
-        states.inv_inertia[i] = r * Mat3A::from(m.inv_inertia_local(motion.full)) * r.transpose();
+    }
+    for group in moving.chunks(LANES) {
+        let body = |k: usize| group[k.min(group.len() - 1)];
+        let world = world_inertia(
+            Quatx4::from_fn(|k| states.rot[body(k)]),
+            Mat3x4::from_fn(|k| motion.bodies[body(k)].inv_inertia_local(motion.full)),
+        );
+        for (k, &i) in group.iter().enumerate() {
+            states.inv_inertia[i] = Mat3A::from(world.lane(k));
+        }
+    }
+}
+
+/// `R M Rᵀ` in each lane (`R` from the orientation): glam's
+/// `Mat3A::from_quat(q) * m * r.transpose()`, the same operations in their order.
+fn world_inertia(rot: Quatx4, m: Mat3x4) -> Mat3x4 {
+    let r = rotation_matrix(rot);
+    r * m * r.transpose()
+}
+
+/// `Mat3A::from_quat` in lanes, its operations in its order.
+fn rotation_matrix(q: Quatx4) -> Mat3x4 {
+    let (x, y, z, w) = (q.v.x, q.v.y, q.v.z, q.w);
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, xy, xz) = (x * x2, x * y2, x * z2);
+    let (yy, yz, zz) = (y * y2, y * z2, z * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let one = f32x4::ONE;
+    Mat3x4 {
+        cols: [
+            Vec3x4 {
+                x: one - (yy + zz),
+                y: xy + wz,
+                z: xz - wy,
+            },
+            Vec3x4 {
+                x: xy - wz,
+                y: one - (xx + zz),
+                z: yz + wx,
+            },
+            Vec3x4 {
+                x: xz + wy,
+                y: yz - wx,
+                z: one - (xx + yy),
+            },
+        ],
     }
 }
 
@@ -27,28 +78,54 @@ pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[boo
 ///
 /// `f(ω) = I (ω − ω₀) + h ω × I ω`, `J = I + h (ω̂ I − (Iω)^)`, `ω₁ = ω₀ − J⁻¹ f(ω₀)`.
 ///
-/// In `Mat3A` (16-byte columns) so the products run in SIMD lanes without widening
-/// each column first: the same operations, the same bits.
-fn gyroscopic(w_world: Vec3, rot: Quat, inertia: Mat3, h: f32) -> Vec3 {
-    let inertia = Mat3A::from(inertia);
-    let w = rot.inverse() * w_world;
+/// Four bodies at a time, one per lane, each lane with glam's operations in their order
+/// (`Quat * Vec3`, `Mat3A * Vec3A` and `Mat3A * Mat3A` column by column, the cross
+/// product's products, `Mat3A::determinant` and `Mat3A::inverse` by their cofactors):
+/// a lane holds the bits of the one-body form in glam's types (`tests::one_body`), which
+/// the tests compare. A lane whose `J` is singular keeps its velocity.
+fn gyroscopic(w_world: Vec3x4, rot: Quatx4, inertia: Mat3x4, h: f32x4) -> Vec3x4 {
+    let w = rot.conjugate().rotate_as_glam(w_world);
     let iw = inertia * w;
-    let f = h * w.cross(iw);
-    let j = inertia + h * (Mat3A::from(skew(w)) * inertia - Mat3A::from(skew(iw)));
-    let det = j.determinant();
-    if !(det.is_finite() && det.abs() > 1e-12) {
-        return w_world;
+    let f = w.cross(iw) * h;
+    let (sw, siw) = (skew(w), skew(iw));
+    let col = |c: usize| inertia.cols[c] + ((sw * inertia.cols[c]) - siw.cols[c]) * h;
+    let [x, y, z] = [col(0), col(1), col(2)];
+    let (t0, t1, t2) = (y.cross(z), z.cross(x), x.cross(y));
+    let det = x.dot(t0);
+    let size = det.abs();
+    let ok = size.simd_gt(f32x4::splat(1e-12)) & size.simd_lt(f32x4::splat(f32::INFINITY));
+    let inv_det = f32x4::ONE / det;
+    // `J⁻¹`: the cofactor columns over the determinant, transposed.
+    let inverse = Mat3x4 {
+        cols: [t0 * inv_det, t1 * inv_det, t2 * inv_det],
     }
-    rot * (w - j.inverse() * f)
+    .transpose();
+    let turned = rot.rotate_as_glam(w - inverse * f);
+    Vec3x4::select(ok, turned, w_world)
 }
 
-/// The cross-product matrix: `skew(a) b = a × b`.
-pub fn skew(a: Vec3) -> Mat3 {
-    Mat3::from_cols(
-        Vec3::new(0.0, a.z, -a.y),
-        Vec3::new(-a.z, 0.0, a.x),
-        Vec3::new(a.y, -a.x, 0.0),
-    )
+/// The cross-product matrices of four vectors: `skew(a) b = a × b` in each lane.
+fn skew(a: Vec3x4) -> Mat3x4 {
+    let zero = f32x4::ZERO;
+    Mat3x4 {
+        cols: [
+            Vec3x4 {
+                x: zero,
+                y: a.z,
+                z: -a.y,
+            },
+            Vec3x4 {
+                x: -a.z,
+                y: zero,
+                z: a.x,
+            },
+            Vec3x4 {
+                x: a.y,
+                y: -a.x,
+                z: zero,
+            },
+        ],
+    }
 }
 
 /// Velocity half of the substep: gravity, Doom 3 air friction (a fraction of the velocity
@@ -60,17 +137,26 @@ pub fn integrate_velocities(
     gravity: Vec3,
     h: f32,
 ) {
-    for (i, b) in motion.bodies.iter().enumerate() {
-        if !awake[i] {
-            continue;
+    // The gyroscopic term of the awake bodies four at a time (see `gyroscopic`); a
+    // last group of fewer repeats its last body.
+    let moving: Vec<usize> = (0..motion.bodies.len()).filter(|&i| awake[i]).collect();
+    let hx4 = f32x4::splat(h);
+    for group in moving.chunks(LANES) {
+        let body = |k: usize| group[k.min(group.len() - 1)];
+        let w = gyroscopic(
+            Vec3x4::from_fn(|k| Vec3::from(states.ang_vel[body(k)])),
+            Quatx4::from_fn(|k| states.rot[body(k)]),
+            Mat3x4::from_fn(|k| motion.bodies[body(k)].inertia(motion.full)),
+            hx4,
+        );
+        for (k, &i) in group.iter().enumerate() {
+            states.ang_vel[i] = Vec3A::from(w.lane(k));
         }
+    }
+    for &i in &moving {
+        let b = &motion.bodies[i];
         let mut v = states.lin_vel[i] + Vec3A::from(gravity * h);
-        let mut w = Vec3A::from(gyroscopic(
-            Vec3::from(states.ang_vel[i]),
-            states.rot[i],
-            b.inertia(motion.full),
-            h,
-        ));
+        let mut w = states.ang_vel[i];
         if b.linear_damping > 0.0 {
             v *= (1.0 - b.linear_damping.min(1.0)).max(0.0).powf(h);
         }
@@ -93,5 +179,82 @@ pub fn integrate_positions(states: &mut BodyStates, awake: &[bool], h: f32) {
         let q = states.rot[i];
         let dq = Quat::from_xyzw(w.x, w.y, w.z, 0.0) * q;
         states.rot[i] = (q + dq * (0.5 * h)).normalize();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particle::uniform;
+    use glam::Mat3;
+
+    /// The gyroscopic step of one body in glam's types: the form the lanes repeat.
+    fn one_body(w_world: Vec3, rot: Quat, inertia: Mat3, h: f32) -> Vec3 {
+        let skew = |a: Vec3| {
+            Mat3A::from_cols(
+                Vec3A::new(0.0, a.z, -a.y),
+                Vec3A::new(-a.z, 0.0, a.x),
+                Vec3A::new(a.y, -a.x, 0.0),
+            )
+        };
+        let inertia = Mat3A::from(inertia);
+        let w = rot.inverse() * w_world;
+        let iw = inertia * w;
+        let f = h * w.cross(iw);
+        let j = inertia + h * (skew(w) * inertia - skew(iw));
+        let det = j.determinant();
+        if !(det.is_finite() && det.abs() > 1e-12) {
+            return w_world;
+        }
+        rot * (w - j.inverse() * f)
+    }
+
+    /// Random bodies: tumbling fast and slow, diagonal and full inertia tensors, a
+    /// massless one (a singular `J`); every lane has the one-body bits, whatever its
+    /// neighbours hold, and so does the world inverse inertia.
+    #[test]
+    fn lanes_give_the_one_body_bits() {
+        let mut r = uniform(0x9e37_79b9);
+        let mut v = |scale: f32| Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * scale;
+        for case in 0..500 {
+            let w: [Vec3; LANES] = std::array::from_fn(|_| v(40.0));
+            let rot: [Quat; LANES] = std::array::from_fn(|_| {
+                let q = v(2.0);
+                Quat::from_xyzw(q.x, q.y, q.z, 0.7).normalize()
+            });
+            let inertia: [Mat3; LANES] = std::array::from_fn(|k| {
+                let d = Mat3::from_diagonal(v(1.0).abs() + Vec3::splat(0.01));
+                match (case + k) % 3 {
+                    0 => d,
+                    1 => {
+                        let q = Quat::from_scaled_axis(v(3.0));
+                        Mat3::from_quat(q) * d * Mat3::from_quat(q).transpose()
+                    }
+                    _ if case % 7 == 0 => Mat3::ZERO,
+                    _ => d,
+                }
+            });
+            let h = 1.0 / 240.0;
+            let lanes = gyroscopic(
+                Vec3x4::from_fn(|k| w[k]),
+                Quatx4::from_fn(|k| rot[k]),
+                Mat3x4::from_fn(|k| inertia[k]),
+                f32x4::splat(h),
+            );
+            let world = world_inertia(Quatx4::from_fn(|k| rot[k]), Mat3x4::from_fn(|k| inertia[k]));
+            for k in 0..LANES {
+                let one = one_body(w[k], rot[k], inertia[k], h);
+                let got = lanes.lane(k);
+                assert!(
+                    got.to_array().map(f32::to_bits) == one.to_array().map(f32::to_bits),
+                    "case {case} lane {k}: {got} against {one}"
+                );
+                let r = Mat3A::from_quat(rot[k]);
+                let expected = r * Mat3A::from(inertia[k]) * r.transpose();
+                let got = Mat3A::from(world.lane(k));
+                let bits = |m: Mat3A| m.to_cols_array().map(f32::to_bits);
+                assert!(bits(got) == bits(expected), "case {case} lane {k}: inertia");
+            }
+        }
     }
 }
