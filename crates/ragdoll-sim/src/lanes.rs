@@ -177,6 +177,22 @@ impl Mat3x4 {
 }
 
 impl Mat3x4 {
+    /// The cross-product matrices of four vectors, `skew(a) b = a × b` in each lane: the
+    /// columns `(0, a_z, −a_y)`, `(−a_z, 0, a_x)`, `(a_y, −a_x, 0)`, zeros included, as
+    /// the scalar forms build them.
+    #[inline]
+    pub fn skew(a: Vec3x4) -> Mat3x4 {
+        let zero = f32x4::ZERO;
+        let col = |x, y, z| Vec3x4 { x, y, z };
+        Mat3x4 {
+            cols: [
+                col(zero, a.z, -a.y),
+                col(-a.z, zero, a.x),
+                col(a.y, -a.x, zero),
+            ],
+        }
+    }
+
     /// Lane `k`.
     #[inline]
     pub fn lane(&self, k: usize) -> Mat3 {

@@ -87,7 +87,7 @@ fn gyroscopic(w_world: Vec3x4, rot: Quatx4, inertia: Mat3x4, h: f32x4) -> Vec3x4
     let w = rot.conjugate().rotate_as_glam(w_world);
     let iw = inertia * w;
     let f = w.cross(iw) * h;
-    let (sw, siw) = (skew(w), skew(iw));
+    let (sw, siw) = (Mat3x4::skew(w), Mat3x4::skew(iw));
     let col = |c: usize| inertia.cols[c] + ((sw * inertia.cols[c]) - siw.cols[c]) * h;
     let [x, y, z] = [col(0), col(1), col(2)];
     let (t0, t1, t2) = (y.cross(z), z.cross(x), x.cross(y));
@@ -102,30 +102,6 @@ fn gyroscopic(w_world: Vec3x4, rot: Quatx4, inertia: Mat3x4, h: f32x4) -> Vec3x4
     .transpose();
     let turned = rot.rotate_as_glam(w - inverse * f);
     Vec3x4::select(ok, turned, w_world)
-}
-
-/// The cross-product matrices of four vectors: `skew(a) b = a × b` in each lane.
-fn skew(a: Vec3x4) -> Mat3x4 {
-    let zero = f32x4::ZERO;
-    Mat3x4 {
-        cols: [
-            Vec3x4 {
-                x: zero,
-                y: a.z,
-                z: -a.y,
-            },
-            Vec3x4 {
-                x: -a.z,
-                y: zero,
-                z: a.x,
-            },
-            Vec3x4 {
-                x: a.y,
-                y: -a.x,
-                z: zero,
-            },
-        ],
-    }
 }
 
 /// Velocity half of the substep: gravity, Doom 3 air friction (a fraction of the velocity

@@ -5,14 +5,16 @@
 //! A joint's solve reads the velocities of its two bodies and writes them, so
 //! Gauss–Seidel order matters only between joints that share a body. `schedule` deals
 //! a joint type's joints, in their solve order, into bundles of up to four (`LANES`) in
-//! which no body appears twice, each joint in a later bundle than every earlier joint on its
-//! bodies: every body meets its joints in the same order as one by one, and a bundle's
-//! joints touch disjoint bodies, so solving its lanes at once is solving them in any
-//! order. Each lane repeats the scalar joint's arithmetic — the same operations in the
-//! same order (`crate::lanes` keeps glam's order of sums and products) — and a lane
-//! whose scalar update would do nothing (a row far from its bound, a singular effective
-//! mass, a joint between sleeping bodies) keeps its old values by a select. So a world
-//! solved in lanes has the one-by-one solve's bits, which the nine scenes' traces check.
+//! which no body appears twice, each joint in a later bundle than every earlier joint
+//! on its bodies: every body meets its joints in the same order as one by one, and a
+//! bundle's joints touch disjoint bodies, so solving its lanes at once is solving them
+//! in any order. Each lane repeats the scalar joint's arithmetic — the same operations
+//! in the same order (`crate::lanes` keeps glam's order of sums and products) — and a
+//! lane whose scalar update would do nothing (a row far from its bound, a singular
+//! effective mass, a joint between sleeping bodies) keeps its old values by a select.
+//! So a world solved in lanes has the one-by-one solve's bits: the test
+//! `joints_in_lanes_give_the_bits_of_joints_one_by_one` (`rigid::world`) compares them
+//! frame by frame, and the piles' traces match those of the one-by-one solver.
 //!
 //! The rows live in the lanes for a whole solve: prepared there from the bodies' poses
 //! and inertias, warm-started, iterated, prepared again and relaxed there. Only the limit
@@ -33,7 +35,7 @@
 use super::ball::BallJoint;
 use super::body::BodyStates;
 use super::hinge::HingeJoint;
-use super::joint::{AxisRow, RowKind};
+use super::joint::{AxisRow, JointFrame, RowKind};
 use super::limits::{MARGIN, Swing};
 use super::soft::{Softness, StepContext};
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4, f4};
@@ -269,22 +271,7 @@ struct PointX4 {
 /// `point_response`, the columns of `r̂` with their zeros, products in glam's order).
 #[inline]
 fn point_response(ii: Mat3x4, m: f32x4, r: Vec3x4) -> (Mat3x4, [f32x4; 6]) {
-    let zero = f32x4::ZERO;
-    let c0 = Vec3x4 {
-        x: zero,
-        y: r.z,
-        z: -r.y,
-    };
-    let c1 = Vec3x4 {
-        x: -r.z,
-        y: zero,
-        z: r.x,
-    };
-    let c2 = Vec3x4 {
-        x: r.y,
-        y: -r.x,
-        z: zero,
-    };
+    let [c0, c1, c2] = Mat3x4::skew(r).cols;
     let t = [ii * c0, ii * c1, ii * c2];
     let k = [
         m + c0.dot(t[0]),
@@ -318,6 +305,15 @@ fn invert_symmetric(k: [f32x4; 6]) -> (Mat3x4, f32x4) {
 }
 
 impl PointX4 {
+    /// The point constraints of the lanes' joint frames, before any preparation.
+    fn at<'a>(frame: impl Fn(usize) -> &'a JointFrame) -> PointX4 {
+        PointX4 {
+            local_a: Vec3x4::from_fn(|k| frame(k).local_a),
+            local_b: Vec3x4::from_fn(|k| frame(k).local_b),
+            ..PointX4::default()
+        }
+    }
+
     /// The scalar `prepare`: offsets and error on the poses now, then [`PointX4::weigh`].
     fn prepare(&mut self, l: &Lanes, p: &Bodies) {
         self.ra = p.rot_a.rotate_as_glam(self.local_a);
@@ -632,11 +628,7 @@ impl JointLanes {
             for joints in schedule((0..balls.len()).map(frame), bodies, anchor) {
                 let l = Lanes::new(joints, frame);
                 let j = |k: usize| &balls[l.joints[if l.used(k) { k } else { 0 }] as usize];
-                let point = PointX4 {
-                    local_a: Vec3x4::from_fn(|k| j(k).frame.local_a),
-                    local_b: Vec3x4::from_fn(|k| j(k).frame.local_b),
-                    ..PointX4::default()
-                };
+                let point = PointX4::at(|k| &j(k).frame);
                 let cone = |k: usize| match j(k).swing {
                     Some(Swing::Cone {
                         axis_b,
@@ -671,11 +663,7 @@ impl JointLanes {
             for joints in schedule((0..hinges.len()).map(frame), bodies, anchor) {
                 let l = Lanes::new(joints, frame);
                 let j = |k: usize| &hinges[l.joints[if l.used(k) { k } else { 0 }] as usize];
-                let point = PointX4 {
-                    local_a: Vec3x4::from_fn(|k| j(k).frame.local_a),
-                    local_b: Vec3x4::from_fn(|k| j(k).frame.local_b),
-                    ..PointX4::default()
-                };
+                let point = PointX4::at(|k| &j(k).frame);
                 let align = AlignX4 {
                     local_a: Vec3x4::from_fn(|k| j(k).align.local_a),
                     local_b: Vec3x4::from_fn(|k| j(k).align.local_b),
