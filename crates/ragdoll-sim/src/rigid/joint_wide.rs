@@ -184,6 +184,19 @@ impl Lanes {
         }
     }
 
+    /// Whether any lane's joint is solved this step.
+    fn is_live(&self) -> bool {
+        self.live.any()
+    }
+
+    /// Gathers the lanes' body velocities, lets `f` update them, writes them back.
+    #[inline]
+    fn update_velocities(&self, s: &mut BodyStates, f: impl FnOnce(&mut Velocities)) {
+        let mut v = self.gather(s);
+        f(&mut v);
+        self.scatter(s, &v);
+    }
+
     /// Whether lane `k` holds a joint.
     fn used(&self, k: usize) -> bool {
         self.joints[k] != EMPTY
@@ -718,7 +731,7 @@ impl JointLanes {
     ) {
         for b in &mut self.balls {
             b.lanes.begin(s, awake);
-            if !b.lanes.live.any() {
+            if !b.lanes.is_live() {
                 continue;
             }
             let j = |k: usize| &balls[b.lanes.joints[if b.lanes.used(k) { k } else { 0 }] as usize];
@@ -729,7 +742,7 @@ impl JointLanes {
         }
         for h in &mut self.hinges {
             h.lanes.begin(s, awake);
-            if !h.lanes.live.any() {
+            if !h.lanes.is_live() {
                 continue;
             }
             let j =
@@ -755,18 +768,12 @@ impl JointLanes {
         hinges: &mut [HingeJoint],
         s: &BodyStates,
     ) {
-        for b in &mut self.balls {
-            if !b.lanes.live.any() {
-                continue;
-            }
+        for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
             b.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = b.lanes.inertia;
             b.point.weigh(&b.lanes, ia, ib);
         }
-        for h in &mut self.hinges {
-            if !h.lanes.live.any() {
-                continue;
-            }
+        for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             h.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = h.lanes.inertia;
             h.point.weigh(&h.lanes, ia, ib);
@@ -789,10 +796,7 @@ impl JointLanes {
         hinges: &mut [HingeJoint],
         s: &BodyStates,
     ) {
-        for b in &mut self.balls {
-            if !b.lanes.live.any() {
-                continue;
-            }
+        for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
             let (a, bb) = (b.lanes.a, b.lanes.b);
             let axis = Quatx4::from_fn(|k| s.rot[bb[k]]).rotate_as_glam(b.axis_b);
             let shaft = Quatx4::from_fn(|k| s.rot[a[k]]).rotate_as_glam(b.shaft_a);
@@ -810,10 +814,7 @@ impl JointLanes {
             let j = |k: usize| &balls[b.lanes.joints[k] as usize];
             b.cone.copy(&b.lanes, |k| cone_row(j(k)));
         }
-        for h in &mut self.hinges {
-            if !h.lanes.live.any() {
-                continue;
-            }
+        for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
                 if let Some(l) = &mut j.limit {
@@ -829,29 +830,23 @@ impl JointLanes {
 
     /// Re-applies the accumulated impulses of the ball joints, in their scalar order.
     pub fn warm_start_balls(&self, s: &mut BodyStates) {
-        for b in &self.balls {
-            if !b.lanes.live.any() {
-                continue;
-            }
-            let mut v = b.lanes.gather(s);
-            b.cone.warm_start(&mut v);
-            b.point.warm_start(&mut v, &b.lanes);
-            b.lanes.scatter(s, &v);
+        for b in self.balls.iter().filter(|x| x.lanes.is_live()) {
+            b.lanes.update_velocities(s, |v| {
+                b.cone.warm_start(v);
+                b.point.warm_start(v, &b.lanes);
+            });
         }
     }
 
     /// Re-applies the accumulated impulses of the hinges, in their scalar order.
     pub fn warm_start_hinges(&self, s: &mut BodyStates) {
-        for h in &self.hinges {
-            if !h.lanes.live.any() {
-                continue;
-            }
-            let mut v = h.lanes.gather(s);
-            h.limit[0].warm_start(&mut v);
-            h.limit[1].warm_start(&mut v);
-            h.align.warm_start(&mut v, &h.lanes);
-            h.point.warm_start(&mut v, &h.lanes);
-            h.lanes.scatter(s, &v);
+        for h in self.hinges.iter().filter(|x| x.lanes.is_live()) {
+            h.lanes.update_velocities(s, |v| {
+                h.limit[0].warm_start(v);
+                h.limit[1].warm_start(v);
+                h.align.warm_start(v, &h.lanes);
+                h.point.warm_start(v, &h.lanes);
+            });
         }
     }
 
@@ -859,17 +854,14 @@ impl JointLanes {
     /// the point rows first, since the positions have moved.
     pub fn solve_balls(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let soft = Soft::new(ctx, use_bias);
-        for b in &mut self.balls {
-            if !b.lanes.live.any() {
-                continue;
-            }
+        for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
             if !use_bias {
                 b.point.prepare(&b.lanes, &b.lanes.bodies(s));
             }
-            let mut v = b.lanes.gather(s);
-            b.cone.solve(&mut v, &soft);
-            b.point.solve(&mut v, &b.lanes, &soft);
-            b.lanes.scatter(s, &v);
+            b.lanes.update_velocities(s, |v| {
+                b.cone.solve(v, &soft);
+                b.point.solve(v, &b.lanes, &soft);
+            });
         }
     }
 
@@ -878,41 +870,32 @@ impl JointLanes {
     /// change, so preparing before the range rows' update is preparing after it.)
     pub fn solve_hinges(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let soft = Soft::new(ctx, use_bias);
-        for h in &mut self.hinges {
-            if !h.lanes.live.any() {
-                continue;
-            }
+        for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             if !use_bias {
                 let p = h.lanes.bodies(s);
                 h.align.prepare(&h.lanes, &p);
                 h.point.prepare(&h.lanes, &p);
             }
-            let mut v = h.lanes.gather(s);
-            h.limit[0].solve(&mut v, &soft);
-            h.limit[1].solve(&mut v, &soft);
-            h.align.solve(&mut v, &soft);
-            h.point.solve(&mut v, &h.lanes, &soft);
-            h.lanes.scatter(s, &v);
+            h.lanes.update_velocities(s, |v| {
+                h.limit[0].solve(v, &soft);
+                h.limit[1].solve(v, &soft);
+                h.align.solve(v, &soft);
+                h.point.solve(v, &h.lanes, &soft);
+            });
         }
     }
 
     /// Hands the accumulated impulses back to the joints (after a solve's substeps), for
     /// the next step's warm start wherever it is solved.
     pub fn finish(&self, balls: &mut [BallJoint], hinges: &mut [HingeJoint]) {
-        for b in &self.balls {
-            if !b.lanes.live.any() {
-                continue;
-            }
+        for b in self.balls.iter().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
                 let j = &mut balls[b.lanes.joints[k] as usize];
                 j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
                 cone_row_mut(j).impulse = b.cone.impulse.as_array()[k];
             }
         }
-        for h in &self.hinges {
-            if !h.lanes.live.any() {
-                continue;
-            }
+        for h in self.hinges.iter().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
                 j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
