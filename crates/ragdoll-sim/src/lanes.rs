@@ -72,6 +72,19 @@ impl Vec3x4 {
         }
     }
 
+    /// glam's `Vec3A::cross` per lane: `a_y b_z − b_y a_z` (and so on) with the second
+    /// product subtracted by a fused multiply–subtract where the target has one (x86-64
+    /// with FMA), as glam's SSE2 cross does, and by a product and a subtraction
+    /// otherwise. [`Vec3x4::cross`] is glam's `Vec3::cross`, never fused.
+    #[inline]
+    pub fn cross_a(self, o: Vec3x4) -> Vec3x4 {
+        Vec3x4 {
+            x: o.y.mul_neg_add(self.z, self.y * o.z),
+            y: o.z.mul_neg_add(self.x, self.z * o.x),
+            z: o.x.mul_neg_add(self.y, self.x * o.y),
+        }
+    }
+
     /// Component-wise product.
     #[inline]
     pub fn mul_elem(self, o: Vec3x4) -> Vec3x4 {
@@ -296,12 +309,13 @@ impl Quatx4 {
     }
 
     /// `v` rotated by the unit quaternion with glam's `Quat * Vec3` operations, in its
-    /// order: `v (w² − u·u) + u (2 v·u) + (u × v)(2w)`, so a lane holds glam's bits.
+    /// order: `v (w² − u·u) + u (2 v·u) + (u × v)(2w)`, the cross product glam's
+    /// `Vec3A` one, so a lane holds glam's bits.
     #[inline]
     pub fn rotate_as_glam(self, v: Vec3x4) -> Vec3x4 {
         let two = f32x4::splat(2.0);
         let u = self.v;
-        (v * (self.w * self.w - u.dot(u)) + u * (v.dot(u) * two)) + u.cross(v) * (self.w * two)
+        (v * (self.w * self.w - u.dot(u)) + u * (v.dot(u) * two)) + u.cross_a(v) * (self.w * two)
     }
 
     /// `v` rotated by the inverse of the unit quaternion.

@@ -16,15 +16,12 @@ use wide::f32x4;
 /// Four awake bodies at a time, each lane with glam's operations in their order
 /// (`Mat3A::from_quat`, `Mat3A * Mat3A` column by column), so the same bits as one by one.
 pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[bool]) {
-    let mut moving = Vec::with_capacity(awake.len());
-    for (i, m) in awake.iter().enumerate().take(motion.bodies.len()) {
-        if *m {
-            moving.push(i);
-        } else {
+    for (i, &moving) in awake.iter().enumerate().take(motion.bodies.len()) {
+        if !moving {
             states.inv_inertia[i] = Mat3A::ZERO;
         }
     }
-    for group in moving.chunks(LANES) {
+    for_each_group(&awake[..motion.bodies.len()], |group| {
         let body = |k: usize| group[k.min(group.len() - 1)];
         let world = world_inertia(
             Quatx4::from_fn(|k| states.rot[body(k)]),
@@ -33,6 +30,24 @@ pub fn update_inertia(states: &mut BodyStates, motion: Motions<'_>, awake: &[boo
         for (k, &i) in group.iter().enumerate() {
             states.inv_inertia[i] = Mat3A::from(world.lane(k));
         }
+    });
+}
+
+/// Calls `f` with the indices of the set entries of `awake`, four at a time (fewer in
+/// the last group), in order, without collecting them.
+fn for_each_group(awake: &[bool], mut f: impl FnMut(&[usize])) {
+    let mut group = [0; LANES];
+    let mut len = 0;
+    for i in (0..awake.len()).filter(|&i| awake[i]) {
+        group[len] = i;
+        len += 1;
+        if len == LANES {
+            f(&group);
+            len = 0;
+        }
+    }
+    if len > 0 {
+        f(&group[..len]);
     }
 }
 
@@ -90,7 +105,8 @@ fn gyroscopic(w_world: Vec3x4, rot: Quatx4, inertia: Mat3x4, h: f32x4) -> Vec3x4
     let (sw, siw) = (Mat3x4::skew(w), Mat3x4::skew(iw));
     let col = |c: usize| inertia.cols[c] + ((sw * inertia.cols[c]) - siw.cols[c]) * h;
     let [x, y, z] = [col(0), col(1), col(2)];
-    let (t0, t1, t2) = (y.cross(z), z.cross(x), x.cross(y));
+    // `Mat3A`'s columns are `Vec3A`s: their cross products are glam's `Vec3A` ones.
+    let (t0, t1, t2) = (y.cross_a(z), z.cross_a(x), x.cross_a(y));
     let det = x.dot(t0);
     let size = det.abs();
     let ok = size.simd_gt(f32x4::splat(1e-12)) & size.simd_lt(f32x4::splat(f32::INFINITY));
@@ -115,9 +131,9 @@ pub fn integrate_velocities(
 ) {
     // The gyroscopic term of the awake bodies four at a time (see `gyroscopic`); a
     // last group of fewer repeats its last body.
-    let moving: Vec<usize> = (0..motion.bodies.len()).filter(|&i| awake[i]).collect();
+    let awake = &awake[..motion.bodies.len()];
     let hx4 = f32x4::splat(h);
-    for group in moving.chunks(LANES) {
+    for_each_group(awake, |group| {
         let body = |k: usize| group[k.min(group.len() - 1)];
         let w = gyroscopic(
             Vec3x4::from_fn(|k| Vec3::from(states.ang_vel[body(k)])),
@@ -128,9 +144,11 @@ pub fn integrate_velocities(
         for (k, &i) in group.iter().enumerate() {
             states.ang_vel[i] = Vec3A::from(w.lane(k));
         }
-    }
-    for &i in &moving {
-        let b = &motion.bodies[i];
+    });
+    for (i, b) in motion.bodies.iter().enumerate() {
+        if !awake[i] {
+            continue;
+        }
         let mut v = states.lin_vel[i] + Vec3A::from(gravity * h);
         let mut w = states.ang_vel[i];
         if b.linear_damping > 0.0 {
@@ -188,6 +206,9 @@ mod tests {
     /// Random bodies: tumbling fast and slow, diagonal and full inertia tensors, a
     /// massless one (a singular `J`); every lane has the one-body bits, whatever its
     /// neighbours hold, and so does the world inverse inertia.
+    // The lanes repeat glam's x86-64 (SSE2) code; elsewhere glam orders its sums otherwise
+    // (every path uses the lanes there, so results still do not depend on threads).
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn lanes_give_the_one_body_bits() {
         let mut r = uniform(0x9e37_79b9);

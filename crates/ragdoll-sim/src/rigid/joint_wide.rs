@@ -28,6 +28,12 @@
 //! Only the common shapes are bundled: hinges with a hard range and no friction, ball
 //! joints with a hard cone, no twist limit and no friction (a pile's humans). A type
 //! with any other joint is solved one by one, as are the other joint types.
+//!
+//! Only on x86-64, where the lanes repeat glam's SSE2 code (its `Vec3A` cross product
+//! fused where the target has FMA, as `Vec3x4::cross_a` is): glam's code for other
+//! targets orders its sums otherwise, and the lanes would then differ from the one-by-one
+//! solve that islands solved on other threads use, and results would depend on the
+//! number of threads.
 
 // `!(k > ε)` on purpose, as in the scalar joints: NaN must skip the row too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -166,13 +172,7 @@ struct Lanes {
 
 impl Lanes {
     fn new(joints: [u32; LANES], frame: impl Fn(usize) -> [usize; 2]) -> Lanes {
-        let body = |k: usize| {
-            frame(if joints[k] == EMPTY {
-                0
-            } else {
-                joints[k] as usize
-            })
-        };
+        let body = |k: usize| frame(joints[if joints[k] == EMPTY { 0 } else { k }] as usize);
         Lanes {
             joints,
             a: std::array::from_fn(|k| body(k)[0]),
@@ -182,6 +182,14 @@ impl Lanes {
             inv_mass_b: f32x4::ZERO,
             inertia: Inertias::default(),
         }
+    }
+
+    /// Whether every used lane's bodies are its joint's (`frame(j)`): the lanes were
+    /// dealt from these joints and followed every change of their bodies' indices.
+    fn names(&self, frame: impl Fn(usize) -> [usize; 2]) -> bool {
+        (0..LANES)
+            .filter(|&k| self.used(k))
+            .all(|k| frame(self.joint(k)) == [self.a[k], self.b[k]])
     }
 
     /// Whether any lane's joint is solved this step.
@@ -200,6 +208,11 @@ impl Lanes {
     /// Whether lane `k` holds a joint.
     fn used(&self, k: usize) -> bool {
         self.joints[k] != EMPTY
+    }
+
+    /// The joint of lane `k`, lane 0's for an unused lane (whose results are masked).
+    fn joint(&self, k: usize) -> usize {
+        self.joints[if self.used(k) { k } else { 0 }] as usize
     }
 
     /// The sleep state and inverse masses of this step. A bundle without a live lane
@@ -362,7 +375,8 @@ impl PointX4 {
     /// The scalar `solve` (the relax pass prepares first, in [`JointLanes`]).
     #[inline]
     fn solve(&mut self, v: &mut Velocities, l: &Lanes, soft: &Soft) {
-        let cdot = (v.vb + v.wb.cross(self.rb)) - (v.va + v.wa.cross(self.ra));
+        // `point_velocity`: `Vec3A` cross products.
+        let cdot = (v.vb + v.wb.cross_a(self.rb)) - (v.va + v.wa.cross_a(self.ra));
         let p = (self.k_inv * (cdot + self.c * soft.bias_rate)) * -soft.mass_scale
             - self.impulse * soft.impulse_scale;
         self.impulse = Vec3x4::select(self.on, self.impulse + p, self.impulse);
@@ -631,6 +645,9 @@ impl JointLanes {
         bodies: usize,
         anchor: usize,
     ) -> Option<JointLanes> {
+        if !cfg!(target_arch = "x86_64") {
+            return None;
+        }
         let worth = |n: usize| n >= 2 * LANES;
         let mut lanes = JointLanes {
             planned: [balls.len(), hinges.len()],
@@ -640,7 +657,7 @@ impl JointLanes {
             let frame = |j: usize| [balls[j].frame.a, balls[j].frame.b];
             for joints in schedule((0..balls.len()).map(frame), bodies, anchor) {
                 let l = Lanes::new(joints, frame);
-                let j = |k: usize| &balls[l.joints[if l.used(k) { k } else { 0 }] as usize];
+                let j = |k: usize| &balls[l.joint(k)];
                 let point = PointX4::at(|k| &j(k).frame);
                 let cone = |k: usize| match j(k).swing {
                     Some(Swing::Cone {
@@ -675,7 +692,7 @@ impl JointLanes {
             let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
             for joints in schedule((0..hinges.len()).map(frame), bodies, anchor) {
                 let l = Lanes::new(joints, frame);
-                let j = |k: usize| &hinges[l.joints[if l.used(k) { k } else { 0 }] as usize];
+                let j = |k: usize| &hinges[l.joint(k)];
                 let point = PointX4::at(|k| &j(k).frame);
                 let align = AlignX4 {
                     local_a: Vec3x4::from_fn(|k| j(k).align.local_a),
@@ -731,10 +748,11 @@ impl JointLanes {
     ) {
         for b in &mut self.balls {
             b.lanes.begin(s, awake);
+            debug_assert!(b.lanes.names(|j| [balls[j].frame.a, balls[j].frame.b]));
             if !b.lanes.is_live() {
                 continue;
             }
-            let j = |k: usize| &balls[b.lanes.joints[if b.lanes.used(k) { k } else { 0 }] as usize];
+            let j = |k: usize| &balls[b.lanes.joint(k)];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
             b.lanes.refresh_inertia(s);
@@ -742,11 +760,11 @@ impl JointLanes {
         }
         for h in &mut self.hinges {
             h.lanes.begin(s, awake);
+            debug_assert!(h.lanes.names(|j| [hinges[j].frame.a, hinges[j].frame.b]));
             if !h.lanes.is_live() {
                 continue;
             }
-            let j =
-                |k: usize| &hinges[h.lanes.joints[if h.lanes.used(k) { k } else { 0 }] as usize];
+            let j = |k: usize| &hinges[h.lanes.joint(k)];
             h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
             for (r, row) in h.limit.iter_mut().enumerate() {
