@@ -187,9 +187,7 @@ impl Mat3x4 {
             ],
         }
     }
-}
 
-impl Mat3x4 {
     /// The cross-product matrices of four vectors, `skew(a) b = a × b` in each lane: the
     /// columns `(0, a_z, −a_y)`, `(−a_z, 0, a_x)`, `(a_y, −a_x, 0)`, zeros included, as
     /// the scalar forms build them.

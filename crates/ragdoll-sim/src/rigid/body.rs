@@ -6,9 +6,11 @@
 //! *static anchor*: a body with zero inverse mass and zero velocity that stands for the
 //! world (`body2 "world"`) and the ground, so constraint code never branches on it.
 
+use crate::lanes::{LANES, Mat3x4, Vec3x4};
 use crate::scene::{BodyDesc, Collider, MassProps, Shape};
 use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 use parry3d::shape::SharedShape;
+use wide::f32x4;
 
 /// Hot per-body state, one entry per body plus the trailing static anchor.
 #[derive(Clone, Debug, Default)]
@@ -30,7 +32,52 @@ pub struct BodyStates {
     pub inv_inertia: Vec<Mat3A>,
 }
 
+/// The velocities of four pairs of bodies in SIMD lanes: linear and angular of each
+/// lane's body a, then of its body b (the contact bundles' and joint lanes' working set).
+pub(crate) type VelocitiesX4 = [Vec3x4; 4];
+
 impl BodyStates {
+    /// The linear and angular velocities of bodies `a[k]` and `b[k]` in lane `k`.
+    #[inline(always)]
+    pub(crate) fn velocities_x4(&self, a: [usize; LANES], b: [usize; LANES]) -> VelocitiesX4 {
+        [
+            Vec3x4::from_fn(|k| Vec3::from(self.lin_vel[a[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(self.ang_vel[a[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(self.lin_vel[b[k]])),
+            Vec3x4::from_fn(|k| Vec3::from(self.ang_vel[b[k]])),
+        ]
+    }
+
+    /// Writes [`BodyStates::velocities_x4`] back for the lanes `used(k)`, each body only
+    /// if its solver inverse mass (`inv_mass_a`, `inv_mass_b`) is positive: static and
+    /// sleeping bodies keep theirs, as a one-by-one solve leaves them. No moving body
+    /// may be in two lanes.
+    #[inline(always)]
+    pub(crate) fn set_velocities_x4(
+        &mut self,
+        [a, b]: [[usize; LANES]; 2],
+        [inv_mass_a, inv_mass_b]: [f32x4; 2],
+        [va, wa, vb, wb]: &VelocitiesX4,
+        used: impl Fn(usize) -> bool,
+    ) {
+        for k in (0..LANES).filter(|&k| used(k)) {
+            if inv_mass_a.as_array()[k] > 0.0 {
+                self.lin_vel[a[k]] = Vec3A::from(va.lane(k));
+                self.ang_vel[a[k]] = Vec3A::from(wa.lane(k));
+            }
+            if inv_mass_b.as_array()[k] > 0.0 {
+                self.lin_vel[b[k]] = Vec3A::from(vb.lane(k));
+                self.ang_vel[b[k]] = Vec3A::from(wb.lane(k));
+            }
+        }
+    }
+
+    /// The world inverse inertias of bodies `i[k]` in lane `k`.
+    #[inline(always)]
+    pub(crate) fn inv_inertia_x4(&self, i: [usize; LANES]) -> Mat3x4 {
+        Mat3x4::from_fn(|k| Mat3::from(self.inv_inertia[i[k]]))
+    }
+
     /// Empty arrays with room for `n` entries: the world knows its body count when it is
     /// built, and pushing one by one would leave up to twice the room it needs.
     pub fn with_capacity(n: usize) -> BodyStates {

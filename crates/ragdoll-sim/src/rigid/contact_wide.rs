@@ -22,8 +22,8 @@ use super::body::BodyStates;
 use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
-use crate::lanes::{Mat3x4, Quatx4, Vec3x4, f4};
-use glam::{Mat3, Vec3, Vec3A};
+use crate::lanes::{Quatx4, Vec3x4, f4};
+use glam::Vec3;
 use wide::f32x4;
 
 /// Pairs per bundle: the lanes of an `f32x4`.
@@ -159,8 +159,7 @@ impl Bundle {
         if !inertia {
             return;
         }
-        let ia = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]]));
-        let ib = Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]]));
+        let (ia, ib) = (s.inv_inertia_x4(self.a), s.inv_inertia_x4(self.b));
         for w in &mut self.points[..self.slots] {
             w.ia_n = ia * w.ja_n;
             w.ib_n = ib * w.jb_n;
@@ -172,33 +171,15 @@ impl Bundle {
     /// The lanes' body velocities.
     #[inline]
     fn gather(&self, s: &BodyStates) -> [Vec3x4; 4] {
-        let (a, b) = (self.a, self.b);
-        [
-            Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[a[k]])),
-            Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[a[k]])),
-            Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[b[k]])),
-            Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[b[k]])),
-        ]
+        s.velocities_x4(self.a, self.b)
     }
 
     /// Writes the lanes' velocities back to their moving bodies (in one colour no moving
     /// body is in two lanes; static and sleeping bodies are not written).
     #[inline]
-    fn scatter(&self, s: &mut BodyStates, [va, wa, vb, wb]: [Vec3x4; 4]) {
-        for k in 0..LANES {
-            if self.count[k] == 0 {
-                continue;
-            }
-            let (a, b) = (self.a[k], self.b[k]);
-            if self.inv_mass_a.as_array()[k] > 0.0 {
-                s.lin_vel[a] = Vec3A::from(va.lane(k));
-                s.ang_vel[a] = Vec3A::from(wa.lane(k));
-            }
-            if self.inv_mass_b.as_array()[k] > 0.0 {
-                s.lin_vel[b] = Vec3A::from(vb.lane(k));
-                s.ang_vel[b] = Vec3A::from(wb.lane(k));
-            }
-        }
+    fn scatter(&self, s: &mut BodyStates, v: [Vec3x4; 4]) {
+        let masses = [self.inv_mass_a, self.inv_mass_b];
+        s.set_velocities_x4([self.a, self.b], masses, &v, |k| self.count[k] != 0);
     }
 
     /// Re-applies the accumulated impulses.

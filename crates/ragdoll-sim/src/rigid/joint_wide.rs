@@ -39,13 +39,13 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::ball::BallJoint;
-use super::body::BodyStates;
+use super::body::{BodyStates, VelocitiesX4};
 use super::hinge::HingeJoint;
 use super::joint::{AxisRow, JointFrame, RowKind};
 use super::limits::{MARGIN, Swing};
 use super::soft::{Softness, StepContext};
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4, f4};
-use glam::{Mat3, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use wide::f32x4;
 
 /// No joint in this lane.
@@ -132,6 +132,12 @@ struct Velocities {
     wa: Vec3x4,
     vb: Vec3x4,
     wb: Vec3x4,
+}
+
+impl Velocities {
+    fn x4(&self) -> VelocitiesX4 {
+        [self.va, self.wa, self.vb, self.wb]
+    }
 }
 
 /// The poses and world inverse inertias of a bundle's bodies.
@@ -241,38 +247,20 @@ impl Lanes {
     /// Reads the bodies' world inverse inertias (refreshed at each substep).
     fn refresh_inertia(&mut self, s: &BodyStates) {
         self.inertia = Inertias {
-            ia: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.a[k]])),
-            ib: Mat3x4::from_fn(|k| Mat3::from(s.inv_inertia[self.b[k]])),
+            ia: s.inv_inertia_x4(self.a),
+            ib: s.inv_inertia_x4(self.b),
         };
     }
 
     fn gather(&self, s: &BodyStates) -> Velocities {
-        let (a, b) = (self.a, self.b);
-        Velocities {
-            va: Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[a[k]])),
-            wa: Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[a[k]])),
-            vb: Vec3x4::from_fn(|k| Vec3::from(s.lin_vel[b[k]])),
-            wb: Vec3x4::from_fn(|k| Vec3::from(s.ang_vel[b[k]])),
-        }
+        let [va, wa, vb, wb] = s.velocities_x4(self.a, self.b);
+        Velocities { va, wa, vb, wb }
     }
 
-    /// Writes the live lanes' moving bodies back (static and sleeping bodies, which the
-    /// scalar solve leaves as they are, are not written; no body is in two lanes).
+    /// Writes the live lanes' moving bodies back (no body is in two lanes).
     fn scatter(&self, s: &mut BodyStates, v: &Velocities) {
-        for k in 0..LANES {
-            if !is_set(self.live, k) {
-                continue;
-            }
-            let (a, b) = (self.a[k], self.b[k]);
-            if self.inv_mass_a.as_array()[k] > 0.0 {
-                s.lin_vel[a] = Vec3A::from(v.va.lane(k));
-                s.ang_vel[a] = Vec3A::from(v.wa.lane(k));
-            }
-            if self.inv_mass_b.as_array()[k] > 0.0 {
-                s.lin_vel[b] = Vec3A::from(v.vb.lane(k));
-                s.ang_vel[b] = Vec3A::from(v.wb.lane(k));
-            }
-        }
+        let masses = [self.inv_mass_a, self.inv_mass_b];
+        s.set_velocities_x4([self.a, self.b], masses, &v.x4(), |k| is_set(self.live, k));
     }
 }
 
