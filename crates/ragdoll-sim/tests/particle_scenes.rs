@@ -168,22 +168,40 @@ fn paper_solver_runs_every_scene_without_nan() {
     }
 }
 
+/// Section 5.1.8–5.1.9: the paper's particle spider and human "gain too much energy";
+/// ours must not.
+///
+/// How much the paper's solver gains is chaotic: dropped from twelve heights 1 mm apart,
+/// the human gains 0.18-1.63 of its energy scale (default build), 0.10-1.72 when built
+/// with `-C target-cpu=native`, whose fused multiply-adds round differently; a single
+/// start at the threshold failed there. The paper's finding is about the method, so its
+/// gain is judged by the mean over `PAPER_STARTS` heights (human: 1.19 default, 0.41
+/// native; spider: 1.53, 2.46).
 #[test]
 fn paper_finding_articulated_figures_gain_energy_in_paper_mode_only() {
-    // Section 5.1.8–5.1.9: the paper's particle spider and human "gain too much energy";
-    // ours must not.
+    const PAPER_STARTS: u32 = 8;
     for name in ["spider", "human"] {
         let s = scene(name, 1);
-        let (paper, _, _) = run(&s, ParticleSolver::Paper, 10.0);
+        let gains: Vec<f64> = (0..PAPER_STARTS)
+            .map(|mm| {
+                run(
+                    &raised(s.clone(), mm as f32 * 1e-3),
+                    ParticleSolver::Paper,
+                    10.0,
+                )
+                .0
+            })
+            .map(|st| st.energy_gain)
+            .collect();
+        let paper = gains.iter().sum::<f64>() / gains.len() as f64;
         let (improved, _, _) = run(&s, ParticleSolver::Improved, 10.0);
         println!(
-            "{name}: energy_gain paper {:.3}, improved {:.4}",
-            paper.energy_gain, improved.energy_gain
+            "{name}: energy_gain paper {paper:.3} (mean of {gains:.3?}), improved {:.4}",
+            improved.energy_gain
         );
         assert!(
-            paper.energy_gain > 0.2,
-            "{name}: the paper's energy gain did not reproduce ({})",
-            paper.energy_gain
+            paper > 0.2,
+            "{name}: the paper's energy gain did not reproduce (mean {paper:.3} of {gains:.3?})"
         );
         assert!(improved.energy_gain <= 0.02);
     }
