@@ -122,33 +122,48 @@ fn ground_contacts(
     });
 }
 
-/// Pairs (or bones, for the ground) per task of the parallel narrow phase, and the
-/// fewest for which it runs on the pool at all: a task must outweigh waking a thread.
-const NARROW_PHASE_CHUNK: usize = 64;
+/// The fewest pairs (or bones, for the ground) in a run of the parallel narrow phase,
+/// and half the fewest for which it runs on the pool at all: a run must outweigh waking
+/// a thread.
+const NARROW_PHASE_MIN_RUN: usize = 64;
+
+/// Runs of the parallel narrow phase per thread: a few, so that work stealing evens out
+/// runs of unequal cost (as `islands`' batches). Each run fills a contact set of its own
+/// from empty, so a run costs more than its items: with runs of 64 pairs, about 470 a
+/// detection on the 1000-human pile, the narrow phase on two threads took longer than
+/// on one (temporary timers, its busiest frames: 15-17 ms a frame against 13; with four
+/// runs per thread 8.5-9 ms).
+const NARROW_PHASE_RUNS_PER_THREAD: usize = 4;
 
 /// The narrow phase: `collide(item, scratch, set)` appends each item's manifolds to a
 /// contact set, item after item. On a pool of several threads, with enough items, runs
-/// of [`NARROW_PHASE_CHUNK`] items are collided on all threads into sets of their own,
-/// then appended to `out` in item order: each pair's manifolds and points land where the
-/// serial loop puts them, so the contacts are the same bits on any number of threads
-/// (the points of a set are renumbered by where it lands, `ContactSet::append`). Parry's
-/// manifold query is stateless here (`scratch` only holds its output), so runs share
-/// nothing. Collision detection runs four times a frame and was the largest serial part
-/// of a frame on two threads.
+/// of consecutive items ([`NARROW_PHASE_RUNS_PER_THREAD`] per thread) are collided on
+/// all threads into sets of their own, then appended to `out` in item order: each
+/// pair's manifolds and points land where the serial loop puts them, so the contacts are
+/// the same bits on any number of threads and whatever the runs (the points of a set
+/// are renumbered by where it lands, `ContactSet::append`). Parry's manifold query is
+/// stateless here (`scratch` only holds its output), so runs share nothing. Collision
+/// detection runs four times a frame and was the largest serial part of a frame on two
+/// threads.
 fn narrow_phase<T: Sync>(
     items: &[T],
     scratch: &mut Vec<ContactManifold<(), ()>>,
     out: &mut ContactSet,
     collide: impl Fn(&T, &mut Vec<ContactManifold<(), ()>>, &mut ContactSet) + Sync,
 ) {
-    if rayon::current_num_threads() == 1 || items.len() < 2 * NARROW_PHASE_CHUNK {
+    let threads = rayon::current_num_threads();
+    if threads == 1 || items.len() < 2 * NARROW_PHASE_MIN_RUN {
         for item in items {
             collide(item, scratch, out);
         }
         return;
     }
+    let run = items
+        .len()
+        .div_ceil(threads * NARROW_PHASE_RUNS_PER_THREAD)
+        .max(NARROW_PHASE_MIN_RUN);
     let sets: Vec<ContactSet> = items
-        .par_chunks(NARROW_PHASE_CHUNK)
+        .par_chunks(run)
         .map(|run| {
             let mut set = ContactSet::default();
             let mut scratch = Vec::new();
