@@ -184,14 +184,9 @@ fn paper_finding_articulated_figures_gain_energy_in_paper_mode_only() {
         let s = scene(name, 1);
         let gains: Vec<f64> = (0..PAPER_STARTS)
             .map(|mm| {
-                run(
-                    &raised(s.clone(), mm as f32 * 1e-3),
-                    ParticleSolver::Paper,
-                    10.0,
-                )
-                .0
+                let dropped = raised(s.clone(), mm as f32 * 1e-3);
+                run(&dropped, ParticleSolver::Paper, 10.0).0.energy_gain
             })
-            .map(|st| st.energy_gain)
             .collect();
         let paper = gains.iter().sum::<f64>() / gains.len() as f64;
         let (improved, _, _) = run(&s, ParticleSolver::Improved, 10.0);
