@@ -7,16 +7,17 @@ use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use std::path::PathBuf;
 
-/// Steps a pile of 12 humans for 3 s on a pool of `threads` threads (`None`: rayon's
-/// global pool) and returns every body's state. The pile starts as 12 separate figures,
-/// so the solve is shared out over many islands; they fall onto each other and merge
-/// into fewer, larger ones, which the run also covers.
+/// Steps a pile of 80 humans for 3 s on a pool of `threads` threads (`None`: rayon's
+/// global pool) and returns every body's state. The pile starts as 80 separate figures,
+/// so the solve is shared out over many islands, several to a batch (`rigid::parallel`
+/// deals 16 batches per thread); they fall onto each other and merge into fewer, larger
+/// ones, which the run also covers.
 fn pile_on(threads: Option<usize>) -> Vec<BodyState> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/pile.af");
     let desc = load(
         &path,
         &AfOptions {
-            count: Some(12),
+            count: Some(80),
             ..Default::default()
         },
     )
