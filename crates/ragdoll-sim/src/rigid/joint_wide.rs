@@ -221,13 +221,27 @@ impl Lanes {
         self.joints[if self.used(k) { k } else { 0 }] as usize
     }
 
-    /// The sleep state and inverse masses of this step. A bundle without a live lane
-    /// (its figures asleep) is skipped by every pass until the next step's `begin`.
-    fn begin(&mut self, s: &BodyStates, awake: &[bool]) {
+    /// The sleep state and inverse masses of this step, and for a bundle with a live
+    /// lane the inertias and poses its first preparation reads; `None` for a bundle
+    /// without one (its figures asleep), which every pass skips until the next step's
+    /// `begin`. `frame` names each joint's bodies, checked against the lanes' in debug
+    /// builds.
+    fn begin(
+        &mut self,
+        s: &BodyStates,
+        awake: &[bool],
+        frame: impl Fn(usize) -> [usize; 2],
+    ) -> Option<Bodies> {
+        debug_assert!(self.names(frame));
         let (a, b) = (self.a, self.b);
         self.live = mask(|k| self.used(k) && (awake[a[k]] || awake[b[k]]));
         self.inv_mass_a = f4(|k| s.inv_mass[a[k]]);
         self.inv_mass_b = f4(|k| s.inv_mass[b[k]]);
+        if !self.is_live() {
+            return None;
+        }
+        self.refresh_inertia(s);
+        Some(self.bodies(s))
     }
 
     /// The poses now, with the inertias of the last [`Lanes::refresh_inertia`].
@@ -735,31 +749,26 @@ impl JointLanes {
         awake: &[bool],
     ) {
         for b in &mut self.balls {
-            b.lanes.begin(s, awake);
-            debug_assert!(b.lanes.names(|j| [balls[j].frame.a, balls[j].frame.b]));
-            if !b.lanes.is_live() {
+            let frame = |j: usize| [balls[j].frame.a, balls[j].frame.b];
+            let Some(p) = b.lanes.begin(s, awake, frame) else {
                 continue;
-            }
+            };
             let j = |k: usize| &balls[b.lanes.joint(k)];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
-            b.lanes.refresh_inertia(s);
-            b.point.prepare(&b.lanes, &b.lanes.bodies(s));
+            b.point.prepare(&b.lanes, &p);
         }
         for h in &mut self.hinges {
-            h.lanes.begin(s, awake);
-            debug_assert!(h.lanes.names(|j| [hinges[j].frame.a, hinges[j].frame.b]));
-            if !h.lanes.is_live() {
+            let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
+            let Some(p) = h.lanes.begin(s, awake, frame) else {
                 continue;
-            }
+            };
             let j = |k: usize| &hinges[h.lanes.joint(k)];
             h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
             for (r, row) in h.limit.iter_mut().enumerate() {
                 row.impulse = f4(|k| limit_rows(j(k))[r].impulse);
             }
-            h.lanes.refresh_inertia(s);
-            let p = h.lanes.bodies(s);
             h.point.prepare(&h.lanes, &p);
             h.align.prepare(&h.lanes, &p);
         }
