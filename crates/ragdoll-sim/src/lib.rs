@@ -15,6 +15,7 @@
 
 #![warn(missing_docs)]
 
+mod batches;
 pub mod broadphase;
 mod lanes;
 pub mod method;

@@ -48,7 +48,7 @@ const BATCHES_PER_THREAD: usize = 4;
 
 /// Below this much work (bones + contact points + joints) a frame's chunk is stepped in
 /// place: gathering and waking threads would cost more than they save.
-const MIN_PARALLEL_WORK: u64 = 256;
+const MIN_PARALLEL_WORK: usize = 256;
 
 /// A chunk is gathered even without parallel work when at most 1 / this of its bones
 /// move.
@@ -134,7 +134,7 @@ impl Plan {
 
         // Work per island, at its root: per substep a bone, a contact point and a joint
         // cost about the same.
-        let mut work = vec![0u64; n];
+        let mut work = vec![0usize; n];
         for &r in root.iter().chain(&joint_root) {
             if r != NONE {
                 work[r as usize] += 1;
@@ -142,35 +142,30 @@ impl Plan {
         }
         for (m, &r) in w.contacts.manifolds.iter().zip(&manifold_root) {
             if r != NONE {
-                work[r as usize] += u64::from(m.end - m.start);
+                work[r as usize] += (m.end - m.start) as usize;
             }
         }
-        let total: u64 = work.iter().sum();
+        let total: usize = work.iter().sum();
         // Gathering also pays on its own when most bones are static (a pile mostly or
         // wholly asleep): a batch's substeps never visit the static bones, which the
         // in-place loops reset and skip on every substep — 3 ms a frame for a pile of
         // 100 humans asleep, with nothing to move.
         let moving = root.iter().filter(|&&r| r != NONE).count();
         let compacts = moving * COMPACT_FRACTION <= n;
-        // Islands in the order of their roots, cut into runs of about total / wanted.
+        // Islands in the order of their roots (every root has work: its own bone),
+        // dealt into runs of about equal work.
         let wanted = if threads > 1 {
-            (threads * BATCHES_PER_THREAD) as u64
+            threads * BATCHES_PER_THREAD
         } else {
             1
         };
+        let roots: Vec<usize> = (0..n).filter(|&r| work[r] > 0).collect();
+        let island_work: Vec<usize> = roots.iter().map(|&r| work[r]).collect();
+        let dealt = crate::batches::deal(&island_work, wanted);
+        let count = dealt.last().map_or(0, |&b| b + 1);
         let mut batch_of = vec![NONE; n];
-        let (mut count, mut done, mut last_cut) = (0u32, 0u64, None);
-        for (r, &cost) in work.iter().enumerate() {
-            if cost == 0 {
-                continue; // not a root
-            }
-            let cut = done * wanted / total;
-            if last_cut != Some(cut) {
-                last_cut = Some(cut);
-                count += 1;
-            }
-            batch_of[r] = count - 1;
-            done += cost;
+        for (&r, &b) in roots.iter().zip(&dealt) {
+            batch_of[r] = b;
         }
         let parallel = threads > 1 && count >= 2 && total >= MIN_PARALLEL_WORK;
         if !parallel && !compacts {

@@ -33,7 +33,7 @@ const NONE: u32 = u32::MAX;
 /// threads would cost about what they save.
 const MIN_PARALLEL_WORK: usize = 256;
 
-/// Batches per thread. One task per island, as before, gathered every island into
+/// Batches per thread ([`crate::batches`]). One task per island, as before, gathered every island into
 /// arrays of its own, most of them a single figure; a batch of consecutive islands pays
 /// that once, and with enough batches work stealing still evens out their unequal cost.
 /// Measured on the pile, two threads, 600 frames (a throwaway example, two alternations
@@ -41,25 +41,6 @@ const MIN_PARALLEL_WORK: usize = 256;
 /// but 1000 humans from 3.9-4.3 to 4.2-4.5 (a tail of large batches); 16 per thread
 /// 0.39-0.40 and 3.5-3.9 ms.
 const BATCHES_PER_THREAD: usize = 16;
-
-/// Deals islands, in order, into about `wanted` runs of consecutive islands of about
-/// equal work: each island's batch, ascending from 0.
-fn batches(island_work: &[usize], wanted: usize) -> Vec<u32> {
-    let total: usize = island_work.iter().sum();
-    let (mut batch, mut done, mut last_cut) = (0u32, 0usize, None);
-    island_work
-        .iter()
-        .map(|&work| {
-            let cut = done * wanted / total.max(1);
-            if last_cut.is_some_and(|c| c != cut) {
-                batch += 1;
-            }
-            last_cut = Some(cut);
-            done += work;
-            batch
-        })
-        .collect()
-}
 
 /// For each joint type, the world index of every joint of a batch's local set.
 #[derive(Default)]
@@ -174,10 +155,9 @@ pub fn solve_islands(
         count(pair.a as usize, pair.b as usize);
     }
     let wanted = rayon::current_num_threads() * BATCHES_PER_THREAD;
-    let batch_of_island = batches(&island_work, wanted);
+    let batch_of_island = crate::batches::deal(&island_work, wanted);
     let batch_count = batch_of_island.last().map_or(0, |&b| b as usize + 1);
     // Each batch's moving bodies in ascending world order (its islands interleaved).
-    let mut task_of = vec![NONE; s.len()];
     let mut local_of_moving = vec![NONE; s.len()];
     let mut tasks: Vec<IslandTask> = (0..batch_count).map(|_| IslandTask::default()).collect();
     for i in 0..n {
@@ -186,7 +166,6 @@ pub fn solve_islands(
         }
         let t = batch_of_island[island_of_body[i] as usize];
         let task = &mut tasks[t as usize];
-        task_of[i] = t;
         local_of_moving[i] = task.bodies.len() as u32;
         task.bodies.push(i);
     }
@@ -194,10 +173,7 @@ pub fn solve_islands(
         task.moving = task.bodies.len();
     }
     // A constraint's batch is its island's.
-    let batch_of = |a: usize, b: usize| {
-        let t = if awake[a] { task_of[a] } else { task_of[b] };
-        (t != NONE).then_some(t as usize)
-    };
+    let batch_of = |a: usize, b: usize| island_of(a, b).map(|t| batch_of_island[t] as usize);
 
     macro_rules! gather_joints {
         ($($kind:ident),*) => {$(
@@ -273,21 +249,5 @@ pub fn solve_islands(
             pair.b = b;
             pairs[k] = pair;
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::batches;
-
-    /// Consecutive islands share a batch until the work before an island crosses the
-    /// next multiple of total / wanted; batches are numbered densely (a large island
-    /// that spans several shares makes one batch, not empty ones after it).
-    #[test]
-    fn batches_deal_consecutive_islands_by_work() {
-        assert_eq!(batches(&[5, 5, 5, 5], 2), [0, 0, 1, 1]);
-        assert_eq!(batches(&[1, 1, 30, 1, 1], 4), [0, 0, 0, 1, 1]);
-        assert_eq!(batches(&[3, 3, 3], 8), [0, 1, 2]);
-        assert_eq!(batches(&[7], 4), [0]);
     }
 }
