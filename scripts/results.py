@@ -7,7 +7,7 @@ import json, subprocess, sys
 BIN = sys.argv[1] if len(sys.argv) > 1 else "target/release/ragdoll-lab"
 SCENES = [(1, 1), (2, 1), (2, 2), (3, 1), (3, 2), (3, 3), (4, 1), (4, 2),
           (5, 1), (6, 1), (7, 1), (8, 1), (9, 1)]
-RUNS = [("particle, improved (default)", ["--method", "particle", "--particle-solver", "improved"], "particle"),
+RUNS = [("particle, rigid frames (default)", ["--method", "particle", "--particle-solver", "rigid-frames"], "particle"),
         ("particle, paper", ["--method", "particle", "--particle-solver", "paper"], "particle"),
         ("multibody", ["--method", "multibody"], "multibody")]
 

@@ -55,9 +55,10 @@ pub struct SceneArgs {
 pub enum ParticleSolverArg {
     /// Section 3 of the paper, as written.
     Paper,
-    /// Ours: particulated bones, inverse-mass weighting, substeps.
+    /// Position-based rigid bones (rigid frames with evaluated corner particles),
+    /// particulated mass properties, substeps, friction, sleeping.
     #[default]
-    Improved,
+    RigidFrames,
 }
 
 /// `view` options.

@@ -12,7 +12,7 @@ pub fn build_particle(
 ) -> Result<Box<dyn Method>, AppError> {
     let solver = match solver {
         ParticleSolverArg::Paper => ParticleSolver::Paper,
-        ParticleSolverArg::Improved => ParticleSolver::Improved,
+        ParticleSolverArg::RigidFrames => ParticleSolver::RigidFrames,
     };
     Ok(Box::new(ParticleWorld::new(scene, solver)?))
 }

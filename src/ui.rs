@@ -243,7 +243,7 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     ui.horizontal(|ui| {
         for (solver, name) in [
             (ParticleSolverArg::Paper, "paper"),
-            (ParticleSolverArg::Improved, "improved"),
+            (ParticleSolverArg::RigidFrames, "rigid frames"),
         ] {
             if ui.radio(state.particle_solver == solver, name).clicked() {
                 actions.push(Action::ParticleSolver(solver));
@@ -391,8 +391,8 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                 item(ui, "Reload file (R)", Action::Reload);
                 ui.separator();
                 let other = match state.particle_solver {
-                    ParticleSolverArg::Paper => ParticleSolverArg::Improved,
-                    ParticleSolverArg::Improved => ParticleSolverArg::Paper,
+                    ParticleSolverArg::Paper => ParticleSolverArg::RigidFrames,
+                    ParticleSolverArg::RigidFrames => ParticleSolverArg::Paper,
                 };
                 item(
                     ui,

@@ -37,7 +37,7 @@ fn positive(v: &Value, what: &str) -> f64 {
     x
 }
 
-const FLAVORS: [&str; 3] = ["particle_paper", "particle_improved", "multibody"];
+const FLAVORS: [&str; 3] = ["particle_paper", "particle_rigid_frames", "multibody"];
 
 /// The realtime benches (tests 10-12) share one per-method shape.
 fn check_timings(row: &Value) {

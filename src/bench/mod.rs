@@ -37,7 +37,7 @@ pub enum Flavor {
     /// The particle method as the paper wrote it (section 3).
     ParticlePaper,
     /// Our particle method (the default solver).
-    ParticleImproved,
+    ParticleRigidFrames,
     /// The impulse-based multibody method.
     Multibody,
 }
@@ -46,7 +46,7 @@ impl Flavor {
     /// All three, in table order.
     pub const ALL: [Flavor; 3] = [
         Flavor::ParticlePaper,
-        Flavor::ParticleImproved,
+        Flavor::ParticleRigidFrames,
         Flavor::Multibody,
     ];
 
@@ -54,7 +54,7 @@ impl Flavor {
     pub fn key(self) -> &'static str {
         match self {
             Flavor::ParticlePaper => "particle_paper",
-            Flavor::ParticleImproved => "particle_improved",
+            Flavor::ParticleRigidFrames => "particle_rigid_frames",
             Flavor::Multibody => "multibody",
         }
     }
@@ -63,7 +63,9 @@ impl Flavor {
     pub fn build(self, scene: &SceneDesc) -> Result<Box<dyn Method>, AppError> {
         match self {
             Flavor::ParticlePaper => methods::build_particle(scene, ParticleSolverArg::Paper),
-            Flavor::ParticleImproved => methods::build_particle(scene, ParticleSolverArg::Improved),
+            Flavor::ParticleRigidFrames => {
+                methods::build_particle(scene, ParticleSolverArg::RigidFrames)
+            }
             Flavor::Multibody => methods::build_multibody(scene),
         }
     }

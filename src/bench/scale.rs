@@ -23,13 +23,13 @@ pub const FRAME_DT: f32 = 1.0 / 60.0;
 
 /// The two methods the scale table compares: the particle method in its default
 /// (improved) mode and the multibody method.
-pub const FLAVORS: [Flavor; 2] = [Flavor::ParticleImproved, Flavor::Multibody];
+pub const FLAVORS: [Flavor; 2] = [Flavor::ParticleRigidFrames, Flavor::Multibody];
 
 /// Whether `flavor` spreads one simulation's step over several threads: both methods
 /// step their islands on the rayon pool they are stepped in (`rigid::parallel`,
 /// `particle::islands`); the paper's particle solver stays serial.
 pub fn runs_in_parallel(flavor: Flavor) -> bool {
-    matches!(flavor, Flavor::Multibody | Flavor::ParticleImproved)
+    matches!(flavor, Flavor::Multibody | Flavor::ParticleRigidFrames)
 }
 
 /// The thread counts to measure: one, and all cores when there is more than one.

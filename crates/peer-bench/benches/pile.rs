@@ -97,7 +97,7 @@ fn timeline(scene: &ragdoll_sim::SceneDesc, frames: usize) -> Result<Vec<[f64; 3
         r.world.step();
         out[f / 60][0] += 1e3 * (thread_cpu_seconds() - t0);
     }
-    for (k, flavor) in [(1, Flavor::Multibody), (2, Flavor::ParticleImproved)] {
+    for (k, flavor) in [(1, Flavor::Multibody), (2, Flavor::ParticleRigidFrames)] {
         let ms = on_threads(1, || {
             let mut m = flavor.build(scene)?;
             let mut ms = vec![0.0; seconds];
@@ -173,7 +173,7 @@ fn main() {
             runs.push(Round {
                 rapier,
                 multibody: ours(Flavor::Multibody),
-                particle: ours(Flavor::ParticleImproved),
+                particle: ours(Flavor::ParticleRigidFrames),
             });
         }
         let rapier = median_cost(runs.iter().map(|r| r.rapier).collect());

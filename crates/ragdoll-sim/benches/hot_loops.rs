@@ -34,13 +34,13 @@ fn main() {
 /// Which method a bench runs.
 #[derive(Clone, Copy, Debug)]
 enum Which {
-    ParticleImproved,
+    ParticleRigidFrames,
     ParticlePaper,
     Multibody,
 }
 
 const ALL: [Which; 3] = [
-    Which::ParticleImproved,
+    Which::ParticleRigidFrames,
     Which::ParticlePaper,
     Which::Multibody,
 ];
@@ -48,7 +48,7 @@ const ALL: [Which; 3] = [
 impl std::fmt::Display for Which {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            Which::ParticleImproved => "particle_improved",
+            Which::ParticleRigidFrames => "particle_rigid_frames",
             Which::ParticlePaper => "particle_paper",
             Which::Multibody => "multibody",
         })
@@ -61,8 +61,8 @@ fn build(which: Which, scene: &SceneDesc, settle_steps: usize) -> Box<dyn Method
     scene.settings.sleep.time = 1e9;
     let scene = &scene;
     let mut m: Box<dyn Method> = match which {
-        Which::ParticleImproved => {
-            Box::new(ParticleWorld::new(scene, ParticleSolver::Improved).unwrap())
+        Which::ParticleRigidFrames => {
+            Box::new(ParticleWorld::new(scene, ParticleSolver::RigidFrames).unwrap())
         }
         Which::ParticlePaper => Box::new(ParticleWorld::new(scene, ParticleSolver::Paper).unwrap()),
         Which::Multibody => Box::new(MultibodyWorld::new(scene).unwrap()),
@@ -187,7 +187,7 @@ fn broad_phase(bencher: divan::Bencher, which: Which) {
     bencher.bench_local(|| m.step());
 }
 
-#[divan::bench(args = [Which::ParticleImproved, Which::Multibody], sample_count = 30)]
+#[divan::bench(args = [Which::ParticleRigidFrames, Which::Multibody], sample_count = 30)]
 fn pile_of_4(bencher: divan::Bencher, which: Which) {
     // 90 frames: the humans have landed on each other.
     let mut m = build(which, &pile(4), 90);

@@ -50,7 +50,7 @@ fn run(s: &SceneDesc, multibody: bool) -> Result<(MethodStats, f64), String> {
         let w = MultibodyWorld::new(s).map_err(|e| e.to_string())?;
         measure(w, s, |w| w.sample().energy)
     } else {
-        let w = ParticleWorld::new(s, ParticleSolver::Improved).map_err(|e| e.to_string())?;
+        let w = ParticleWorld::new(s, ParticleSolver::RigidFrames).map_err(|e| e.to_string())?;
         measure(w, s, ParticleWorld::state_energy)
     }
 }

@@ -53,7 +53,7 @@ fn lift_sleeping_chest(m: &mut dyn Method, scene: &SceneDesc) -> f32 {
 #[test]
 fn grabbing_a_sleeping_body_wakes_it_and_lifts_it_on_both_sides() {
     let scene = human();
-    let mut particle = ParticleWorld::new(&scene, ParticleSolver::Improved).expect("particle");
+    let mut particle = ParticleWorld::new(&scene, ParticleSolver::RigidFrames).expect("particle");
     let mut multibody = MultibodyWorld::new(&scene).expect("multibody");
     // The chest's shape-frame origin is its centre. Held 60 cm up with the rest of the
     // body hanging from it, it must come within 10 cm of the target: both grabs are

@@ -40,7 +40,7 @@ fn com(w: &ParticleWorld) -> Vec3 {
 
 #[test]
 fn free_fall_matches_parabola() {
-    for solver in [ParticleSolver::Improved, ParticleSolver::Paper] {
+    for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
         let mut b = boxed(
             "b",
             Vec3::new(0.2, 0.1, 0.3),
@@ -78,7 +78,7 @@ fn restitution_bounce_height() {
         let mut b = boxed("b", Vec3::splat(half), Vec3::new(0.0, half + h0, 0.0), 1.0);
         b.restitution = e;
         let s = scene(vec![b], vec![], Some(Ground::default()));
-        let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+        let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
         let (mut bounced, mut apex, mut up) = (false, 0.0f32, f32::MIN);
         for _ in 0..150 {
             w.step();
@@ -119,7 +119,7 @@ fn slide(deg: f32, seconds: f32) -> f32 {
     b.pose.rotation = Quat::from_rotation_z(tilt);
     b.friction.contact = 0.5;
     let s = scene(vec![b], vec![], Some(ground));
-    let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+    let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
     let x0 = com(&w);
     let frames = (seconds / s.settings.timestep).round() as usize;
     for _ in 0..frames {
@@ -172,7 +172,7 @@ fn hinge_pendulum_period_matches_rigid_pendulum() {
         friction: 0.0,
     };
     let s = scene(vec![b], vec![c], None);
-    let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+    let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
     // Rigid pendulum: T = 2π √(I_pivot / (m g d)).
     let d = half.y;
     let i_cm = m / 12.0 * ((2.0 * half.x).powi(2) + (2.0 * half.y).powi(2));
@@ -242,7 +242,7 @@ fn chain_scene() -> SceneDesc {
 
 #[test]
 fn same_scene_twice_gives_identical_bits() {
-    for solver in [ParticleSolver::Improved, ParticleSolver::Paper] {
+    for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
         let run = || {
             let mut w = ParticleWorld::new(&chain_scene(), solver).unwrap();
             for _ in 0..180 {
@@ -288,7 +288,7 @@ fn assert_sane(mut s: SceneDesc, solver: ParticleSolver, seconds: f32, vmax: f32
 
 #[test]
 fn robust_across_timesteps_and_iterations() {
-    for solver in [ParticleSolver::Improved, ParticleSolver::Paper] {
+    for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
         for dt in [1.0 / 1000.0, 1.0 / 60.0, 1.0 / 10.0] {
             let mut s = chain_scene();
             s.settings.timestep = dt;
@@ -306,7 +306,7 @@ fn robust_across_timesteps_and_iterations() {
 
 #[test]
 fn robust_drop_interpenetration_and_coincident_anchors() {
-    for solver in [ParticleSolver::Improved, ParticleSolver::Paper] {
+    for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
         // A bone dropped from 100 m: at most √(2 g 100) ≈ 44 m/s, then it must stop.
         let s = scene(
             vec![boxed(
@@ -319,7 +319,7 @@ fn robust_drop_interpenetration_and_coincident_anchors() {
             Some(Ground::default()),
         );
         assert_sane(s.clone(), solver, 6.0, 46.0, "drop from 100 m");
-        if solver == ParticleSolver::Improved {
+        if solver == ParticleSolver::RigidFrames {
             // It lands after 4.5 s and must then lie still on the ground, its centre
             // between its half-thickness (0.1 m, flat) and half-length (0.3 m, on end).
             let mut w = ParticleWorld::new(&s, solver).unwrap();
@@ -379,9 +379,12 @@ fn undescribable_scenes_are_clear_errors() {
         Pose::IDENTITY,
         MassSpec::Density(1.0),
     );
-    let err = ParticleWorld::new(&scene(vec![flat], vec![], None), ParticleSolver::Improved)
-        .err()
-        .expect("flat hull");
+    let err = ParticleWorld::new(
+        &scene(vec![flat], vec![], None),
+        ParticleSolver::RigidFrames,
+    )
+    .err()
+    .expect("flat hull");
     assert!(err.to_string().contains("flat"), "{err}");
     let s = scene(
         vec![boxed("a", Vec3::splat(0.1), Vec3::ZERO, 1.0)],
@@ -414,7 +417,7 @@ fn projectile_wakes_a_resting_box() {
         vec![],
         Some(Ground::default()),
     );
-    let mut w = ParticleWorld::new(&s, ParticleSolver::Improved).unwrap();
+    let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
     for _ in 0..180 {
         w.step();
     }

@@ -65,7 +65,7 @@ fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9_every_variant() {
         let n = k + 1;
         let variants = scene(name, 1).variants.len().max(1) as u32;
         for v in 1..=variants {
-            let (st, state_gain, _) = run(&scene(name, v), ParticleSolver::Improved, 10.0);
+            let (st, state_gain, _) = run(&scene(name, v), ParticleSolver::RigidFrames, 10.0);
             println!(
                 "scene {n} {name} v{v}: energy_gain {:.4} (state {:.4}) final_kinetic {:.2e} penetration {:.4} m joint_gap {:.4} m limit {:.2}° stretch {:.1e} asleep_at {:?}",
                 st.energy_gain,
@@ -135,7 +135,7 @@ fn resting_piles_stop_creeping_and_sleep_sooner() {
             ..Default::default()
         };
         let s = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
-        let (st, _, _) = run(&s, ParticleSolver::Improved, 6.0);
+        let (st, _, _) = run(&s, ParticleSolver::RigidFrames, 6.0);
         times.push(st.asleep_at_s.unwrap_or(f64::INFINITY));
     }
     let mean = times.iter().sum::<f64>() / times.len() as f64;
@@ -189,7 +189,7 @@ fn paper_finding_articulated_figures_gain_energy_in_paper_mode_only() {
             })
             .collect();
         let paper = gains.iter().sum::<f64>() / gains.len() as f64;
-        let (improved, _, _) = run(&s, ParticleSolver::Improved, 10.0);
+        let (improved, _, _) = run(&s, ParticleSolver::RigidFrames, 10.0);
         println!(
             "{name}: energy_gain paper {paper:.3} (mean of {gains:.3?}), improved {:.4}",
             improved.energy_gain
@@ -221,7 +221,7 @@ fn capsule_human_keeps_its_energy_from_any_drop_height() {
     for mm in 0..24 {
         let (_, state_gain, _) = run(
             &raised(base.clone(), mm as f32 * 1e-3),
-            ParticleSolver::Improved,
+            ParticleSolver::RigidFrames,
             10.0,
         );
         if state_gain > worst.0 {
@@ -250,7 +250,7 @@ fn com(w: &ParticleWorld, body: usize) -> (Vec3, Vec3) {
 fn scene_4_big_box_keeps_its_speed_and_pushes_the_small_one_away() {
     // Section 5.1.5: "we expect the big box to dominate, and push the small box away
     // loosing only little speed". Measured 5 frames after the boxes first touch.
-    for solver in [ParticleSolver::Paper, ParticleSolver::Improved] {
+    for solver in [ParticleSolver::Paper, ParticleSolver::RigidFrames] {
         let s = scene("box-masses", 1);
         let (small, big) = (
             s.body_id("small").unwrap().index(),

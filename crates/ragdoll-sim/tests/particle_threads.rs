@@ -32,7 +32,7 @@ fn pile(count: u32) -> SceneDesc {
 /// Steps `frames` frames, in a pool of `threads` threads or (`None`) in rayon's global
 /// pool, holding `grab` throughout, and returns every particle position.
 fn run(scene: &SceneDesc, frames: usize, threads: Option<usize>, grab: Option<Grab>) -> Vec<Vec3> {
-    let mut w = ParticleWorld::new(scene, ParticleSolver::Improved).unwrap();
+    let mut w = ParticleWorld::new(scene, ParticleSolver::RigidFrames).unwrap();
     w.set_grab(grab);
     let mut steps = || {
         for _ in 0..frames {
@@ -119,7 +119,7 @@ fn pile_of_100_humans_timing() {
         .ok()
         .and_then(|v| v.parse().ok());
     for threads in [1, 2].into_iter().filter(|t| only.is_none_or(|o| o == *t)) {
-        let mut w = ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap();
+        let mut w = ParticleWorld::new(&scene, ParticleSolver::RigidFrames).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

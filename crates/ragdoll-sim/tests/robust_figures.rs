@@ -69,8 +69,8 @@ fn figures_stay_finite_and_bounded_across_timesteps_and_iterations() {
         for (label, s, seconds) in variations(&scene(name)) {
             let mut methods: Vec<(&str, Box<dyn Method>, bool)> = vec![
                 (
-                    "particle improved",
-                    Box::new(ParticleWorld::new(&s, ParticleSolver::Improved).unwrap()),
+                    "particle rigid frames",
+                    Box::new(ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap()),
                     true,
                 ),
                 (

@@ -8,7 +8,7 @@
 //! loop meets its contacts and joints in the same relative order. So each batch of
 //! islands is gathered into dense arrays of its own (bones renumbered, contacts and
 //! joints kept in world order, a manifold's points still consecutive), stepped by the
-//! very code that steps the whole world (`improved::run_substeps`), and scattered back:
+//! very code that steps the whole world (`rigid_frames::run_substeps`), and scattered back:
 //! the serial result bit for bit, on any number of threads.
 //!
 //! The union-find here is also sleeping's.
@@ -16,9 +16,9 @@
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
 use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
-use super::improved::{self, Part};
 use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
+use super::rigid_frames::{self, Part};
 use crate::scene::Settings;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -417,7 +417,7 @@ pub(super) fn run_substeps(
                 lockstep: &lockstep,
                 grab: world.grab,
             };
-            improved::run_substeps(&mut part, count, h, s);
+            rigid_frames::run_substeps(&mut part, count, h, s);
             (batch, lockstep)
         })
         .collect();

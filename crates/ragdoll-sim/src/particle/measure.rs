@@ -27,7 +27,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         potential += potential_energy(&w.settings, m, x);
     };
     match w.solver {
-        ParticleSolver::Improved => {
+        ParticleSolver::RigidFrames => {
             for (b, &(com, rot)) in w.bones.iter().zip(&w.frame_starts) {
                 if b.fixed {
                     continue;
@@ -83,7 +83,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         .map(|b| b.stretch(&w.corners(b)))
         .fold(0.0, f32::max);
     let all_asleep =
-        w.solver == ParticleSolver::Improved && w.bones.iter().all(|b| b.fixed || b.asleep);
+        w.solver == ParticleSolver::RigidFrames && w.bones.iter().all(|b| b.fixed || b.asleep);
     Sample {
         energy: kinetic + potential,
         kinetic,
@@ -103,7 +103,7 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
         0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.settings, m, x)
     };
     match w.solver {
-        ParticleSolver::Improved => w
+        ParticleSolver::RigidFrames => w
             .bones
             .iter()
             .filter(|b| !b.fixed)
@@ -127,7 +127,7 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
         let pose = b.shape_pose();
         let com = pose.transform_point(b.shape_com);
         let (lin, ang) = match w.solver {
-            ParticleSolver::Improved => (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel)),
+            ParticleSolver::RigidFrames => (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel)),
             ParticleSolver::Paper => {
                 let x = &w.particles.frame_start;
                 let p0 = x[b.particles[0] as usize];

@@ -2,7 +2,7 @@
 //! and six sticks (Glimberg & Engel 2007, section 3), with two solvers.
 //!
 //! - [`ParticleSolver::Paper`]: section 3 as written ([`paper`](self) module doc).
-//! - [`ParticleSolver::Improved`] (default): particles placed automatically so every bone
+//! - [`ParticleSolver::RigidFrames`] (default): particles placed automatically so every bone
 //!   has its rigid body's mass, centre of mass and inertia; joints between points in
 //!   the bones' frames; generalised-inverse-mass corrections; substeps; contact
 //!   manifolds with Coulomb friction and restitution; sleeping.
@@ -10,14 +10,13 @@
 //! Files, one concept each: `particles` (the paper's storage, Verlet), `bone` (tetrahedron, frame,
 //! rigid corrections), `placement` (particulation), `joints`, `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
-//! `improved` and `paper` (the two solver loops), `islands` (the improved loop on all
+//! `rigid_frames` and `paper` (the two solver loops), `islands` (the rigid-frames loop on all
 //! cores), `measure` (the metrics).
 
 mod bone;
 mod bone_lanes;
 mod contacts;
 mod friction;
-mod improved;
 mod islands;
 mod joint_lanes;
 mod joints;
@@ -26,6 +25,7 @@ mod measure;
 mod paper;
 mod particles;
 mod placement;
+mod rigid_frames;
 mod sleeping;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
@@ -50,9 +50,12 @@ use particles::Particles;
 pub enum ParticleSolver {
     /// The paper's section 3 as written.
     Paper,
-    /// Ours: particulated bones, inverse-mass weighting, substeps, friction, sleeping.
+    /// Position-based rigid bodies (in the manner of Müller et al. 2020): each bone is
+    /// moved as a rigid frame whose four corner particles are evaluated, never stored;
+    /// the limit of infinitely stiff sticks. Particulated mass properties, joints between
+    /// points in the bones' frames, substeps, contact friction, sleeping.
     #[default]
-    Improved,
+    RigidFrames,
 }
 
 impl ParticleSolver {
@@ -60,7 +63,7 @@ impl ParticleSolver {
     pub fn name(self) -> &'static str {
         match self {
             ParticleSolver::Paper => "paper",
-            ParticleSolver::Improved => "improved",
+            ParticleSolver::RigidFrames => "rigid-frames",
         }
     }
 }
@@ -125,7 +128,7 @@ impl ParticleWorld {
             collider(b)?;
         }
         match solver {
-            ParticleSolver::Improved => {
+            ParticleSolver::RigidFrames => {
                 for (i, b) in scene.bodies.iter().enumerate() {
                     let bone = w.particulated_bone(i, b)?;
                     w.bones.push(bone);
@@ -215,12 +218,12 @@ impl ParticleWorld {
         let s = &self.settings;
         let (dt, g) = (s.timestep, s.gravity);
         let movable = !desc.is_fixed();
-        if self.solver == ParticleSolver::Improved {
+        if self.solver == ParticleSolver::RigidFrames {
             // The velocity form of Verlet keeps its velocity half a substep back,
             // `v − ½ g h` (see `Particles::push`), which makes free fall exact. The
             // frame a step earlier, for the first frame's energy, is the motion run
             // backwards: `x − v dt + ½ g dt²`, turned back by `ω dt`.
-            let h = dt / improved::substeps(s) as f32;
+            let h = dt / rigid_frames::substeps(s) as f32;
             if movable {
                 bone.lin_vel -= Vec3A::from(g * (0.5 * h));
                 let start = Vec3::from(bone.com) - desc.linear_velocity * dt + g * (0.5 * dt * dt);
@@ -251,7 +254,7 @@ impl ParticleWorld {
     /// the improved bone's frame.
     pub(crate) fn corners(&self, b: &Bone) -> [Vec3; 4] {
         match self.solver {
-            ParticleSolver::Improved => std::array::from_fn(|k| b.corner(k)),
+            ParticleSolver::RigidFrames => std::array::from_fn(|k| b.corner(k)),
             ParticleSolver::Paper => b.particles.map(|p| self.particles.x[p as usize]),
         }
     }
@@ -344,7 +347,7 @@ pub(crate) fn text_world(text: &str, path: &std::path::Path, count: Option<u32>)
     let scene = parse(text, path, &opts)
         .unwrap_or_else(|e| panic!("{e}"))
         .desc;
-    ParticleWorld::new(&scene, ParticleSolver::Improved).unwrap_or_else(|e| panic!("{e}"))
+    ParticleWorld::new(&scene, ParticleSolver::RigidFrames).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run
@@ -410,9 +413,9 @@ impl Method for ParticleWorld {
             ParticleSolver::Paper => format!("paper, {} iterations", s.iterations),
             // The panel's sliders are substeps and iterations; say how they make the
             // substeps the solver runs (one constraint pass each).
-            ParticleSolver::Improved => format!(
-                "improved, {} substeps ({} × {} iterations)",
-                improved::substeps(s),
+            ParticleSolver::RigidFrames => format!(
+                "rigid frames, {} substeps ({} × {} iterations)",
+                rigid_frames::substeps(s),
                 s.substeps.max(1),
                 s.iterations.max(1)
             ),
@@ -425,7 +428,7 @@ impl Method for ParticleWorld {
 
     fn step(&mut self) {
         match self.solver {
-            ParticleSolver::Improved => improved::step(self),
+            ParticleSolver::RigidFrames => rigid_frames::step(self),
             ParticleSolver::Paper => {
                 if let Some(st) = self.paper.take() {
                     paper::step(self, &st);
@@ -479,7 +482,7 @@ impl Method for ParticleWorld {
                     role: StickRole::Bone,
                 });
             }
-            if self.solver == ParticleSolver::Improved {
+            if self.solver == ParticleSolver::RigidFrames {
                 let role = if b.fixed {
                     ParticleRole::Fixed
                 } else {
@@ -561,7 +564,7 @@ impl Method for ParticleWorld {
 
     fn particle_count(&self) -> usize {
         match self.solver {
-            ParticleSolver::Improved => 4 * self.bones.len(),
+            ParticleSolver::RigidFrames => 4 * self.bones.len(),
             ParticleSolver::Paper => self.particles.len(),
         }
     }
@@ -573,7 +576,9 @@ impl Method for ParticleWorld {
     fn particle_positions(&self, out: &mut Vec<Vec3>) {
         out.clear();
         match self.solver {
-            ParticleSolver::Improved => out.extend(self.bones.iter().flat_map(|b| self.corners(b))),
+            ParticleSolver::RigidFrames => {
+                out.extend(self.bones.iter().flat_map(|b| self.corners(b)))
+            }
             ParticleSolver::Paper => out.extend_from_slice(&self.particles.x),
         }
     }
