@@ -9,7 +9,7 @@ use crate::render::camera::OrbitCamera;
 use glam::Vec2;
 use ragdoll_sim::scene::Settings;
 
-/// The built-in scenes in order (DESIGN.md, "Scenes"); Tab walks this list.
+/// The built-in scenes in order (the README's scene table); Tab walks this list.
 pub const SCENES: [&str; 10] = [
     "collision",
     "ball-chain",

@@ -1,4 +1,4 @@
-//! The command line (DESIGN.md, "Command line"). Tests and checks call it; keep it stable.
+//! The command line (`docs/cli.md`). Tests and checks call it; keep it stable.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;

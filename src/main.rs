@@ -1,6 +1,6 @@
 //! `ragdoll-lab`: particle and multibody ragdolls side by side.
 //!
-//! The command line is the contract with tests and users (DESIGN.md, "Command line");
+//! The command line is the contract with tests and users (`docs/cli.md`);
 //! each subcommand lives in its own module.
 
 use clap::Parser;

@@ -1,4 +1,4 @@
-//! The built-in scenes (DESIGN.md, "Scenes") and loading any scene the CLI names.
+//! The built-in scenes (the README's scene table) and loading any scene the CLI names.
 //!
 //! Every scene is an `.af` file under `assets/scenes/`; the files are also embedded in
 //! the binary so `ragdoll-lab` works from any directory. `R` in the viewer re-reads the
@@ -21,7 +21,7 @@ pub struct LoadedScene {
     pub ignored: Vec<String>,
 }
 
-/// One scene of the DESIGN.md table, shipped as a file and embedded in the binary.
+/// One scene of the built-in table, shipped as a file and embedded in the binary.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
     /// Its number in the table (1-10), the `--scene` number.
@@ -67,7 +67,7 @@ static BUILTIN: [BuiltinScene; 10] = [
     builtin!(10, "pile"),
 ];
 
-/// The scenes of the DESIGN.md table, in order.
+/// The built-in scenes, in order.
 pub fn builtin_scenes() -> &'static [BuiltinScene] {
     &BUILTIN
 }

@@ -1,5 +1,6 @@
-//! `ragdoll-lab stats`: run a scene headless and print the metrics of DESIGN.md as one
-//! JSON object; `--trace FILE` also writes every frame as JSON lines.
+//! `ragdoll-lab stats`: run a scene headless and print the metrics (`docs/metrics.md`)
+//! as one JSON object; `--trace FILE` also writes every frame as JSON lines
+//! (`docs/cli.md`).
 
 use crate::cli::{MethodArg, ParticleSolverArg, StatsArgs};
 use crate::{AppError, methods, scenes};

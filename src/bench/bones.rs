@@ -72,7 +72,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
             "paper particle",
             "particle(paper)",
             "us",
-            "particle(improved)",
+            "particle(rigid-frames)",
             "us",
             "paper constraint",
             "multibody",

@@ -40,7 +40,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
             "Iterations",
             "paper particle",
             "particle(paper)",
-            "particle(improved)",
+            "particle(rigid-frames)",
             "multibody",
         ],
     );

@@ -5,9 +5,8 @@
 //! measured, keeps the number of live heap bytes and their high-water mark in two
 //! relaxed atomics: one `fetch_add`/`fetch_sub` and one `fetch_max` per allocation. At
 //! any other time it only reads a flag, so the other benches and the demo, whose
-//! threads allocate at once (the parallel narrow phase), do not share the counters'
-//! cache line (measured: within this machine's noise, the 1000-human pile on two
-//! threads 19.9 -> 19.4 ms a frame, medians of three alternations). The `ragdoll-lab`
+//! threads allocate at once (the parallel narrow phase), do not contend for the
+//! counters' cache line. The `ragdoll-lab`
 //! binary installs it as its `#[global_allocator]`; a library user who does not
 //! install it gets an error from this bench instead of zeros.
 //!
@@ -205,7 +204,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
             "paper constraint KB",
             "particle(paper) KB",
             "B/bone",
-            "particle(improved) KB",
+            "particle(rigid-frames) KB",
             "B/bone",
             "multibody KB",
             "B/bone",
@@ -249,7 +248,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
         table.row(cells);
         rows.push(Value::Object(row));
     }
-    table.note("Goal (issue 6): at most 512 B per bone for both methods.");
+    table.note("Goal: at most 512 B per bone for both methods.");
     Ok(Report {
         json: json!({"bench": "memory", "steps": STEPS, "rows": rows}),
         text: table.render(),

@@ -195,7 +195,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
         table.note("\"one thread\": the method does not run a step on several threads, so there is no separate figure.");
     }
     table.note(
-        "Goals (issue 6): 1000 humans under 16.6 ms (particle) and 33 ms (multibody) per frame; \
+        "Goals: 1000 humans under 16.6 ms (particle) and 33 ms (multibody) per frame; \
          multibody at most ~2.9 us per bone per step on one core (Box3D's rain benchmark here).",
     );
     Ok(Report {

@@ -40,7 +40,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
             "Timestep",
             "paper particle",
             "particle(paper)",
-            "particle(improved)",
+            "particle(rigid-frames)",
             "paper constraint",
             "multibody",
         ],

@@ -10,15 +10,14 @@
 //!
 //! All three run single-threaded (Rapier without its `parallel` feature), the same
 //! scene description, timestep and solver budget; see `rapier_scene.rs` for how the
-//! scene is carried over. Goals (issue 6): our multibody at or below Rapier's time, the
-//! particle method at half of it.
+//! scene is carried over. Goals: our multibody at or below Rapier's time, the particle
+//! method at half of it (`docs/benchmarks.md`).
 //!
 //! `--rounds N` runs the three engines in turn N times and reports each engine's median
-//! mean and the median of the rounds' ratios, with their range: this machine is shared,
-//! and the CPU time of the same run of the same binary moves by up to 1.7× over an
-//! hour (Rapier's 100-human pile: 0.58 and 1.00 ms a frame), so one round's ratio can be
-//! off by the drift between its engines' turns; engines taken in turn within each round
-//! see the same drift.
+//! mean and the median of the rounds' ratios, with their range: on a shared machine
+//! the CPU time of the same run of the same binary drifts with the load, so one round's
+//! ratio can be off by the drift between its engines' turns; engines taken in turn
+//! within each round see the same drift.
 
 mod rapier_scene;
 

@@ -9,9 +9,9 @@
 //! One start's figures are a matter of rounding in a chaotic scene (the human's sleep
 //! time moves by seconds with one operation's rounding), so a solver change is judged
 //! over the ensemble: the largest rise of the state's own energy
-//! (`ParticleWorld::state_energy`) and of DESIGN.md's frame-difference measure, both as
-//! fractions of the energy scale, how many starts fall asleep and the largest joint gap,
-//! limit excess and penetration. `--each` prints every start too; `--from MM` shifts by
+//! (`ParticleWorld::state_energy`) and of the `energy_gain` metric's frame-difference
+//! measure (docs/metrics.md), both as fractions of the energy scale, how many starts
+//! fall asleep and the largest joint gap, limit excess and penetration. `--each` prints every start too; `--from MM` shifts by
 //! MM … MM + 23 mm instead, another 72 starts; `--multibody` runs the multibody method
 //! instead, whose state energy is the sample's (its velocities are the state's own).
 
@@ -42,8 +42,8 @@ fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
         .map_err(|e| e.to_string())
 }
 
-/// DESIGN.md's metrics of one start, and the largest rise of the state's own energy
-/// above its running minimum as a fraction of the energy scale.
+/// The metrics of one start (docs/metrics.md), and the largest rise of the state's own
+/// energy above its running minimum as a fraction of the energy scale.
 fn run(s: &SceneDesc, multibody: bool) -> Result<(MethodStats, f64), String> {
     if multibody {
         // Its sample's energy is the state's: the velocities are the bodies' own.
@@ -55,7 +55,7 @@ fn run(s: &SceneDesc, multibody: bool) -> Result<(MethodStats, f64), String> {
     }
 }
 
-/// Steps `w` for [`FRAMES`] frames, recording DESIGN.md's metrics and `state_energy`.
+/// Steps `w` for [`FRAMES`] frames, recording the metrics and `state_energy`.
 fn measure<M: Method>(
     mut w: M,
     s: &SceneDesc,

@@ -10,9 +10,9 @@
 //!
 //! Bodies at rest (asleep or fixed) need no pairs with each other, and in a pile that
 //! is settling most bodies are: only the moving boxes go into trees, and each box at
-//! rest is looked up in them ([`moving_pairs_where`]). Measured on the 1000-human
-//! particle pile on two threads, in the frames where most of it had fallen asleep
-//! (the fourth second): the trees' share of a frame 3.0 -> 0.4 ms.
+//! rest is looked up in them ([`moving_pairs_where`]). The trees' cost then follows
+//! the number of moving bodies, not of all bodies, and a pile that is mostly asleep
+//! costs little to detect.
 
 use glam::Vec3;
 use parry3d::bounding_volume::Aabb;
@@ -28,10 +28,8 @@ use rayon::prelude::*;
 /// points can approach at the start velocities, `(|v_a − v_b| + |ω_a| r_a + |ω_b| r_b) dt`
 /// (each method's detection), so the constant only covers what that misses: gravity's
 /// `g dt²` ([`speculative_margin`]) and velocity the other constraints give a body
-/// meanwhile. Measured on the multibody method against 2 cm: scenes 1–9 agree to their
-/// printed digits but for the spider's first sleep (2.55 → 2.40 s), the 100-human
-/// pile's step takes 6.5 % fewer instructions (fewer speculative rows), and over 72
-/// shifted starts the figures' worst figures and sleeping starts are the same.
+/// meanwhile. Smaller than Box2D's constant, it keeps fewer speculative rows in the
+/// solver; it is enough because a pair's own approach is already in its margin.
 pub const SPECULATIVE_DISTANCE: f32 = 0.005;
 
 /// The speculative margin of a detection covering `dt` under gravity `g` (m/s²): what
@@ -182,10 +180,10 @@ impl Split {
 /// seldom leave their fat boxes) and against the other boxes that left (a small tree
 /// of their own). The pairs are the boxes' own, sorted: the same as from new trees.
 /// When more than one in 16 of the moving boxes left (`ESCAPED_FOR_REBUILD`), the
-/// trees are built again around the boxes as they are. Measured on the 1000-human pile: with 1 cm of fat, 189 of its
-/// 16 000 boxes on average had left theirs by a later detection of the same frame in
-/// its busiest second, 12 in the first and none from the third on; refitting the trees
-/// and traversing them again, as before, cost about 1.3 ms a detection on two threads.
+/// trees are built again around the boxes as they are. Within a frame few boxes leave
+/// a fat box (about one in a hundred in a pile's busiest second, none once it settles),
+/// so querying the trees with those few costs much less than refitting and traversing
+/// every tree again at each detection.
 ///
 /// Many boxes are cut into runs of consecutive indices, a tree each, two runs per
 /// thread (`parts`): the trees are built and traversed against themselves on all
@@ -200,8 +198,8 @@ impl Split {
 /// (a body woke) calls [`Reused::forget`] first.
 ///
 /// It lives for one step and is dropped after it: kept between steps, the trees alone
-/// would cost 79 bytes per body (parry's `heap_memory_size`, 4096 boxes) and the fat
-/// boxes 24 more, a fifth of the memory goal.
+/// would hold about 80 bytes per body (parry's `heap_memory_size`) and the fat boxes 24
+/// more, a fifth of what a whole body costs (`docs/benchmarks.md`, memory).
 #[derive(Default)]
 pub struct Reused {
     parts: Vec<Part>,
@@ -233,9 +231,8 @@ const ESCAPED_FOR_REBUILD: usize = 16;
 
 /// How many runs [`Reused`] cuts `n` boxes into on this thread pool: two per thread, at
 /// most eight (the trees' cross traversals grow with the square of their number). With
-/// one per thread, two threads had one cross traversal, run on one of them; with two,
-/// the build of a 1000-human particle frame's trees took 16 % less time on two threads
-/// and 5 % less on one (temporary timers, two alternations each).
+/// one run per thread, two threads would have a single cross traversal, run on one of
+/// them; two runs per thread give two threads six cross traversals to share.
 fn parts(n: usize) -> usize {
     if n < BOXES_TO_CUT {
         1

@@ -5,7 +5,7 @@
 //! compare them. No GPU, no window: glam and parry3d only.
 //!
 //! - [`scene`]: `SceneDesc`, mass properties, the `.af` and `.md5mesh` readers.
-//! - [`particle`]: the particle (Verlet) ragdoll, `paper` and `improved` solvers.
+//! - [`particle`]: the particle ragdoll, the `paper` (Verlet) and `rigid-frames` solvers.
 //! - [`rigid`]: the impulse-based multibody solver.
 //! - [`method`]: the trait both methods implement for the app.
 //! - [`snapshot`]: what a method shows, the same way for both.

@@ -41,7 +41,7 @@ pub struct BodyState {
 }
 
 /// Per-frame measurements a method reports; [`crate::metrics`] turns a run of these into
-/// the `stats` numbers. Definitions: DESIGN.md, "Metrics".
+/// the `stats` numbers. Definitions: `docs/metrics.md`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Sample {
     /// Total energy E(t) (J): kinetic + gravitational potential above the ground plane.
@@ -86,7 +86,7 @@ pub struct Grab {
 pub trait Method: Send {
     /// Which method this is.
     fn kind(&self) -> MethodKind;
-    /// A one-line description of the solver configuration ("improved, 8 substeps").
+    /// A one-line description of the solver configuration ("rigid frames, 20 substeps (4 × 5 iterations)").
     fn solver_label(&self) -> String;
     /// Simulated time so far (s).
     fn time(&self) -> f64;

@@ -1,4 +1,5 @@
-//! The metrics of DESIGN.md ("Metrics"), accumulated over a run of [`Sample`]s.
+//! The metrics `stats` reports (defined in `docs/metrics.md`), accumulated over a run
+//! of [`Sample`]s.
 //!
 //! Methods report instantaneous values ([`Sample`]); this module owns the definitions
 //! that span time (energy gain against the running minimum, maxima, first sleep) and the

@@ -1,5 +1,5 @@
 //! Every scene file loads, and its counts, masses, sizes, limits and placements are
-//! those the paper (section 5.1, appendix A), DESIGN.md and the PyODE tutorial give.
+//! those the paper (section 5.1, appendix A) and the PyODE tutorial give.
 
 use ragdoll_sim::glam::{Quat, Vec3};
 use ragdoll_sim::scene::af::{AfOptions, AfScene, load};
@@ -201,7 +201,7 @@ fn human_is_the_papers_appendix_a() {
         assert_close(half_angle.to_degrees(), deg, 1e-3, name);
         assert!(axis.dot(*shaft) > 0.9999);
     }
-    // DESIGN.md placements: appendix C centres (cm, Z up) relative to the head, mapped
+    // Placements: the paper's appendix C centres (cm, Z up) relative to the head, mapped
     // (x, y, z) → (x, z, -y) and carried by the file's transform (read off the head).
     let head = body(&s, "head").pose;
     let world = |p: Vec3| head.position + head.rotation * Vec3::new(p.x, p.z, -p.y) * 0.01;

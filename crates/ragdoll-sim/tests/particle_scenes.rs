@@ -1,6 +1,7 @@
-//! The particle method on the scene files (assets/scenes, DESIGN.md "Scenes"): the
-//! issue's thresholds for the improved solver across scenes 1–9, the paper solver on
-//! every scene without NaN, and the paper's own expectations (section 5.1), measured.
+//! The particle method on the scene files (assets/scenes, the README's scene table):
+//! the quality bounds (docs/results.md) for the rigid-frames solver across scenes 1–9,
+//! the paper solver on every scene without NaN, and the paper's own expectations
+//! (section 5.1), measured.
 //!
 //! One binary, each scene simulated once per solver (10 s at the scene's timestep):
 //! about two seconds of release-mode CPU in all.
@@ -14,7 +15,7 @@ use ragdoll_sim::snapshot::{RenderSnapshot, StickRole};
 use ragdoll_sim::{Method, SceneDesc};
 use std::path::PathBuf;
 
-/// The scene table, in DESIGN.md's order (scene N is `SCENES[N - 1]`).
+/// The scene table, in the README's order (scene N is `SCENES[N - 1]`).
 const SCENES: [&str; 10] = [
     "collision",
     "ball-chain",

@@ -1,5 +1,5 @@
-//! The particle method's improved solver steps independent islands on all cores
-//! (issue 6) and must stay deterministic: the same scene gives the same particles bit
+//! The particle method's rigid-frames solver steps independent islands on all cores
+//! and must stay deterministic: the same scene gives the same particles bit
 //! for bit whatever the number of threads, and the same as the serial solver.
 //!
 //! The timing of the same scene, by hand (no timing is asserted in a test):

@@ -1,9 +1,10 @@
 //! The multibody method over the scene table (scenes 1–9 with every variant, 10 s each):
-//! the thresholds of issue 4. One binary, one run per scene, so CI stays short.
+//! the quality bounds of docs/results.md. One binary, one run per scene, so CI stays
+//! short.
 //!
 //! Scenes and metrics that do not yet meet a threshold are listed in `KNOWN_GAPS` with
 //! the figure measured when the list was written; the test checks everything else at the
-//! issue's thresholds, and fails when a listed gap starts passing, so the list cannot go
+//! thresholds, and fails when a listed gap starts passing, so the list cannot go
 //! stale.
 
 use ragdoll_sim::Method;

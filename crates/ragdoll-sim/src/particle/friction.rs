@@ -76,7 +76,7 @@ fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3A, pb: V
 /// --scene pile --count N`, 11 distinct piles): they fall asleep at 1.5–2.9 s, mean 2.3,
 /// against 2.2–4.9 s, mean 3.6, with the pull at zero. One scene's sleep time alone is
 /// chaotic and moves by seconds with the rounding of a single operation (the human,
-/// scene 8: 2.9 s with the pull, 2.8 s without, 5.1 s before this code), so the test
+/// scene 8: 2.9 s with the pull, 2.8 s without), so the test
 /// (`resting_piles_stop_creeping_and_sleep_sooner`) averages piles.
 const ANCHOR_PULL: f32 = 0.5;
 

@@ -148,8 +148,8 @@ impl Plan {
         let total: usize = work.iter().sum();
         // Gathering also pays on its own when most bones are static (a pile mostly or
         // wholly asleep): a batch's substeps never visit the static bones, which the
-        // in-place loops reset and skip on every substep — 3 ms a frame for a pile of
-        // 100 humans asleep, with nothing to move.
+        // in-place loops reset and skip on every substep, a cost that grows with the
+        // pile while there is nothing to move.
         let moving = root.iter().filter(|&&r| r != NONE).count();
         let compacts = moving * COMPACT_FRACTION <= n;
         // Islands in the order of their roots (every root has work: its own bone),
@@ -379,8 +379,8 @@ pub(super) fn run_substeps(
 ) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
-    // bones no constraint reads. On all threads: a pass over every bone, on one it was
-    // a fifth of the serial step's own time on a 1000-human pile (perf).
+    // bones no constraint reads. On all threads: it is a pass over every bone, which on
+    // one thread would be a large serial part of a big pile's step.
     w.bones
         .par_iter_mut()
         .with_min_len(BONES_PER_TASK)

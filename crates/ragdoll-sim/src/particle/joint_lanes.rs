@@ -437,7 +437,7 @@ mod tests {
 
     /// A hinge whose axes are a right angle apart (their cross product rounding to a
     /// length above one, where `asin` is NaN) is turned back, not poisoned: scalar and
-    /// lanes stay finite and agree (the review of 2026-11-25 found NaN frames there).
+    /// lanes stay finite and agree.
     #[test]
     fn hinge_at_a_right_angle_stays_finite() {
         let h = 1.0 / 1200.0;

@@ -1,5 +1,5 @@
-//! The metrics of DESIGN.md for the particle method, computed from the particles and
-//! the bone frames they imply.
+//! The metrics (`docs/metrics.md`) for the particle method, computed from the
+//! particles and the bone frames they imply.
 //!
 //! - E(t) = Σ ½ m_p |v_p|² + m_p g h_p over particles, `v_p = (x_p(t) − x_p(t−dt))/dt`
 //!   over the frame (not the substep), potential from [`crate::metrics`].

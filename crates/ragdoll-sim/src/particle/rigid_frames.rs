@@ -128,11 +128,9 @@ fn ground_contacts(
 const NARROW_PHASE_MIN_RUN: usize = 64;
 
 /// Runs of the parallel narrow phase per thread: a few, so that work stealing evens out
-/// runs of unequal cost (as `islands`' batches). Each run fills a contact set of its own
-/// from empty, so a run costs more than its items: with runs of 64 pairs, about 470 a
-/// detection on the 1000-human pile, the narrow phase on two threads took longer than
-/// on one (temporary timers, its busiest frames: 15-17 ms a frame against 13; with four
-/// runs per thread 8.5-9 ms).
+/// runs of unequal cost (as `islands`' batches), but not many: each run fills a contact
+/// set of its own from empty, so a run costs more than its items, and hundreds of small
+/// runs cost more than the second thread saves.
 const NARROW_PHASE_RUNS_PER_THREAD: usize = 4;
 
 /// The narrow phase: `collide(item, scratch, set)` appends each item's manifolds to a
@@ -196,8 +194,8 @@ fn record_frame_starts(w: &mut ParticleWorld) {
 /// hit. (The end of the frame would wake it anyway: contacts join sleep islands.)
 /// Returns whether any bone woke.
 fn wake_touched(w: &mut ParticleWorld) -> bool {
-    // On all threads: each manifold reads two bones from anywhere in the array (5 % of
-    // the serial step's own time on a 1000-human pile, perf).
+    // On all threads: each manifold reads two bones from anywhere in the array, which
+    // is memory-bound on a large pile.
     let bones = &w.bones;
     let mut figures: Vec<u32> = w
         .contacts
@@ -232,10 +230,9 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 /// by side, point by point: none reads what another writes (the ground and other static
 /// sides are never written), so each gets the same bits as in turn, but the processor
 /// has independent chains of corrections to overlap (within a manifold every correction
-/// waits for the last one's turn of the same bone). Measured, that gains a few percent
-/// of a pass: it is bound by its work more than by the wait. Detection order already
-/// deals most points into such groups (93 % in fours on a pile of 300), the layout for
-/// solving a group in SIMD lanes.
+/// waits for the last one's turn of the same bone). A pass is bound by its work more
+/// than by that wait, so this gains little, but detection order already deals most
+/// points into such groups, the layout for solving a group in SIMD lanes.
 fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
     let mut k = 0;
     while k < manifolds.len() {
@@ -334,8 +331,8 @@ const VELOCITY_PASSES: u32 = 2;
 
 /// Substeps per frame: the scene's substeps times its iterations, one constraint pass
 /// each. Macklin et al. 2019 show that spending a fixed budget on substeps rather than
-/// iterations converges faster and damps less; measured on the human (scene 8),
-/// 20 substeps × 1 pass halves the joint gap and penetration of 4 substeps × 5 passes.
+/// iterations converges faster and damps less; on the human (scene 8), 20 substeps × 1
+/// pass leave a third of the joint gap and penetration of 4 substeps × 5 passes.
 pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
     (s.substeps.max(1) * s.iterations.max(1)).min(1000)
 }
@@ -460,7 +457,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let mut tree = Reused::fattened(DETECTION_FAT);
     // The joint passes of the frame's last detection chunk, kept for the next one: the
     // world's, or each batch's with the batch itself (its islands seldom change within
-    // a frame, and building a pass for 15 000 joints is about 1 ms).
+    // a frame, and building a pass costs a walk over every joint).
     let (mut whole, mut kept) = (None, Vec::new());
     let mut sub = 0;
     while sub < n_sub {

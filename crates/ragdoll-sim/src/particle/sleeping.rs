@@ -22,8 +22,8 @@ use rayon::prelude::*;
 /// every sleeping bone counts as slow and still, so its timers grow by `dt`, and its
 /// island, unchanged since the last detection (none runs while everything sleeps) and
 /// asleep with timers that only grow, stays asleep. The same bits as [`update`],
-/// without its island search over every joint and contact (a resting pile of 1000
-/// humans: 0.3 ms a frame).
+/// without its island search over every joint and contact, so a world at rest costs
+/// a pass over its bones a frame.
 pub(crate) fn advance_at_rest(bones: &mut [Bone], dt: f32) {
     for b in bones.iter_mut().filter(|b| !b.fixed) {
         b.sleep_time += dt;
@@ -48,8 +48,8 @@ pub(crate) fn update(
 ) {
     newly_asleep.clear();
     let n = bones.len();
-    // Each bone's rest timers, on all threads (a turn angle each: a serial millisecond
-    // of a 1000-human frame on two threads).
+    // Each bone's rest timers, on all threads (a turn angle each, for every bone: too
+    // much to leave serial on a large pile).
     bones
         .par_iter_mut()
         .with_min_len(BONES_PER_TASK)

@@ -15,8 +15,8 @@
 //!
 //! An iteration then reads a row's velocity as `d·(v_b − v_a) + (r_b × d)·ω_b −
 //! (r_a × d)·ω_a` and applies an impulse λ as `v ± d λ/m`, `ω ± I⁻¹(r × d) λ`: dot
-//! products and scaled additions, no cross product and no 3×3 product, where forming
-//! them in every iteration made the contact solve 40 % of a moving pile's step. The
+//! products and scaled additions, no cross product and no 3×3 product in the loop that
+//! runs most often (forming them in every iteration would multiply its cost). The
 //! arrays live for one solve (one island on one thread), so they cost no memory
 //! between steps; [`ContactConstraints::store_impulses`] writes the impulses back to
 //! the pairs for the next step's warm start.

@@ -21,9 +21,9 @@
 //! angles are measured one joint at a time (an arctangent or arccosine and the unwrapping
 //! memory) and their rows copied in. The accumulated impulses are taken from the joints
 //! when a solve starts and handed back when its substeps end, so a step solved island by
-//! island on other threads (one by one) continues from them. Loading rows prepared one
-//! by one into lanes at every substep cost more than the lanes saved (eighth session:
-//! 0.63 → 0.67 ms a frame); preparing them in the lanes is what pays.
+//! island on other threads (one by one) continues from them. Rows are prepared in the
+//! lanes, not prepared one by one and loaded: loading them at every substep would cost
+//! more than the lanes save.
 //!
 //! Only the common shapes are bundled: hinges with a hard range and no friction, ball
 //! joints with a hard cone, no twist limit and no friction (a pile's humans). A type

@@ -33,13 +33,12 @@ const NONE: u32 = u32::MAX;
 /// threads would cost about what they save.
 const MIN_PARALLEL_WORK: usize = 256;
 
-/// Batches per thread ([`crate::batches`]). One task per island, as before, gathered every island into
-/// arrays of its own, most of them a single figure; a batch of consecutive islands pays
-/// that once, and with enough batches work stealing still evens out their unequal cost.
-/// Measured on the pile, two threads, 600 frames (a throwaway example, two alternations
-/// each): 4 batches per thread took 100 humans from 0.41-0.43 to 0.37-0.38 ms a frame
-/// but 1000 humans from 3.9-4.3 to 4.2-4.5 (a tail of large batches); 16 per thread
-/// 0.39-0.40 and 3.5-3.9 ms.
+/// Batches per thread ([`crate::batches`]). A task per island would gather every
+/// island into arrays of its own, most of them a single figure; a batch of consecutive
+/// islands pays that once. Batches are dealt by work, not by count, and there are many
+/// per thread so that work stealing evens out what dealing cannot foresee (islands of
+/// unequal cost): with few, the last large batch leaves the other threads idle. The
+/// batches change no result: each is solved as an island would be.
 const BATCHES_PER_THREAD: usize = 16;
 
 /// For each joint type, the world index of every joint of a batch's local set.

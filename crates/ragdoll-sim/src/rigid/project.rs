@@ -37,7 +37,7 @@ pub const MAX_LINEAR_CORRECTION: f32 = 0.2;
 /// `b2_maxAngularCorrection` (8°).
 pub const MAX_ANGULAR_CORRECTION: f32 = 8.0 * std::f32::consts::PI / 180.0;
 /// Joint gap left to the velocity solver (m): about what a resting figure's soft
-/// joints sag under its weight, a quarter of the 2 mm the issue allows.
+/// joints sag under its weight, a quarter of the 2 mm joint-gap bound.
 pub const JOINT_SLOP: f32 = 0.0005;
 /// Violation of a hard angular limit left alone (rad, 0.25°): the limit rows keep it.
 pub const ANGULAR_SLOP: f32 = 0.25 * std::f32::consts::PI / 180.0;
