@@ -28,9 +28,21 @@
 use super::body::BodyStates;
 use super::contact::{ContactPair, LINEAR_SLOP};
 use super::contact_wide::{self, Bundle, LANES, SLOTS};
-use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION};
+use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION, POSITION_ITERATIONS};
 use super::soft::StepContext;
 use glam::{Mat3, Vec3, Vec3A};
+
+/// What bounds the contact projection's push-out in one step (see
+/// [`ContactConstraints::project`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PushOutBudget {
+    /// `Settings::max_push_out_speed` (m/s).
+    pub max_speed: f32,
+    /// The soft contact's bias rate (1/s) the substeps pushed out with.
+    pub bias_rate: f32,
+    /// The step's length (s).
+    pub dt: f32,
+}
 
 /// One touching pair's share of the step.
 #[derive(Clone, Copy, Debug, Default)]
@@ -73,6 +85,8 @@ pub(super) struct PointConstraint {
     /// `s₀ − n·(p_b − p_a)` at build time: the separation now is this plus
     /// `n·(p_b − p_a)` for the anchors' current world positions.
     pub(super) base_separation: f32,
+    /// Separation when the step's constraints were built (negative: overlap).
+    pub(super) start_separation: f32,
     /// Separation at the start of the substep's biased iterations: set only for the
     /// pairs solved one by one (a bundle forms its own in its lanes).
     pub(super) separation: f32,
@@ -174,6 +188,7 @@ impl ContactConstraints {
                     local_a: c.local_a,
                     local_b: c.local_b,
                     base_separation: separation - normal.dot((s.com[b] + rb) - (s.com[a] + ra)),
+                    start_separation: separation,
                     separation,
                     ja_n,
                     jb_n,
@@ -474,7 +489,15 @@ impl ContactConstraints {
     /// (Box2D v2.4's `b2ContactSolver::SolvePositionConstraints`). The Jacobian is
     /// formed anew on the moved pose, with the inverse masses the projection holds
     /// (`s`, where resting bodies count as static).
-    pub fn project(&self, s: &mut BodyStates) {
+    ///
+    /// Together with the velocity solve, a point is pushed out no faster than
+    /// `max_push_out_speed`: the biased iterations already pushed it at
+    /// `v = min(bias_rate · depth₀, max)` this step (depth₀ at the step's start; the
+    /// depth only shrinks while it is pushed out), so the projection may move it by at
+    /// most `(max − v) dt` in all, a share of that per iteration. A body that starts
+    /// 25 cm in the ground rose at 10 m/s through the projection alone.
+    pub fn project(&self, s: &mut BodyStates, push: &PushOutBudget) {
+        let per_iteration = push.dt / POSITION_ITERATIONS as f32;
         for pc in &self.pairs {
             let (a, b) = (pc.a, pc.b);
             // Both bodies held still (see `JointSet::project`): nothing can move.
@@ -484,8 +507,10 @@ impl ContactConstraints {
             let n = pc.normal;
             for p in &self.points[pc.start..pc.start + pc.count] {
                 let sep = current_separation(pc, p, s);
-                let c =
-                    (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-MAX_LINEAR_CORRECTION, 0.0);
+                let pushed = (-push.bias_rate * (p.start_separation + LINEAR_SLOP))
+                    .clamp(0.0, push.max_speed);
+                let room = ((push.max_speed - pushed) * per_iteration).min(MAX_LINEAR_CORRECTION);
+                let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-room, 0.0);
                 if c == 0.0 {
                     continue;
                 }
