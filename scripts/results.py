@@ -24,9 +24,9 @@ RUNS = [("particle, rigid frames (default)",
          ["--method", "particle", "--particle-solver", "rigid-frames"], "particle"),
         ("particle, paper", ["--method", "particle", "--particle-solver", "paper"], "particle"),
         ("multibody", ["--method", "multibody"], "multibody")]
-HEADER = ("| scene | variant | energy gain | max penetration (m) | max joint gap (m) "
-          "| max limit violation (°) | max stretch | asleep at (s) | ms/step |\n"
-          "|---|---|---|---|---|---|---|---|---|")
+HEADER = ("| scene | variant | energy gain | energy lost | max speed (m/s) | max penetration (m) "
+          "| max joint gap (m) | max limit violation (°) | max stretch | asleep at (s) | ms/step |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def fmt(v, f):
@@ -39,6 +39,7 @@ def row(binary, scene, variant, args, key):
     d = json.loads(out.stdout)
     m = d["methods"][key]
     return (f"| {scene} {d['scene']} | {variant} | {fmt(m['energy_gain'], '{:.4f}')} "
+            f"| {fmt(m['energy_loss'], '{:.4f}')} | {fmt(m['max_body_speed_mps'], '{:.2f}')} "
             f"| {fmt(m['max_penetration_m'], '{:.4f}')} | {fmt(m['max_joint_gap_m'], '{:.4f}')} "
             f"| {fmt(m['max_limit_violation_deg'], '{:.2f}')} "
             f"| {fmt(m['max_bone_stretch'], '{:.4f}')} "
