@@ -4,18 +4,23 @@
 //! Per frame: collision detection with a speculative margin, [`DETECTIONS_PER_FRAME`]
 //! times. Per substep `h` ([`substeps`]: the scene's substeps × iterations):
 //! 1. integrate every particle (`v += g h`, `x += v h`: Verlet in velocity form);
-//! 2. shape-match each bone to the rigid frame that best fits its particles — the
-//!    six sticks held exactly, with linear and angular momentum kept (steps 1–2 in
-//!    closed form, [`Bone::advance`], which keeps them to second order in `h |ω|`);
+//! 2. move each bone's frame as its particles move with the six sticks held exactly:
+//!    momentum and angular momentum kept, the turn by the implicit midpoint rule
+//!    (steps 1–2 in closed form, [`Bone::advance`]);
 //! 3. [`PASSES`] Gauss–Seidel passes over contacts, joints and limits, each a rigid
 //!    correction of the bone frames weighted by generalised inverse mass (contacts
 //!    first, so a joint is what holds last; the joints of four figures side by side in
 //!    SIMD lanes, `joint_lanes`);
-//! 4. derive the velocities from the particles' displacements, `v = (x − x_prev)/h`
-//!    (their momentum, in closed form: [`Bone::substep_velocity`]);
+//! 4. derive the velocities from the frames' motion over the substep, `v = Δc/h` and
+//!    the turn's angular momentum carried to the substep's end
+//!    ([`Bone::substep_velocity`]);
 //! 5. the velocity pass: restitution, air friction.
 //!
-//! Energy: every step is a projection or a dissipative velocity change; the only source
+//! Energy: a free bone keeps its energy and angular momentum (no damping of its own);
+//! every other step is a projection or a dissipative velocity change. The projections
+//! damp to first order in `h` (the constraint direction is taken at the end of the
+//! substep, not its start): a frictionless hinge pendulum loses about 1 % of its swing
+//! energy a second at 20 substeps a frame, half that at 40. The only source of energy
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
