@@ -241,7 +241,15 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 /// of a pass: it is bound by its work more than by the wait. Detection order already
 /// deals most points into such groups (93 % in fours on a pile of 300), the layout for
 /// solving a group in SIMD lanes.
-fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
+///
+/// `push_out` is how far an old overlap may be pushed out in a substep
+/// ([`solve_normal`]).
+fn contact_pass(
+    bones: &mut [Bone],
+    manifolds: &[Manifold],
+    points: &mut [ContactPoint],
+    push_out: f32,
+) {
     let mut k = 0;
     while k < manifolds.len() {
         let mut end = k + 1;
@@ -262,7 +270,7 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
         let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
         for i in 0..longest {
             for s in solves.iter_mut().flatten() {
-                s.normal(bones, i);
+                s.normal(bones, i, push_out);
             }
             for s in solves.iter_mut().flatten() {
                 s.friction(bones, i);
@@ -297,9 +305,9 @@ impl<'a> ManifoldSolve<'a> {
 
     /// Point `i`'s normal correction (none past the manifold's last point).
     #[inline(always)]
-    fn normal(&mut self, bones: &mut [Bone], i: usize) {
+    fn normal(&mut self, bones: &mut [Bone], i: usize, push_out: f32) {
         if let Some(c) = self.points.get_mut(i) {
-            solve_normal(bones, self.m, c);
+            solve_normal(bones, self.m, c, push_out);
         }
     }
 
@@ -369,6 +377,8 @@ pub(super) struct Part<'a> {
 
 /// Runs `count` substeps of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
+    // How far an old overlap may be pushed out in a substep (`friction::solve_normal`).
+    let push_out = s.max_push_out_speed * h;
     for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
@@ -393,6 +403,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
+                c.left_before = c.left;
                 c.vn_before = if m.e > 0.0 {
                     let pa = p.bones[m.a].world(c.ra);
                     let pb = super::bone::side_world(p.bones, m.b, c.rb);
@@ -405,7 +416,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
-            contact_pass(p.bones, p.manifolds, p.points);
+            contact_pass(p.bones, p.manifolds, p.points, push_out);
             p.lockstep.solve(p.joints, p.bones, h);
             if let Some(g) = p.grab {
                 super::grab_improved(p.bones, g, h);
@@ -419,6 +430,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 continue;
             }
             (b.lin_vel, b.ang_vel) = b.substep_velocity(h);
+            // Out of what it started in once a substep leaves it no old overlap.
+            b.pushing_out &= b.still_inside;
+            b.still_inside = false;
             b.com += b.dcom;
             b.dcom = Vec3A::ZERO;
         }
