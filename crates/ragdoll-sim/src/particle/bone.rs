@@ -8,10 +8,12 @@
 //!   Müller et al. 2005), whose origin is the centre of mass and whose axes are the
 //!   principal axes of inertia, because the particles were placed to reproduce them.
 //!
-//! The improved solver also moves a bone *rigidly*: a correction impulse `p` at world
-//! point `r` translates the centre of mass by `p/M` and rotates by `I⁻¹ (r − c) × p`,
-//! then rewrites the four particles from the frame. For particles that reproduce M, c
-//! and I exactly this is the limit of infinitely stiff sticks, reached in one step.
+//! The rigid-frames solver also moves a bone *rigidly*: a correction impulse `p` at
+//! world point `r` translates the centre of mass by `p/M` and rotates by `I⁻¹ (r − c) ×
+//! p`, then rewrites the four particles from the frame. For particles that reproduce M,
+//! c and I exactly this is the limit of infinitely stiff sticks, reached in one step; a
+//! free bone moves as that limit does, keeping its momentum and angular momentum
+//! ([`Bone::advance`]).
 
 use crate::scene::{BodyCollider, Pose};
 use glam::{Mat3, Quat, Vec3, Vec3A};
@@ -76,6 +78,13 @@ pub(crate) struct Bone {
     pub figure: u32,
     /// Collides with bones of its own figure.
     pub self_collision: bool,
+    /// The bone may still be inside what it started in (a file's rest pose, a body
+    /// added inside another): its old overlaps are pushed out at
+    /// `Settings::max_push_out_speed` (`friction::solve_normal`). Set when the bone is
+    /// made; cleared for good after the first substep that leaves it no old overlap.
+    pub pushing_out: bool,
+    /// Whether a contact of the current substep left the bone an old overlap.
+    pub still_inside: bool,
 }
 
 impl Bone {
@@ -94,9 +103,9 @@ impl Bone {
         self.still_anchor = (Vec3::from(self.center()), self.rot);
     }
 
-    /// Takes `from`'s motion: all that the improved solver's substeps write of a bone
-    /// (its frame, the substep's start and displacement, its velocities), a quarter of
-    /// its bytes. A batch of islands returns its bones to the world through this
+    /// Takes `from`'s motion: all that the rigid-frames solver's substeps write of a bone
+    /// (its frame, the substep's start and displacement, its velocities, whether it is
+    /// still being pushed out), a quarter of its bytes. A batch of islands returns its bones to the world through this
     /// (`islands`); `particle_threads` checks the result is the serial one bit for bit.
     pub fn take_motion(&mut self, from: &Bone) {
         self.com = from.com;
@@ -105,6 +114,8 @@ impl Bone {
         self.prev_rot = from.prev_rot;
         self.lin_vel = from.lin_vel;
         self.ang_vel = from.ang_vel;
+        self.pushing_out = from.pushing_out;
+        self.still_inside = from.still_inside;
     }
 
     /// Inverse mass seen by the solver.
@@ -172,63 +183,61 @@ impl Bone {
         worst
     }
 
-    /// Improved mode, substep steps 1–2: advances every particle by its velocity,
-    /// `x_k ← x_k + (v + ω × a_k + g h) h` with `a_k = R rest_k`, and shape-matches the
-    /// bone to them (Müller et al. 2005), in closed form; the frame's displacement goes
-    /// to `dcom`.
+    /// Rigid-frames mode, substep steps 1–2: advances the frame by its velocity, as the
+    /// four particles of an infinitely stiff tetrahedron move: the centre of mass by
+    /// `(v + g h) h` (to `dcom`), the orientation by the turn `θ` that keeps the angular
+    /// momentum `L = R I Rᵀ ω` of a free body.
     ///
-    /// Equal particle masses put the matched origin at the mean, moved by `(v + g h) h`.
-    /// The matched rotation is the rotational part of `A = Σ (x_k − c) rest_kᵀ =
-    /// (1 + h ω̂) R D`, `D = Σ rest_k rest_kᵀ` (diagonal in the principal bone frame), as
-    /// Müller et al. 2016's iteration ("A robust method to extract the rotational part of
-    /// deformations") finds it from the warm start `R`: linearised about `R`, the turn
-    /// still to make, `e` in the bone frame, starts at `h ω` and shrinks as `e ← M e`
-    /// with `M = D / tr D` while each iteration turns the frame by `(1 − M) e`; the
-    /// iteration stops once a turn is below [`EXTRACT_TOLERANCE`], or after 20. So the
-    /// bone turns by `(1 − M^N) h ω` (in its frame), not `h ω`. About an axis of small
-    /// inertia the share `m_k = 1 − 2 I_k / tr I` is near 1 (0.73 about a capsule
-    /// human's limb, 0.90 about a box human's) and the turn lags: a twist of a long bone
-    /// is damped, most when slow (few iterations run), which is the damping the resting
-    /// figures rely on (at 20 substeps a frame a box limb keeps about a tenth of a twist
-    /// from frame to frame). To second order the
-    /// iteration also turns by `½ (1 − M)⁻¹ (ê × M ê)`, `ê = h ω` in the bone frame,
-    /// which keeps a tumbling bone's angular momentum, and which is added here. Running
-    /// the iteration itself cost 5–7 rotation matrices, cross products and sines per bone
-    /// per substep; this is the same turn to second order in `h |ω|` on the axes it
-    /// converges on (within 0.03 % of the turn at `h |ω|` = 0.03 on a chest box, 0.1 %
-    /// on a limb's capped twist: the unit test below), from three products per
-    /// iteration, with the frame turned once, `q ← q + ½ q [θ, 0]` normalised (the
-    /// turn `R (1 − M^N) Rᵀ h ω` plus that term).
+    /// The turn is the implicit midpoint rule on the rotation group: `θ = h R_m I⁻¹ R_mᵀ
+    /// L`, `R_m` the frame half-way through the turn, `R_m = R m(θ)`. With `Π = Rᵀ L`
+    /// (the momentum in the frame at the substep's start) and every turn in that frame,
+    /// `θ = h m I⁻¹ m⁻¹ Π`, solved by fixed-point iteration from `θ = h Rᵀ ω`; each
+    /// iteration contracts the error by about `h |ω|` times the inertia's anisotropy, and
+    /// [`TURN_ITERATIONS`] leave it at f32 rounding at the substep rates used. The frame
+    /// turns by the Cayley rotation `cay(θ) = (1, θ/2)/|·|` ([`rotate_local`]) and `m` is
+    /// its half, `(1 + cay(θ))/|·|`; [`Bone::substep_velocity`] inverts exactly this map,
+    /// so that with no correction in between, the momentum carried to the next substep is
+    /// `L` itself: `|L|` and the direction of `L` are kept to rounding and the kinetic
+    /// energy `½ ω·L` is kept without drift (it wobbles by `O(h²)` on a tumbling body).
+    /// Gyroscopic motion — precession, the flip about the intermediate axis — is the
+    /// turn of `ω` under a fixed `L`, and comes from this with no torque term.
     pub fn advance(&mut self, h: f32, gravity: Vec3) {
         self.dcom = (self.lin_vel + Vec3A::from(gravity) * h) * h;
-        self.rot = matched_turn(self.rot, Vec3::from(self.ang_vel * h), turn_lag(&self.rest));
+        let inertia = inertia_of(self.inv_inertia_local);
+        let w = self.rot.inverse() * self.ang_vel;
+        let momentum = inertia * w;
+        let mut turn = w * h;
+        for _ in 0..TURN_ITERATIONS {
+            let m = half_turn(cayley(turn));
+            turn = m * (self.inv_inertia_local * (m.inverse() * momentum)) * h;
+        }
+        self.rot = rotate_local(self.rot, turn);
     }
 
-    /// Improved mode, substep step 4: the bone's velocity from its particles'
-    /// displacements over the substep, `v_k = (Δc + (R − P) r_k) / h` (`R`, `P` the frame
-    /// now and at the substep's start, `r_k = rest_k`, `Δc = dcom`): the mean velocity
-    /// and the angular momentum `L = (M/4) Σ R r_k × (v_k − v)` over the inertia.
+    /// Rigid-frames mode, substep step 4: the bone's velocity at the end of the substep
+    /// from its motion over the substep, the frame's whole turn (its own and every
+    /// correction's) and the displacement of its centre.
     ///
-    /// In closed form, with no particle evaluated: the rest positions sum to zero and
-    /// `D = Σ r_k r_kᵀ` is diagonal (`placement`: corners `(±1, ±1, ±1)` scaled per
-    /// axis), so `v = Δc / h` and, as `R r × R r = 0`, `L = −(M / 4h) R Σ r_k × Q r_k`
-    /// with `Q = Rᵀ P`. For `Q = (w, u)`, `Q r = r + 2w u × r + 2 u × (u × r)`, and
-    /// summing `r × (u × r) = |r|² u − (r·u) r` and `r × (u × (u × r)) = (u·r)(r × u)`
-    /// over the corners gives `Σ r_k × Q r_k = 2w (tr D − D) u + 2 (D u) × u`. Then
-    /// `ω = R I⁻¹ Rᵀ L = −(M / 2h) R I⁻¹ (w (tr D − D) u + (D u) × u)`: one quaternion
-    /// product and one rotation, where the particles' form took ten rotations. (A turn
-    /// `θ` over the substep gives `u ≈ −θ_local / 2`, `ω = I⁻¹ (M/4)(tr D − D) θ / h`:
-    /// the turn rate, as the particles' inertia `(M/4)(tr D − D)` is the bone's — except
-    /// for a needle, whose particles keep a floor of volume (`placement`), as the
-    /// particles' form had it too.)
+    /// `v = Δc / h`. The turn from the start frame `P` to the frame now `R = P d` is read
+    /// back through the inverse Cayley map, `θ = 2 d_v / d_w` (in `P`'s frame), the map
+    /// [`Bone::advance`] turns by, so a free substep gives back its own turn to rounding.
+    /// `θ / h` is the angular velocity half-way through the substep, at the frame
+    /// `R_m = P m`, `m = (1 + d)/|·|`; its momentum `L = P m I θ / h` (`m` turns about `θ`,
+    /// so `m⁻¹ θ = θ`) is carried to the end, `ω = R I⁻¹ Rᵀ L = R I⁻¹ m⁻¹ I θ / h`
+    /// (`d⁻¹ m = m⁻¹`). Taking `θ / h` as the end velocity instead would turn `L` by half
+    /// the substep's turn at every substep.
     pub fn substep_velocity(&self, h: f32) -> (Vec3A, Vec3A) {
-        let q = self.rot.inverse() * self.prev_rot;
-        let (u, w) = (Vec3A::new(q.x, q.y, q.z), q.w);
-        let d = Vec3A::from(second_moments(&self.rest));
-        let tr = d.x + d.y + d.z;
-        let sum = (Vec3A::splat(tr) - d) * u * w + (d * u).cross(u);
-        let local = self.inv_inertia_local * sum * (-0.5 * self.mass / h);
-        (self.dcom / h, self.rot * local)
+        let mut d = self.prev_rot.inverse() * self.rot;
+        if d.w < 0.0 {
+            d = -d;
+        }
+        // A frame turned by more than about 170° in a substep (never at the rates a
+        // scene runs) reads as that much, not as an unbounded rate.
+        let turn = Vec3A::new(d.x, d.y, d.z) * (2.0 / d.w.max(MIN_TURN_COSINE));
+        let m = half_turn(d);
+        let inertia = inertia_of(self.inv_inertia_local);
+        let local = self.inv_inertia_local * (m.inverse() * (inertia * turn));
+        (self.dcom / h, self.rot * local * (1.0 / h))
     }
 
     /// The paper's frame (section 3.1.2): origin at particle 0, X towards particle 1,
@@ -258,55 +267,29 @@ pub(crate) fn gram_schmidt(e1: Vec3, e2: Vec3) -> (Quat, bool) {
     (Quat::from_mat3(&Mat3::from_cols(x, y, z)).normalize(), true)
 }
 
-/// Per bone axis, the share of a turn that shape matching leaves to its next iteration
-/// (see [`Bone::advance`]): `m_k = D_kk / tr D`, `D = Σ rest_j rest_jᵀ` (zero for a bone
-/// without extent). Evaluated where it is used rather than stored: 12 bytes a bone
-/// against a few products per substep.
-pub(crate) fn turn_lag(rest: &[Vec3; 4]) -> Vec3 {
-    let d = second_moments(rest);
-    let tr = d.x + d.y + d.z;
-    if tr > 0.0 { d / tr } else { Vec3::ZERO }
+/// Fixed-point iterations of the implicit turn ([`Bone::advance`]).
+const TURN_ITERATIONS: usize = 3;
+
+/// Smallest `w` of a substep's relative turn that [`Bone::substep_velocity`] divides by
+/// (`cos 85°`, a turn of 170°).
+const MIN_TURN_COSINE: f32 = 0.087;
+
+/// The inertia from the inverse inertia, per principal axis (zero where the inverse is
+/// zero: an axis that takes no turn).
+fn inertia_of(inv: Vec3A) -> Vec3A {
+    Vec3A::select(inv.cmpgt(Vec3A::ZERO), inv.recip(), Vec3A::ZERO)
 }
 
-/// The diagonal of `D = Σ rest_k rest_kᵀ`, the particles' second moments about the
-/// frame origin (per unit particle mass): diagonal in the principal bone frame.
-fn second_moments(rest: &[Vec3; 4]) -> Vec3 {
-    rest.iter().fold(Vec3::ZERO, |acc, r| acc + *r * *r)
+/// The Cayley rotation of the rotation vector `θ`, `(1, θ/2)` normalised: the turn
+/// [`rotate_local`] makes (by the angle `2 atan(|θ|/2)` about `θ`).
+fn cayley(turn: Vec3A) -> Quat {
+    Quat::from_xyzw(0.5 * turn.x, 0.5 * turn.y, 0.5 * turn.z, 1.0).normalize()
 }
 
-/// The frame `q` turned as shape matching turns it when its particles turn by the world
-/// rotation vector `turn` (see [`Bone::advance`]), `m` the bone's [`turn_lag`].
-fn matched_turn(q: Quat, turn: Vec3, m: Vec3) -> Quat {
-    let full = q.inverse() * turn;
-    // In SIMD lanes: the products are glam's `Vec3` ones, lane by lane, and the squared
-    // length adds them in `Vec3::length_squared`'s order, so the bits are the same.
-    let (m, keep) = (Vec3A::from(m), Vec3A::ONE - Vec3A::from(m));
-    let mut e = Vec3A::from(full);
-    for _ in 0..EXTRACT_ITERATIONS {
-        let step = keep * e;
-        e *= m;
-        let sq = step * step;
-        if sq.x + sq.y + sq.z < EXTRACT_TOLERANCE * EXTRACT_TOLERANCE {
-            break;
-        }
-    }
-    // Second order: the extraction also turns the frame by `½ (1 − M)⁻¹ (ê × M ê)`,
-    // `ê = h ω` in the bone frame, the gyroscopic turn that keeps a tumbling bone's
-    // angular momentum; first order alone lets it drift (a chest box tumbling at 10 rad/s:
-    // 0.08 rad in a second, against 8e-4 rad with this term, as the iteration kept it).
-    // Each component is at most `½ |ê_j ê_k|`, `1 − m_i = m_j + m_k ≥ |m_k − m_j|`.
-    let (m, keep) = (Vec3::from(m), Vec3::from(keep));
-    let gyro = full.cross(m * full);
-    let second = Vec3::select(keep.cmpgt(Vec3::ZERO), 0.5 * gyro / keep, Vec3::ZERO);
-    rotate_local(q, Vec3A::from(full - Vec3::from(e) + second))
+/// The half of a unit rotation `q` with `w ≥ 0`: `(1 + q)/|1 + q|`.
+fn half_turn(q: Quat) -> Quat {
+    Quat::from_xyzw(q.x, q.y, q.z, q.w + 1.0).normalize()
 }
-
-/// Turn (rad) below which Müller et al.'s extraction has converged and stops: a few f32
-/// ulps of a unit quaternion component (ε ≈ 1.2e-7). It sets how strongly
-/// [`Bone::advance`] damps a slow twist.
-const EXTRACT_TOLERANCE: f32 = 1e-6;
-/// Most iterations of the extraction per substep.
-const EXTRACT_ITERATIONS: usize = 20;
 
 /// A static-or-moving side of a two-body constraint: a bone, or the world/ground.
 pub(crate) type Side = Option<usize>;
@@ -551,126 +534,66 @@ pub(crate) fn side_rot(bones: &[Bone], s: Side) -> Quat {
 mod tests {
     use super::*;
 
-    /// Shape matching itself: the rotational part of `A = Σ (x_k − c) rest_kᵀ` by Müller
-    /// et al. 2016's iteration `q ← exp(ω) q`, `ω = Σ r_k × a_k / |Σ r_k · a_k|`,
-    /// warm-started from `q`, with the tolerance and cap of [`matched_turn`].
-    fn extract(a: Mat3, mut q: Quat) -> Quat {
-        for _ in 0..EXTRACT_ITERATIONS {
-            let r = Mat3::from_quat(q);
-            let num =
-                r.x_axis.cross(a.x_axis) + r.y_axis.cross(a.y_axis) + r.z_axis.cross(a.z_axis);
-            let den =
-                (r.x_axis.dot(a.x_axis) + r.y_axis.dot(a.y_axis) + r.z_axis.dot(a.z_axis)).abs();
-            let omega = num / den;
-            let w = omega.length();
-            if w == 0.0 || !w.is_finite() {
-                break;
-            }
-            q = (Quat::from_axis_angle(omega / w, w) * q).normalize();
-            if w < EXTRACT_TOLERANCE {
-                break;
-            }
-        }
-        q
-    }
-
-    /// `matched_turn` against the particles advanced and shape-matched one by one, for a
-    /// long bone (0.4 × 0.08 × 0.08 m: where the extraction lags, about its own axis) and
-    /// a chest box (0.196 × 0.125 × 0.2045 m: three different axes, where the turn
-    /// converges and its second-order, gyroscopic part shows), turning slowly and fast.
-    /// Returns the worst error relative to the substep's turn above 1 rad/s, per shape.
-    fn worst_errors(f: impl Fn(Quat, Vec3, Vec3) -> Quat) -> [f32; 2] {
-        let q = Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0);
-        let h = 1.0 / 1200.0;
-        let mut worst = [0.0f32; 2];
-        for (s, size) in [Vec3::new(0.4, 0.08, 0.08), Vec3::new(0.196, 0.125, 0.2045)]
-            .into_iter()
-            .enumerate()
-        {
-            let rest = [
-                Vec3::new(1.0, 1.0, 1.0),
-                Vec3::new(1.0, -1.0, -1.0),
-                Vec3::new(-1.0, 1.0, -1.0),
-                Vec3::new(-1.0, -1.0, 1.0),
-            ]
-            .map(|c| c * size * 0.5 / 3f32.sqrt());
-            let m = turn_lag(&rest);
-            let (x, y, z) = (q * Vec3::X, q * Vec3::Y, q * Vec3::Z);
-            for w in [
-                x * 0.01,
-                x * 2.0,
-                x * 40.0,
-                y * 0.01,
-                y * 40.0,
-                (x + y * 0.5) * 25.0,
-                (x * 0.3 + y + z * 0.7) * 30.0,
-            ] {
-                let a = rest.iter().fold(Mat3::ZERO, |acc, r| {
-                    let arm = q * *r;
-                    let p = arm + w.cross(arm) * h;
-                    acc + Mat3::from_cols(p * r.x, p * r.y, p * r.z)
-                });
-                let reference = extract(a, q);
-                let ours = f(q, w * h, m);
-                let diff = 2.0 * (ours * reference.inverse()).xyz().length();
-                let turn = w.length() * h;
-                assert!(
-                    diff <= 0.01 * turn + 2e-6,
-                    "ω {w}: off by {diff:e} of {turn:e}"
-                );
-                if w.length() > 1.0 {
-                    worst[s] = worst[s].max(diff / turn);
-                }
-                if s == 0 && w == x * 0.01 {
-                    // The slow twist of a long bone lags: the extraction stops after
-                    // one iteration, which turns it by a tenth.
-                    let turned = 2.0 * (ours * q.inverse()).xyz().length();
-                    assert!(turned < 0.5 * turn, "no lag: {turned:e} of {turn:e}");
-                }
-            }
-        }
-        worst
-    }
-
-    /// The closed-form velocity is the particles' own, `v = Σ v_k / 4` and `ω = I⁻¹
-    /// Σ (M/4) r_k × (v_k − v)` with `v_k = (Δc + (R − P) rest_k) / h`, to rounding: the
-    /// human's 16 bones (long limbs, the chest), each turned by up to 0.05 rad about
-    /// random axes in a substep from random frames.
+    /// A free bone tumbling about a general axis, substep after substep with nothing in
+    /// between (`advance`, then `substep_velocity`, as the solver runs them): the world
+    /// angular momentum stays put to rounding and the kinetic energy does not drift. The
+    /// human's chest (three different inertias) and a forearm (two nearly equal, one
+    /// small), at the solver's substep of 1/1200 s and at a coarse 1/60 s, for 10 s.
     #[test]
-    fn substep_velocity_is_the_particles_momentum() {
-        use super::super::{scene_world, uniform};
+    fn free_turn_keeps_angular_momentum_and_energy() {
+        use super::super::scene_world;
         let w = scene_world("human.af", None);
-        let mut next = uniform(0x5eed_1234);
+        for (i, h) in [(2usize, 1.0 / 1200.0), (2, 1.0 / 60.0), (5, 1.0 / 1200.0)] {
+            let h: f32 = h;
+            let mut b = w.bones[i].clone();
+            b.rot = Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0);
+            b.ang_vel = Vec3A::new(3.0, -7.0, 5.0);
+            let inertia = inertia_of(b.inv_inertia_local);
+            let state = |b: &Bone| {
+                let l = b.rot * (inertia * (b.rot.inverse() * b.ang_vel));
+                (l, 0.5 * b.ang_vel.dot(l))
+            };
+            let (l0, e0) = state(&b);
+            let (mut worst_l, mut worst_e) = (0.0f32, 0.0f32);
+            for _ in 0..(10.0 / h) as usize {
+                b.prev_rot = b.rot;
+                b.advance(h, Vec3::ZERO);
+                (b.lin_vel, b.ang_vel) = b.substep_velocity(h);
+                let (l, e) = state(&b);
+                worst_l = worst_l.max((l - l0).length() / l0.length());
+                worst_e = worst_e.max((e - e0).abs() / e0);
+            }
+            println!("bone {i}, h {h}: L within {worst_l}, energy within {worst_e}");
+            // The bounds of a torque-free body over 10 s: |L| within 1 %, energy within
+            // 2 %. What is left is f32 rounding: the turn is read back from the frame,
+            // whose rounding (an ulp, 6e-8) is a random walk of the rate of `ulp / h`
+            // per substep (measured: L within 0.15 %, energy within 0.3 % at 1/1200 s).
+            assert!(worst_l < 0.01, "bone {i}, h {h}: L off by {worst_l}");
+            assert!(worst_e < 0.02, "bone {i}, h {h}: energy off by {worst_e}");
+        }
+    }
+
+    /// A turn made by [`rotate_local`] reads back as itself: the velocity of a bone turned
+    /// by `θ` about a principal axis in a substep is `θ / h` about it, to the rounding of
+    /// the frame (a few ulps of a quaternion over `h`).
+    #[test]
+    fn substep_velocity_reads_back_the_turn() {
+        use super::super::scene_world;
+        let w = scene_world("human.af", None);
         let h = 1.0 / 1200.0;
-        for case in 0..800 {
-            let mut random = || Vec3::new(next(), next(), next()) * 2.0 - Vec3::ONE;
-            let mut b = w.bones[case % w.bones.len()].clone();
-            let turn = random().normalize_or_zero() * 0.05 * (case as f32 / 800.0);
-            b.prev_rot = Quat::from_scaled_axis(random() * 3.0);
-            b.rot = (Quat::from_scaled_axis(turn) * b.prev_rot).normalize();
-            b.dcom = Vec3A::from(random() * 0.01);
-            let arms = b.rest.map(|r| b.rot * Vec3A::from(r));
-            let vk: Vec<Vec3A> = (0..4)
-                .map(|k| (b.dcom + (arms[k] - b.prev_rot * Vec3A::from(b.rest[k]))) / h)
-                .collect();
-            let v = (vk[0] + vk[1] + vk[2] + vk[3]) * 0.25;
-            let l = (0..4).fold(Vec3A::ZERO, |l, k| {
-                l + arms[k].cross(vk[k] - v) * (b.mass * 0.25)
-            });
-            let omega = b.rot * (b.inv_inertia_local * (b.rot.inverse() * l));
-            let (ours_v, ours_w) = b.substep_velocity(h);
-            assert!(
-                (ours_v - v).length() < 1e-4,
-                "case {case}: {ours_v} against {v}"
-            );
-            // Measured: within 1e-5 of the rate plus 1e-4 rad/s (the particles' form
-            // takes differences of rotated points); without the `(D u) × u` term the
-            // test fails.
-            let tol = 1e-4 * omega.length() + 1e-3;
-            assert!(
-                (ours_w - omega).length() < tol,
-                "case {case}: {ours_w} against {omega}"
-            );
+        let mut b = w.bones[5].clone();
+        for axis in [Vec3A::X, Vec3A::Y, Vec3A::Z] {
+            for angle in [1e-4f32, 0.01, 0.3] {
+                b.prev_rot = Quat::from_euler(glam::EulerRot::XYZ, 0.7, -0.4, 2.1);
+                b.rot = rotate_local(b.prev_rot, axis * angle);
+                let (_, omega) = b.substep_velocity(h);
+                let expected = b.prev_rot * axis * (angle / h);
+                assert!(
+                    (omega - expected).length()
+                        <= 1e-5 * expected.length() + 4.0 * f32::EPSILON / h,
+                    "{axis} by {angle}: {omega} against {expected}"
+                );
+            }
         }
     }
 
@@ -695,31 +618,5 @@ mod tests {
                 assert!(off < 3e-7, "{angle}: {off:e} from the exact normalisation");
             }
         }
-    }
-
-    /// The closed form is the shape matching it replaces: within 1 % of the substep's
-    /// turn everywhere (the long bone's capped twist), and within 0.1 % on the chest box,
-    /// where the first-order turn alone is off by more.
-    #[test]
-    fn matched_turn_is_shape_matching_in_closed_form() {
-        let [limb, chest] = worst_errors(matched_turn);
-        assert!(limb < 0.01, "long bone: {limb}");
-        assert!(chest < 1e-3, "chest: {chest}");
-        // Without the second-order term the chest box is off by more: the test sees it.
-        let first_order = |q: Quat, turn: Vec3, m: Vec3| {
-            let full = q.inverse() * turn;
-            let mut e = full;
-            for _ in 0..EXTRACT_ITERATIONS {
-                let step = (Vec3::ONE - m) * e;
-                e *= m;
-                if step.length_squared() < EXTRACT_TOLERANCE * EXTRACT_TOLERANCE {
-                    break;
-                }
-            }
-            let t = full - e;
-            (q + q * Quat::from_xyzw(t.x, t.y, t.z, 0.0) * 0.5).normalize()
-        };
-        let [_, chest_first] = worst_errors(first_order);
-        assert!(chest_first > 2.0 * chest, "{chest_first} against {chest}");
     }
 }

@@ -87,6 +87,14 @@ pub(crate) struct ContactPoint {
     /// (`friction::solve_normal`), not for every speculative point at every substep's
     /// start.
     pub touched_at: Option<Vec3>,
+    /// Overlap (m) the point's last normal solve left to push out later, at most
+    /// `max_push_out_speed` × h a substep (`friction::solve_normal`); `∞` before its
+    /// first solve.
+    pub left: f32,
+    /// [`ContactPoint::left`] as the current substep started: the only overlap the
+    /// substep's solves push out slowly. Anything deeper was pushed in after the last
+    /// solve (by a joint) and is taken back in full.
+    pub left_before: f32,
 }
 
 impl ContactPoint {
@@ -99,6 +107,8 @@ impl ContactPoint {
             lambda_t: 0.0,
             vn_before: 0.0,
             touched_at: None,
+            left: f32::INFINITY,
+            left_before: f32::INFINITY,
         }
     }
 }

@@ -10,7 +10,7 @@ use super::bone::{Bone, Side, angular, positional, side_rot, side_world};
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
-use glam::{Quat, Vec3, Vec3A};
+use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 /// Type-specific data, in the bones' frames.
 #[derive(Clone, Copy, Debug)]
@@ -76,6 +76,8 @@ pub(crate) struct Joint {
     pub limit_compliance: f32,
     /// Whether this joint is drawn and measured by its anchor.
     pub has_anchor: bool,
+    /// Largest joint friction torque (N·m, 0 for none): [`Joint::with_friction`].
+    pub friction_torque: f32,
 }
 
 /// A joint's two sides, packed: what the island search and sleeping ask of every
@@ -196,6 +198,7 @@ impl Joint {
             swing: None,
             limit_compliance: 0.0,
             has_anchor: kind.anchor().is_some() || matches!(kind, JointKind::Fixed),
+            friction_torque: 0.0,
         };
         match kind {
             JointKind::BallAndSocket {
@@ -274,6 +277,57 @@ impl Joint {
             }
         }
         j
+    }
+
+    /// The joint with the file's joint friction `friction` (Doom 3: a number in [0, 1]
+    /// without units), read as the multibody method reads it (`rigid::FrictionMotor`) so
+    /// that both methods agree: the largest friction torque is that fraction of the
+    /// torque gravity `g` puts on body1 (mass `mass_a`) held horizontally at its arm, the
+    /// anchor's distance from its centre of mass (at least 5 cm), `f · m₁ g r`. Only
+    /// joints that turn take it (ball, hinge, universal).
+    pub fn with_friction(mut self, friction: f32, mass_a: f32, g: f32) -> Joint {
+        let turns = matches!(
+            self.kind,
+            JointType::Ball | JointType::Hinge { .. } | JointType::Universal { .. }
+        );
+        if turns && friction > 0.0 && self.a.is_some() {
+            self.friction_torque = friction * mass_a * g * self.anchor_a.length().max(0.05);
+        }
+        self
+    }
+
+    /// Joint friction in the velocity pass of a substep `h`: an angular impulse
+    /// between the two sides that stops their relative turn, `Δλ = −K⁻¹ (ω_a − ω_b)`
+    /// with `K = I_a⁻¹ + I_b⁻¹` (world), capped at the friction torque times `h` — the
+    /// joint holds under a small load and slips under a large one, taking energy
+    /// `|Δλ · ω_rel|` at most. (As the multibody's capped motor: `rigid::FrictionMotor`.)
+    pub fn solve_friction(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
+        let moving = |s: Side| s.filter(|&i| !bones[i].is_static());
+        let (a, b) = (moving(a), moving(b));
+        let inv_inertia = |s: Option<usize>| {
+            s.map_or(Mat3A::ZERO, |i| {
+                let r = Mat3A::from_quat(bones[i].rot);
+                r * Mat3A::from_diagonal(Vec3::from(bones[i].inv_inertia_local)) * r.transpose()
+            })
+        };
+        let spin = |s: Option<usize>| s.map_or(Vec3A::ZERO, |i| bones[i].ang_vel);
+        let (wa, wb) = (inv_inertia(a), inv_inertia(b));
+        let k = wa + wb;
+        let det = k.determinant();
+        if !(det.abs() > 1e-30) {
+            return;
+        }
+        let mut impulse = -(k.inverse() * (spin(a) - spin(b)));
+        let cap = self.friction_torque * h;
+        if impulse.length_squared() > cap * cap {
+            impulse = impulse.normalize() * cap;
+        }
+        if let Some(i) = a {
+            bones[i].ang_vel += wa * impulse;
+        }
+        if let Some(i) = b {
+            bones[i].ang_vel -= wb * impulse;
+        }
     }
 
     /// The anchor as seen from body1 and from body2 (world).

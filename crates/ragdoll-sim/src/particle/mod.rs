@@ -148,7 +148,10 @@ impl ParticleWorld {
         for c in &scene.constraints {
             let a = Some(c.body1.index());
             let b = c.body2.body().map(|b| b.index());
-            w.joints.push(Joint::new(&rf, a, b, &c.kind));
+            let mass_a = w.bones.get(c.body1.index()).map_or(0.0, |b| b.mass);
+            let g = w.settings.gravity.length();
+            w.joints
+                .push(Joint::new(&rf, a, b, &c.kind).with_friction(c.friction, mass_a, g));
             if let Some(b) = b {
                 excluded.push((c.body1.index(), b));
             }
@@ -193,6 +196,8 @@ impl ParticleWorld {
             air: (desc.friction.linear, desc.friction.angular),
             figure: body as u32,
             self_collision: desc.self_collision,
+            pushing_out: !desc.is_fixed(),
+            still_inside: false,
         }
     }
 

@@ -4,18 +4,23 @@
 //! Per frame: collision detection with a speculative margin, [`DETECTIONS_PER_FRAME`]
 //! times. Per substep `h` ([`substeps`]: the scene's substeps × iterations):
 //! 1. integrate every particle (`v += g h`, `x += v h`: Verlet in velocity form);
-//! 2. shape-match each bone to the rigid frame that best fits its particles — the
-//!    six sticks held exactly, with linear and angular momentum kept (steps 1–2 in
-//!    closed form, [`Bone::advance`], which keeps them to second order in `h |ω|`);
+//! 2. move each bone's frame as its particles move with the six sticks held exactly:
+//!    momentum and angular momentum kept, the turn by the implicit midpoint rule
+//!    (steps 1–2 in closed form, [`Bone::advance`]);
 //! 3. [`PASSES`] Gauss–Seidel passes over contacts, joints and limits, each a rigid
 //!    correction of the bone frames weighted by generalised inverse mass (contacts
 //!    first, so a joint is what holds last; the joints of four figures side by side in
 //!    SIMD lanes, `joint_lanes`);
-//! 4. derive the velocities from the particles' displacements, `v = (x − x_prev)/h`
-//!    (their momentum, in closed form: [`Bone::substep_velocity`]);
-//! 5. the velocity pass: restitution, air friction.
+//! 4. derive the velocities from the frames' motion over the substep, `v = Δc/h` and
+//!    the turn's angular momentum carried to the substep's end
+//!    ([`Bone::substep_velocity`]);
+//! 5. the velocity pass: restitution, joint friction, air friction.
 //!
-//! Energy: every step is a projection or a dissipative velocity change; the only source
+//! Energy: a free bone keeps its energy and angular momentum (no damping of its own);
+//! every other step is a projection or a dissipative velocity change. The projections
+//! damp to first order in `h` (the constraint direction is taken at the end of the
+//! substep, not its start): a frictionless hinge pendulum loses 0.9–1.5 % of its swing
+//! energy a second at 20 substeps a frame, half that at 40. The only source of energy
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::Bone;
@@ -233,7 +238,15 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 /// waits for the last one's turn of the same bone). A pass is bound by its work more
 /// than by that wait, so this gains little, but detection order already deals most
 /// points into such groups, the layout for solving a group in SIMD lanes.
-fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [ContactPoint]) {
+///
+/// `push_out` is how far an old overlap may be pushed out in a substep
+/// ([`solve_normal`]).
+fn contact_pass(
+    bones: &mut [Bone],
+    manifolds: &[Manifold],
+    points: &mut [ContactPoint],
+    push_out: f32,
+) {
     let mut k = 0;
     while k < manifolds.len() {
         let mut end = k + 1;
@@ -254,7 +267,7 @@ fn contact_pass(bones: &mut [Bone], manifolds: &[Manifold], points: &mut [Contac
         let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
         for i in 0..longest {
             for s in solves.iter_mut().flatten() {
-                s.normal(bones, i);
+                s.normal(bones, i, push_out);
             }
             for s in solves.iter_mut().flatten() {
                 s.friction(bones, i);
@@ -289,9 +302,9 @@ impl<'a> ManifoldSolve<'a> {
 
     /// Point `i`'s normal correction (none past the manifold's last point).
     #[inline(always)]
-    fn normal(&mut self, bones: &mut [Bone], i: usize) {
+    fn normal(&mut self, bones: &mut [Bone], i: usize, push_out: f32) {
         if let Some(c) = self.points.get_mut(i) {
-            solve_normal(bones, self.m, c);
+            solve_normal(bones, self.m, c, push_out);
         }
     }
 
@@ -361,6 +374,8 @@ pub(super) struct Part<'a> {
 
 /// Runs `count` substeps of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
+    // How far an old overlap may be pushed out in a substep (`friction::solve_normal`).
+    let push_out = s.max_push_out_speed * h;
     for _ in 0..count {
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
@@ -385,6 +400,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 }
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
+                c.left_before = c.left;
                 c.vn_before = if m.e > 0.0 {
                     let pa = p.bones[m.a].world(c.ra);
                     let pb = super::bone::side_world(p.bones, m.b, c.rb);
@@ -397,7 +413,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         }
         // 3. constraints: contacts then joints, twice
         for _ in 0..PASSES {
-            contact_pass(p.bones, p.manifolds, p.points);
+            contact_pass(p.bones, p.manifolds, p.points, push_out);
             p.lockstep.solve(p.joints, p.bones, h);
             if let Some(g) = p.grab {
                 super::grab_improved(p.bones, g, h);
@@ -411,6 +427,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 continue;
             }
             (b.lin_vel, b.ang_vel) = b.substep_velocity(h);
+            // Out of what it started in once a substep leaves it no old overlap.
+            b.pushing_out &= b.still_inside;
+            b.still_inside = false;
             b.com += b.dcom;
             b.dcom = Vec3A::ZERO;
         }
@@ -420,6 +439,12 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 for c in &p.points[m.range()] {
                     solve_velocity(p.bones, m, c, h, s.restitution_threshold);
                 }
+            }
+        }
+        // Joint friction, the file's `friction` of each joint that has one.
+        for &(j, a, b) in p.joints {
+            if j.friction_torque > 0.0 {
+                j.solve_friction(p.bones, a, b, h);
             }
         }
         for b in p.bones.iter_mut() {
