@@ -1,5 +1,11 @@
 //! The XPBD particle solver on the scene files (assets/scenes): the thresholds of
-//! scenes 1–9.
+//! scenes 1–9 (energy gain ≤ 2 %, penetration ≤ 1 cm, joint gap ≤ 5 mm, limit excess
+//! ≤ 3°, bone stretch ≤ 1 %, the spider and the human asleep with no kinetic energy
+//! left), asserted on the scenes where the solver meets them: 1 (collision), 2 (ball
+//! chain), 3 (hinge chain) at 5 and 20 iterations, 4 (box masses), 5 and 6 (limits)
+//! and 7 (spider). On the hinge chain at 2 iterations and the humans (8, 9) it does not
+//! yet: `ragdoll-lab stats --scene N --method particle --particle-solver xpbd` prints
+//! its figures there.
 
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
@@ -33,36 +39,27 @@ fn scene(name: &str, variant: u32) -> SceneDesc {
 
 /// What `ragdoll-lab stats --method particle --particle-solver xpbd --seconds T`
 /// measures.
-fn run(s: &SceneDesc, seconds: f64, verbose: bool) -> MethodStats {
+fn run(s: &SceneDesc, seconds: f64) -> MethodStats {
     let mut w =
         ParticleWorld::new(s, ParticleSolver::Xpbd).unwrap_or_else(|e| panic!("{}: {e}", s.name));
     let mut rec = MetricsRecorder::new(s).unwrap();
     rec.record(0.0, &w.sample());
     let frames = (seconds / s.settings.timestep as f64).round() as usize;
-    for f in 0..frames {
+    for _ in 0..frames {
         w.step();
-        let sm = w.sample();
-        if verbose {
-            println!("{f} {:?}", sm);
-        }
-        rec.record(w.time(), &sm);
+        rec.record(w.time(), &w.sample());
     }
     rec.stats()
 }
 
-#[test]
-#[ignore]
-fn trace_human() {
-    run(&scene("human", 1), 1.0, true);
-}
-
-/// Scene `n` (1-based) against the thresholds, every variant: the failures.
-fn check_scene(n: usize) -> Vec<String> {
+/// Scene `n` (1-based) against the thresholds, variants `variants` (`None`: every
+/// one): the failures.
+fn check_scene(n: usize, variants: Option<&[u32]>) -> Vec<String> {
     let name = SCENES[n - 1];
     let mut failures = Vec::new();
-    let variants = scene(name, 1).variants.len().max(1) as u32;
-    for v in 1..=variants {
-        let st = run(&scene(name, v), 10.0, false);
+    let all: Vec<u32> = (1..=scene(name, 1).variants.len().max(1) as u32).collect();
+    for &v in variants.unwrap_or(&all) {
+        let st = run(&scene(name, v), 10.0);
         println!(
             "scene {n} {name} v{v}: energy_gain {:.4} final_kinetic {:.2e} penetration {:.4} m joint_gap {:.4} m limit {:.2}° stretch {:.1e} asleep_at {:?}",
             st.energy_gain,
@@ -111,11 +108,12 @@ fn check_scene(n: usize) -> Vec<String> {
 }
 
 #[test]
-#[ignore]
-fn survey_scenes_1_to_9() {
-    let mut all = Vec::new();
-    for n in 1..=9 {
-        all.extend(check_scene(n));
+fn meets_the_thresholds_on_the_scenes_it_holds() {
+    let mut failures = Vec::new();
+    for n in [1, 2, 4, 5, 6, 7] {
+        failures.extend(check_scene(n, None));
     }
-    println!("{all:#?}");
+    // The hinge chain at 5 and 20 iterations; at 2 (8 substeps) a stick stretches 1.6 %.
+    failures.extend(check_scene(3, Some(&[1, 3])));
+    assert!(failures.is_empty(), "{failures:#?}");
 }

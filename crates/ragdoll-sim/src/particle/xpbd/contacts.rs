@@ -38,6 +38,12 @@ pub(crate) struct Contact {
     pub n: Vec3,
     /// Coulomb coefficient, `√(μ_a μ_b)`.
     pub mu: f32,
+    /// Restitution, the larger of the two.
+    pub restitution: f32,
+    /// Relative normal velocity `(v_b − v_a) · n` before the substep (< 0: closing).
+    pub vn_before: f32,
+    /// Whether the contact pushed during the substep.
+    pub active: bool,
 }
 
 /// What a detection reuses from the last: candidate pairs and parry's manifolds.
@@ -89,7 +95,7 @@ pub(crate) fn detect(
             .compute_local_aabb()
             .half_extents()
             .length()
-            + Vec3::from(b.shape_in_bone.position).length();
+            + b.shape_in_bone.position.length();
         let speed = c.length() + spin * (outer / inner).max(1.0);
         scratch.speeds.push(speed);
         scratch.margins.push(speed * span + reach);
@@ -105,6 +111,7 @@ pub(crate) fn detect(
     for &(i, j) in &scratch.pairs {
         let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
         let mu = (bones[i].friction * bones[j].friction).sqrt();
+        let restitution = bones[i].restitution.max(bones[j].restitution);
         shape_pair(
             bones,
             i,
@@ -117,6 +124,9 @@ pub(crate) fn detect(
                     b: attach(bones, rest_inv, j, pb),
                     n,
                     mu,
+                    restitution,
+                    vn_before: 0.0,
+                    active: false,
                 });
             },
         );
@@ -128,6 +138,7 @@ pub(crate) fn detect(
                 continue;
             }
             let mu = (bones[i].friction * ground.friction).sqrt();
+            let restitution = bones[i].restitution.max(ground.restitution);
             ground_pair(
                 bones,
                 i,
@@ -140,6 +151,9 @@ pub(crate) fn detect(
                         b: Anchor::World(pb),
                         n,
                         mu,
+                        restitution,
+                        vn_before: 0.0,
+                        active: false,
                     });
                 },
             );
@@ -147,9 +161,47 @@ pub(crate) fn detect(
     }
 }
 
+/// Relative normal velocity of a contact's points, `(v_b − v_a) · n`.
+fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
+    (c.b.velocity(p) - c.a.velocity(p)).dot(c.n)
+}
+
+/// Before a substep: each contact's approach, and not yet active.
+pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles) {
+    for c in contacts.iter_mut() {
+        c.vn_before = normal_velocity(c, p);
+        c.active = false;
+    }
+}
+
+/// After the velocities are derived: the velocity pass of Müller et al. 2020
+/// (section 3.6, eq. 34). A contact that pushed leaves with the normal velocity
+/// Newton's law of restitution gives, `v_n = max(−e ṽ_n, 0)` with `ṽ_n` its approach
+/// before the substep (`e = 0` below `threshold`), set by a velocity change of its
+/// points on the same barycentric weights. Without it the push-out of a position
+/// correction would stay in the velocities as energy the contact never had.
+pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, threshold: f32) {
+    for c in contacts.iter().filter(|c| c.active) {
+        let e = if -c.vn_before > threshold {
+            c.restitution
+        } else {
+            0.0
+        };
+        let target = (-e * c.vn_before).max(0.0);
+        let dv = target - normal_velocity(c, p);
+        let w = c.a.inv_mass(p) + c.b.inv_mass(p);
+        if w <= 0.0 || dv.abs() < 1e-9 {
+            continue;
+        }
+        let dl = dv / w;
+        c.a.kick(p, -c.n * dl);
+        c.b.kick(p, c.n * dl);
+    }
+}
+
 /// One pass over the contacts (module doc).
-pub(crate) fn solve(contacts: &[Contact], p: &mut XParticles) {
-    for c in contacts {
+pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
+    for c in contacts.iter_mut() {
         let (pa, pb) = (c.a.point(p), c.b.point(p));
         let depth = (pb - pa).dot(c.n);
         if depth >= 0.0 {
@@ -157,6 +209,7 @@ pub(crate) fn solve(contacts: &[Contact], p: &mut XParticles) {
         }
         // Push `a` back along −n and `b` along n until the points meet along n.
         let dl = pull(p, &c.a, &c.b, c.n * depth, 0.0);
+        c.active = true;
         if dl <= 0.0 || c.mu <= 0.0 {
             continue;
         }

@@ -48,9 +48,8 @@ pub(crate) fn combine(x: &[Vec3; 4], w: &[f32; 4]) -> Vec3 {
 pub(crate) fn read(bone: &mut Bone, x: &[Vec3; 4]) {
     let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
     let mut a = Mat3::ZERO;
-    for k in 0..4 {
-        let d = x[k] - c;
-        let r = bone.rest[k];
+    for (xk, r) in x.iter().zip(&bone.rest) {
+        let d = *xk - c;
         a += Mat3::from_cols(d * r.x, d * r.y, d * r.z);
     }
     bone.rot = extract_rotation(&a, bone.rot);

@@ -54,6 +54,31 @@ impl Anchor {
         }
     }
 
+    /// The point's velocity, `Σ β_k v_k` (0 for the world).
+    #[inline]
+    pub fn velocity(&self, p: &XParticles) -> Vec3 {
+        match *self {
+            Anchor::Bone(i, ref w) => {
+                let f = PER_BONE * i as usize;
+                let v = &p.v;
+                combine(&[v[f], v[f + 1], v[f + 2], v[f + 3]], w)
+            }
+            Anchor::World(_) => Vec3::ZERO,
+        }
+    }
+
+    /// Changes the point's velocity by `d` times its inverse mass: particle `k`'s by
+    /// `β_k w_k d`.
+    #[inline]
+    pub fn kick(&self, p: &mut XParticles, d: Vec3) {
+        if let Anchor::Bone(i, ref w) = *self {
+            let f = PER_BONE * i as usize;
+            for (k, wk) in w.iter().enumerate() {
+                p.v[f + k] += d * (wk * p.w[f + k]);
+            }
+        }
+    }
+
     /// Its generalised inverse mass, `Σ β_k² w_k`.
     #[inline]
     pub fn inv_mass(&self, p: &XParticles) -> f32 {
@@ -71,8 +96,8 @@ impl Anchor {
     pub fn shift(&self, p: &mut XParticles, d: Vec3) {
         if let Anchor::Bone(i, ref w) = *self {
             let f = PER_BONE * i as usize;
-            for k in 0..PER_BONE {
-                p.x[f + k] += d * (w[k] * p.w[f + k]);
+            for (k, wk) in w.iter().enumerate() {
+                p.x[f + k] += d * (wk * p.w[f + k]);
             }
         }
     }
@@ -126,8 +151,8 @@ fn turn_bone(p: &mut XParticles, bones: &mut [Bone], i: usize, omega: Vec3) {
     let x = p.bone(i);
     let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
     let q = Quat::from_scaled_axis(omega);
-    for k in 0..PER_BONE {
-        p.x[f + k] = c + q * (x[k] - c);
+    for (k, xk) in x.iter().enumerate() {
+        p.x[f + k] = c + q * (*xk - c);
     }
     let b = &mut bones[i];
     b.rot = (q * b.rot).normalize();

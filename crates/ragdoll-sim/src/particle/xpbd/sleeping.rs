@@ -6,7 +6,7 @@
 //! A bone rests when every one of its particles is slower than the sleep speed, or when
 //! its centre has stayed within `sleep.translation` of where it was for `sleep.time`
 //! (Doom 3's `noMoveTime` test, which also catches a limb trembling in place against a
-//! hard limit). A sleeping bone's particles are frozen: inverse mass 0, velocity 0.
+//! hard limit) and has not turned by more than `sleep.rotation`. A sleeping bone's particles are frozen: inverse mass 0, velocity 0.
 
 use super::super::bone::Bone;
 use super::super::joints::Link;
@@ -14,17 +14,19 @@ use super::contacts::Contact;
 use super::joints::Anchor;
 use super::particles::{PER_BONE, XParticles};
 use crate::scene::SleepSettings;
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
 /// Each bone's rest timers.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Rest {
     /// Seconds below the sleep speed.
     pub slow: f32,
-    /// Seconds within the no-move box, and its centre.
+    /// Seconds within the no-move box.
     pub still: f32,
     /// Where the no-move box is centred.
     pub anchor: Vec3,
+    /// The orientation the no-move turn is measured from.
+    pub turn: Quat,
 }
 
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
@@ -73,10 +75,14 @@ pub(crate) fn update(
             0.0
         };
         let c = Vec3::from(bones[i].center());
-        if bones[i].asleep || (c - r.anchor).length() <= s.translation && held != Some(i) {
+        let turned = (bones[i].rot * r.turn.inverse()).to_axis_angle().1;
+        let turned = turned.min(std::f32::consts::TAU - turned);
+        let still = (c - r.anchor).length() <= s.translation && turned <= s.rotation;
+        if bones[i].asleep || still && held != Some(i) {
             r.still += dt;
         } else {
             r.anchor = c;
+            r.turn = bones[i].rot;
             r.still = 0.0;
         }
     }
@@ -122,6 +128,7 @@ pub(crate) fn update(
             if !asleep {
                 rest[i] = Rest {
                     anchor: Vec3::from(bones[i].center()),
+                    turn: bones[i].rot,
                     ..Rest::default()
                 };
             }
