@@ -619,3 +619,32 @@ fn no_scene_starts_with_unjointed_bodies_overlapping() {
         }
     }
 }
+
+#[test]
+fn max_push_out_speed_is_read_in_file_units_per_second() {
+    use ragdoll_sim::scene::af::parse;
+    let text = |units: &str| {
+        format!(
+            "settings {{ units \"{units}\" maxPushOutSpeed 2 }}\n\
+             body \"b\" {{ model box( ( -1, -1, -1 ), ( 1, 1, 1 ) ) origin ( 0, 0, 5 ) mass 1 }}"
+        )
+    };
+    let read = |units: &str| {
+        parse(
+            &text(units),
+            std::path::Path::new("t.af"),
+            &AfOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc
+        .settings
+        .max_push_out_speed
+    };
+    assert_close(read("m"), 2.0, 1e-6, "2 m/s");
+    assert_close(read("inch"), 2.0 * 0.0254, 1e-6, "2 in/s");
+    assert_eq!(
+        ragdoll_sim::scene::Settings::default().max_push_out_speed,
+        3.0,
+        "Box2D's 3 m/s by default"
+    );
+}

@@ -594,7 +594,13 @@ pub struct Settings {
     pub joint_hertz: f32,
     /// Damping ratio for contact and joint softness.
     pub damping_ratio: f32,
-    /// Max speed (m/s) at which contacts push penetrating bodies apart.
+    /// Largest speed (m/s) at which contacts push apart bodies that overlap, such as
+    /// bodies that start inside the ground or inside each other (Box2D's
+    /// `contactPushMaxVelocity` / `maxContactPushSpeed`, 3 m/s there and by default
+    /// here). The multibody solver clamps a soft contact's bias velocity to it, so a
+    /// 25 cm overlap is removed in about 0.1 s instead of turning into a launch; the
+    /// relax pass then takes the push velocity back, so the body does not fly on.
+    /// Read from the `.af` `settings` key `maxPushOutSpeed` (file units per second).
     pub max_push_out_speed: f32,
     /// Relative normal speed (m/s) below which restitution is ignored.
     pub restitution_threshold: f32,

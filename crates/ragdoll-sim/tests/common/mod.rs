@@ -1,0 +1,149 @@
+//! Scene builders and measurements shared by the closed-form suite: the solvers under
+//! test, boxes, joints, and energies computed from the states a method reports.
+
+#![allow(dead_code)]
+
+use ragdoll_sim::glam::{Mat3, Vec3};
+use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::rigid::MultibodyWorld;
+use ragdoll_sim::scene::af::{AfOptions, load};
+use ragdoll_sim::scene::*;
+use ragdoll_sim::{BodyState, Method};
+use std::path::PathBuf;
+
+/// A solver's constructor: builds a method from a scene.
+pub type Make = fn(&SceneDesc) -> Box<dyn Method>;
+
+/// The impulse-based multibody solver.
+pub fn multibody(sc: &SceneDesc) -> Box<dyn Method> {
+    Box::new(MultibodyWorld::new(sc).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// The particle method's rigid-frames solver.
+pub fn rigid_frames(sc: &SceneDesc) -> Box<dyn Method> {
+    Box::new(ParticleWorld::new(sc, ParticleSolver::RigidFrames).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// `body_states` into a fresh vector.
+pub trait States {
+    /// The kinematic state of every body now.
+    fn body_states_vec(&self) -> Vec<BodyState>;
+}
+
+impl States for Box<dyn Method> {
+    fn body_states_vec(&self) -> Vec<BodyState> {
+        let mut out = Vec::new();
+        self.body_states(&mut out);
+        out
+    }
+}
+
+/// A dynamic box of half extents `half` centred at `pos`.
+pub fn boxed(name: &str, half: Vec3, pos: Vec3, mass: f32) -> BodyDesc {
+    BodyDesc::new(
+        name,
+        Shape::Box { half_extents: half },
+        Pose::from_position(pos),
+        MassSpec::Mass(mass),
+    )
+}
+
+/// A dynamic cube of half size `half` centred at `pos`.
+pub fn cube(name: &str, half: f32, pos: Vec3, mass: f32) -> BodyDesc {
+    boxed(name, Vec3::splat(half), pos, mass)
+}
+
+/// A scene of `bodies` with default settings and the given ground, no air friction.
+pub fn scene(bodies: Vec<BodyDesc>, ground: Option<Ground>) -> SceneDesc {
+    SceneDesc {
+        name: "closed form".into(),
+        bodies,
+        settings: Settings {
+            ground,
+            ..Settings::default()
+        },
+        ..SceneDesc::default()
+    }
+}
+
+fn body2(parent: Option<usize>) -> BodyRef {
+    parent.map_or(BodyRef::World, |p| BodyRef::Body(BodyId(p as u32)))
+}
+
+/// A frictionless hinge from body `body` to `parent` (or the world).
+pub fn hinge(
+    name: &str,
+    body: usize,
+    parent: Option<usize>,
+    anchor: Vec3,
+    axis: Vec3,
+    limit: Option<AngleRange>,
+) -> ConstraintDesc {
+    ConstraintDesc {
+        name: name.into(),
+        body1: BodyId(body as u32),
+        body2: body2(parent),
+        kind: JointKind::Hinge {
+            anchor,
+            axis,
+            limit,
+        },
+        friction: 0.0,
+    }
+}
+
+/// A frictionless, unlimited ball-and-socket joint.
+pub fn ball(name: &str, body: usize, parent: Option<usize>, anchor: Vec3) -> ConstraintDesc {
+    ConstraintDesc {
+        name: name.into(),
+        body1: BodyId(body as u32),
+        body2: body2(parent),
+        kind: JointKind::BallAndSocket {
+            anchor,
+            swing: None,
+            twist: None,
+            limit_style: LimitStyle::Hard,
+        },
+        friction: 0.0,
+    }
+}
+
+/// Every body's inertia about its centre of mass in its shape frame (boxes: the centre
+/// of mass is the shape frame's origin).
+pub fn inertias(sc: &SceneDesc) -> Vec<Mat3> {
+    sc.bodies
+        .iter()
+        .map(|b| mass_props(b).unwrap_or_else(|e| panic!("{e}")).inertia)
+        .collect()
+}
+
+/// Total energy ½mv² + ½ωᵀIω + m g y of the dynamic bodies (J), from the states.
+pub fn energy(states: &[BodyState], sc: &SceneDesc, inertia: &[Mat3]) -> f64 {
+    let g = -sc.settings.gravity;
+    let mut e = 0.0f64;
+    for (i, (s, b)) in states.iter().zip(&sc.bodies).enumerate() {
+        if b.is_fixed() {
+            continue;
+        }
+        let m = match b.mass {
+            MassSpec::Mass(m) => m,
+            MassSpec::Density(_) => mass_props(b).unwrap().mass,
+        };
+        let r = Mat3::from_quat(s.orientation);
+        let iw = r * inertia[i] * r.transpose();
+        e += 0.5 * (m * s.linear_velocity.length_squared()) as f64
+            + 0.5 * s.angular_velocity.dot(iw * s.angular_velocity) as f64
+            + (m * g.dot(s.com)) as f64;
+    }
+    e
+}
+
+/// A scene shipped in assets/scenes, default variant.
+pub fn shipped_scene(name: &str) -> SceneDesc {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/scenes")
+        .join(format!("{name}.af"));
+    load(&path, &AfOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc
+}
