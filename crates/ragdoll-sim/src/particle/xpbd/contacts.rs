@@ -9,7 +9,8 @@
 //! until the next detection.
 //!
 //! **Response** (every substep): the non-penetration constraint
-//! `C = (p_b − p_a) · n ≥ 0` on the attached points, a point correction
+//! `C = (p_b − p_a) · n ≥ 0` (or, for a penetration the substep starts with, no deeper
+//! than it less the push-out speed, `begin_substep`) on the attached points, a point correction
 //! (`joints::pull`) when violated; then Coulomb friction in position form (Müller et
 //! al. 2020, section 3.5, applied as a cone): the points' relative tangential motion
 //! over the substep is undone as far as `μ Δλ_n` allows, which holds a static contact
@@ -44,6 +45,9 @@ pub(crate) struct Contact {
     pub vn_before: f32,
     /// Whether the contact pushed during the substep.
     pub active: bool,
+    /// The least separation the substep must reach (m, ≤ 0): 0, or for a contact
+    /// that started the substep in penetration its depth less `max_push_out_speed · h`.
+    pub floor: f32,
 }
 
 /// What a detection reuses from the last: candidate pairs and parry's manifolds.
@@ -127,6 +131,7 @@ pub(crate) fn detect(
                     restitution,
                     vn_before: 0.0,
                     active: false,
+                    floor: 0.0,
                 });
             },
         );
@@ -154,6 +159,7 @@ pub(crate) fn detect(
                         restitution,
                         vn_before: 0.0,
                         active: false,
+                        floor: 0.0,
                     });
                 },
             );
@@ -166,11 +172,18 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
     (c.b.velocity(p) - c.a.velocity(p)).dot(c.n)
 }
 
-/// Before a substep: each contact's approach, and not yet active.
-pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles) {
+/// Before a substep of `h`: each contact's approach, and how deep it may still be at
+/// the end of the substep. A penetration the substep starts with (an overlapping start,
+/// a deep hit) is pushed out at `push_speed` at most (the scene's
+/// `max_push_out_speed`, Box2D's contact push speed): pushed out at once, the
+/// particles' displacement would become their velocity (a box started 25 cm in the
+/// ground left it at 175 m/s).
+pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed: f32, h: f32) {
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.active = false;
+        let depth = (c.b.point(p) - c.a.point(p)).dot(c.n);
+        c.floor = (depth + push_speed * h).min(0.0);
     }
 }
 
@@ -203,7 +216,7 @@ pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, thresho
 pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
     for c in contacts.iter_mut() {
         let (pa, pb) = (c.a.point(p), c.b.point(p));
-        let depth = (pb - pa).dot(c.n);
+        let depth = (pb - pa).dot(c.n) - c.floor;
         if depth >= 0.0 {
             continue;
         }

@@ -100,7 +100,12 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 &mut st.contacts,
             );
         }
-        contacts::begin_substep(&mut st.contacts, &st.particles);
+        contacts::begin_substep(
+            &mut st.contacts,
+            &st.particles,
+            w.settings.max_push_out_speed,
+            h,
+        );
         let p = &mut st.particles;
         for k in 0..p.len() {
             p.x_prev[k] = p.x[k];
