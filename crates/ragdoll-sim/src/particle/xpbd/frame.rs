@@ -78,8 +78,8 @@ pub(crate) fn extract_rotation(a: &Mat3, mut q: Quat) -> Quat {
 mod tests {
     use super::*;
 
-    /// Weights reproduce points of the rest tetrahedron and sum to one; the extraction
-    /// reads back a rotation applied to it.
+    /// Weights reproduce points of the rest tetrahedron and sum to one; the extraction,
+    /// warm-started near it, reads back a rotation applied to the tetrahedron.
     #[test]
     fn weights_and_frames_read_back() {
         let rest = [
@@ -103,7 +103,9 @@ mod tests {
             let d = q * *r;
             m + Mat3::from_cols(d * r.x, d * r.y, d * r.z)
         });
-        let got = extract_rotation(&a, Quat::IDENTITY);
+        // Warm-started as the solver is, from the last substep's frame (here 0.2 rad off).
+        let guess = Quat::from_axis_angle(Vec3::new(0.3, -1.0, 0.2).normalize(), 0.2) * q;
+        let got = extract_rotation(&a, guess);
         assert!(got.dot(q).abs() > 1.0 - 1e-5, "{got} vs {q}");
     }
 }
