@@ -447,8 +447,9 @@ impl Method for ParticleWorld {
                 s.iterations.max(1)
             ),
             ParticleSolver::Xpbd => format!(
-                "xpbd particles, {} substeps ({} × {} iterations)",
+                "xpbd particles, {} substeps × {} passes ({} × {} iterations)",
                 rigid_frames::substeps(s),
+                xpbd::step::PASSES,
                 s.substeps.max(1),
                 s.iterations.max(1)
             ),
