@@ -59,6 +59,10 @@ pub enum ParticleSolverArg {
     /// particulated mass properties, substeps, friction, sleeping.
     #[default]
     RigidFrames,
+    /// XPBD on particles with small steps: every particle keeps its own position and
+    /// velocity; bones are particulated tetrahedra of sticks; joints, limits and
+    /// contacts are constraints on the particles.
+    Xpbd,
 }
 
 /// `view` options.

@@ -13,6 +13,7 @@ pub fn build_particle(
     let solver = match solver {
         ParticleSolverArg::Paper => ParticleSolver::Paper,
         ParticleSolverArg::RigidFrames => ParticleSolver::RigidFrames,
+        ParticleSolverArg::Xpbd => ParticleSolver::Xpbd,
     };
     Ok(Box::new(ParticleWorld::new(scene, solver)?))
 }

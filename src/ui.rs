@@ -244,6 +244,7 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
         for (solver, name) in [
             (ParticleSolverArg::Paper, "paper"),
             (ParticleSolverArg::RigidFrames, "rigid frames"),
+            (ParticleSolverArg::Xpbd, "xpbd particles"),
         ] {
             if ui.radio(state.particle_solver == solver, name).clicked() {
                 actions.push(Action::ParticleSolver(solver));
@@ -392,7 +393,8 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                 ui.separator();
                 let other = match state.particle_solver {
                     ParticleSolverArg::Paper => ParticleSolverArg::RigidFrames,
-                    ParticleSolverArg::RigidFrames => ParticleSolverArg::Paper,
+                    ParticleSolverArg::RigidFrames => ParticleSolverArg::Xpbd,
+                    ParticleSolverArg::Xpbd => ParticleSolverArg::Paper,
                 };
                 item(
                     ui,

@@ -45,6 +45,8 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
                 }
             }
         }
+        // Its own particles' velocities (`ParticleWorld::sample` fills them in).
+        ParticleSolver::Xpbd => {}
     }
     let mut pen = 0.0f32;
     let zero = vec![0.0; w.bones.len()];
@@ -83,7 +85,7 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         .map(|b| b.stretch(&w.corners(b)))
         .fold(0.0, f32::max);
     let all_asleep =
-        w.solver == ParticleSolver::RigidFrames && w.bones.iter().all(|b| b.fixed || b.asleep);
+        w.solver != ParticleSolver::Paper && w.bones.iter().all(|b| b.fixed || b.asleep);
     Sample {
         energy: kinetic + potential,
         kinetic,
@@ -109,6 +111,8 @@ pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
             .filter(|b| !b.fixed)
             .flat_map(|b| (0..4).map(|k| energy(b.mass * 0.25, b.corner_velocity(k), b.corner(k))))
             .sum(),
+        // Answered by `ParticleWorld::state_energy` from its own particles.
+        ParticleSolver::Xpbd => 0.0,
         ParticleSolver::Paper => {
             let p = &w.particles;
             (0..p.len())
@@ -127,7 +131,9 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
         let pose = b.shape_pose();
         let com = pose.transform_point(b.shape_com);
         let (lin, ang) = match w.solver {
-            ParticleSolver::RigidFrames => (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel)),
+            ParticleSolver::RigidFrames | ParticleSolver::Xpbd => {
+                (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel))
+            }
             ParticleSolver::Paper => {
                 let x = &w.particles.frame_start;
                 let p0 = x[b.particles[0] as usize];

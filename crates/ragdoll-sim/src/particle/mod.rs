@@ -27,6 +27,7 @@ mod particles;
 mod placement;
 mod rigid_frames;
 mod sleeping;
+mod xpbd;
 
 use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
@@ -56,6 +57,11 @@ pub enum ParticleSolver {
     /// points in the bones' frames, substeps, contact friction, sleeping.
     #[default]
     RigidFrames,
+    /// XPBD on particles with small steps (Macklin et al. 2019): each particle keeps its
+    /// own position and velocity; a bone is four particles reproducing its mass, centre
+    /// of mass and inertia, held by six sticks; joints, limits and contacts are
+    /// constraints on the particles; the bone frame is read from them ([`xpbd`](self)).
+    Xpbd,
 }
 
 impl ParticleSolver {
@@ -64,6 +70,7 @@ impl ParticleSolver {
         match self {
             ParticleSolver::Paper => "paper",
             ParticleSolver::RigidFrames => "rigid-frames",
+            ParticleSolver::Xpbd => "xpbd",
         }
     }
 }
@@ -92,6 +99,8 @@ pub struct ParticleWorld {
     pairs: Vec<(usize, usize)>,
     manifolds: Vec<ContactManifold<(), ()>>,
     paper: Option<paper::PaperState>,
+    /// The XPBD solver's particles and constraints.
+    xpbd: Option<xpbd::XpbdState>,
     grab: Option<Grab>,
     time: f64,
 }
@@ -116,6 +125,7 @@ impl ParticleWorld {
             pairs: Vec::new(),
             manifolds: Vec::new(),
             paper: None,
+            xpbd: None,
             grab: None,
             time: 0.0,
         };
@@ -128,7 +138,7 @@ impl ParticleWorld {
             collider(b)?;
         }
         match solver {
-            ParticleSolver::RigidFrames => {
+            ParticleSolver::RigidFrames | ParticleSolver::Xpbd => {
                 for (i, b) in scene.bodies.iter().enumerate() {
                     let bone = w.particulated_bone(i, b)?;
                     w.bones.push(bone);
@@ -157,6 +167,9 @@ impl ParticleWorld {
             }
         }
         w.links = w.joints.iter().map(Link::of).collect();
+        if solver == ParticleSolver::Xpbd {
+            w.xpbd = Some(xpbd::XpbdState::new(&mut w.bones, &w.joints));
+        }
         excluded.extend(w.rest_overlaps());
         w.filter = Filter::new(w.bones.len(), &excluded);
         // Built by pushing, these arrays have up to twice the room they use; they keep
@@ -240,6 +253,10 @@ impl ParticleWorld {
             }
             return Ok(bone);
         }
+        if self.solver == ParticleSolver::Xpbd {
+            // Its particles are made from the frame and velocities (`XpbdState::add_bone`).
+            return Ok(bone);
+        }
         for k in 0..4 {
             let x = Vec3::from(bone.world(p.rest[k]));
             let v = desc.linear_velocity + desc.angular_velocity.cross(x - Vec3::from(bone.com));
@@ -261,6 +278,10 @@ impl ParticleWorld {
         match self.solver {
             ParticleSolver::RigidFrames => std::array::from_fn(|k| b.corner(k)),
             ParticleSolver::Paper => b.particles.map(|p| self.particles.x[p as usize]),
+            ParticleSolver::Xpbd => match &self.xpbd {
+                Some(st) => st.particles.bone(b.body),
+                None => std::array::from_fn(|k| b.corner(k)),
+            },
         }
     }
 
@@ -320,7 +341,13 @@ impl ParticleWorld {
     /// a frame where a velocity turns (an impact), so its `energy_gain` can show a rise
     /// the state never had.
     pub fn state_energy(&self) -> f64 {
-        measure::state_energy(self)
+        match &self.xpbd {
+            Some(st) => {
+                let (k, p) = xpbd::measure::energy(self, st);
+                k + p
+            }
+            None => measure::state_energy(self),
+        }
     }
 }
 
@@ -425,6 +452,13 @@ impl Method for ParticleWorld {
                 s.substeps.max(1),
                 s.iterations.max(1)
             ),
+            ParticleSolver::Xpbd => format!(
+                "xpbd particles, {} substeps × {} passes ({} × {} iterations)",
+                rigid_frames::substeps(s),
+                xpbd::step::PASSES,
+                s.substeps.max(1),
+                s.iterations.max(1)
+            ),
         }
     }
 
@@ -439,6 +473,12 @@ impl Method for ParticleWorld {
                 if let Some(st) = self.paper.take() {
                     paper::step(self, &st);
                     self.paper = Some(st);
+                }
+            }
+            ParticleSolver::Xpbd => {
+                if let Some(mut st) = self.xpbd.take() {
+                    xpbd::step::step(self, &mut st);
+                    self.xpbd = Some(st);
                 }
             }
         }
@@ -488,7 +528,10 @@ impl Method for ParticleWorld {
                     role: StickRole::Bone,
                 });
             }
-            if self.solver == ParticleSolver::RigidFrames {
+            if matches!(
+                self.solver,
+                ParticleSolver::RigidFrames | ParticleSolver::Xpbd
+            ) {
                 let role = if b.fixed {
                     ParticleRole::Fixed
                 } else {
@@ -509,6 +552,16 @@ impl Method for ParticleWorld {
                     ParticleRole::Internal
                 },
             });
+        }
+        if let Some(st) = &self.xpbd {
+            for c in &st.contacts {
+                let (pa, pb) = (c.a.point(&st.particles), c.b.point(&st.particles));
+                out.contacts.push(ContactInstance {
+                    point: pa,
+                    normal: c.n,
+                    depth: (pa - pb).dot(c.n),
+                });
+            }
         }
         for m in &self.contacts.manifolds {
             for c in &self.contacts.points[m.range()] {
@@ -561,7 +614,13 @@ impl Method for ParticleWorld {
     }
 
     fn sample(&self) -> Sample {
-        measure::sample(self)
+        let mut s = measure::sample(self);
+        if let Some(st) = &self.xpbd {
+            let (kinetic, potential) = xpbd::measure::energy(self, st);
+            s.energy = kinetic + potential;
+            s.kinetic = kinetic;
+        }
+        s
     }
 
     fn body_count(&self) -> usize {
@@ -572,11 +631,15 @@ impl Method for ParticleWorld {
         match self.solver {
             ParticleSolver::RigidFrames => 4 * self.bones.len(),
             ParticleSolver::Paper => self.particles.len(),
+            ParticleSolver::Xpbd => self.xpbd.as_ref().map_or(0, |st| st.particles.len()),
         }
     }
 
     fn body_states(&self, out: &mut Vec<BodyState>) {
-        measure::body_states(self, out);
+        match &self.xpbd {
+            Some(st) => xpbd::measure::body_states(self, st, out),
+            None => measure::body_states(self, out),
+        }
     }
 
     fn particle_positions(&self, out: &mut Vec<Vec3>) {
@@ -586,6 +649,11 @@ impl Method for ParticleWorld {
                 out.extend(self.bones.iter().flat_map(|b| self.corners(b)))
             }
             ParticleSolver::Paper => out.extend_from_slice(&self.particles.x),
+            ParticleSolver::Xpbd => {
+                if let Some(st) = &self.xpbd {
+                    out.extend_from_slice(&st.particles.x)
+                }
+            }
         }
     }
 
@@ -624,6 +692,11 @@ impl Method for ParticleWorld {
         self.shapes.push(desc.shape.clone());
         if let Ok(mut bone) = self.particulated_bone(id, desc) {
             bone.figure = id as u32;
+            if let Some(st) = self.xpbd.as_mut() {
+                let i = self.bones.len();
+                bone.particles = std::array::from_fn(|k| (4 * i + k) as u32);
+                st.add_bone(i, &bone);
+            }
             if self.solver == ParticleSolver::Paper {
                 // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it.
                 let x = &self.particles.x;

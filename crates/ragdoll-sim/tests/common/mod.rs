@@ -24,6 +24,11 @@ pub fn rigid_frames(sc: &SceneDesc) -> Box<dyn Method> {
     Box::new(ParticleWorld::new(sc, ParticleSolver::RigidFrames).unwrap_or_else(|e| panic!("{e}")))
 }
 
+/// The particle method's XPBD solver.
+pub fn xpbd(sc: &SceneDesc) -> Box<dyn Method> {
+    Box::new(ParticleWorld::new(sc, ParticleSolver::Xpbd).unwrap_or_else(|e| panic!("{e}")))
+}
+
 /// `body_states` into a fresh vector.
 pub trait States {
     /// The kinematic state of every body now.

@@ -1,0 +1,245 @@
+//! Contacts on particles: detection on the frames the particles imply, response on the
+//! particles with barycentric weights (the paper's section 3.4; Jakobsen 2001).
+//!
+//! **Detection** (a few times a frame): the broad phase of `crate::broadphase` over the
+//! bones' shapes posed at their read frames, each box loosened by how far the bone can
+//! travel before the next detection; parry3d's contact manifolds within the distance a
+//! pair can close (speculative contacts). Each contact point becomes a point fixed in
+//! each bone, attached to its particles by barycentric weights, with the normal fixed
+//! until the next detection.
+//!
+//! **Response** (every substep): the non-penetration constraint
+//! `C = (p_b − p_a) · n ≥ 0` (or, for a penetration the substep starts with, no deeper
+//! than it less the push-out speed, `begin_substep`) on the attached points, a point correction
+//! (`joints::pull`) when violated; then Coulomb friction in position form (Müller et
+//! al. 2020, section 3.5, applied as a cone): the points' relative tangential motion
+//! over the substep is undone as far as `μ Δλ_n` allows, which holds a static contact
+//! and slides a moving one at the kinetic rate `μ g cos θ` on a slope.
+
+use super::super::bone::Bone;
+use super::super::contacts::{
+    Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, shape_pair,
+};
+use super::frame::weights;
+use super::joints::{Anchor, pull};
+use super::particles::XParticles;
+use crate::broadphase::{Reused, speculative_margin};
+use crate::scene::Settings;
+use glam::{Mat3, Vec3};
+use parry3d::query::ContactManifold;
+
+/// One contact point between bone `a` and bone `b` or the ground.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Contact {
+    /// The point on body1, on its particles.
+    pub a: Anchor,
+    /// The point on body2 (or the ground).
+    pub b: Anchor,
+    /// Unit normal from `a` to `b`.
+    pub n: Vec3,
+    /// Coulomb coefficient, `√(μ_a μ_b)`.
+    pub mu: f32,
+    /// Restitution, the larger of the two.
+    pub restitution: f32,
+    /// Relative normal velocity `(v_b − v_a) · n` before the substep (< 0: closing).
+    pub vn_before: f32,
+    /// Whether the contact pushed during the substep.
+    pub active: bool,
+    /// The least separation the substep must reach (m, ≤ 0): 0, or for a contact
+    /// that started the substep in penetration its depth less `max_push_out_speed · h`.
+    pub floor: f32,
+}
+
+/// What a detection reuses from the last: candidate pairs and parry's manifolds.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    pairs: Vec<(usize, usize)>,
+    manifolds: Vec<ContactManifold<(), ()>>,
+    margins: Vec<f32>,
+    speeds: Vec<f32>,
+}
+
+/// A point given in world coordinates, attached to bone `i`'s particles.
+fn attach(bones: &[Bone], rest_inv: &[Mat3], i: usize, world: Vec3) -> Anchor {
+    let b = &bones[i];
+    let local = b.rot.inverse() * (world - Vec3::from(b.center()));
+    Anchor::Bone(i as u32, weights(&rest_inv[i], b.rest[0], local))
+}
+
+/// Finds the contacts of the next `span` seconds into `out` (module doc).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn detect(
+    p: &XParticles,
+    bones: &[Bone],
+    rest_inv: &[Mat3],
+    filter: &Filter,
+    settings: &Settings,
+    span: f32,
+    scratch: &mut Scratch,
+    out: &mut Vec<Contact>,
+) {
+    out.clear();
+    let reach = speculative_margin(settings.gravity.length(), span);
+    // A bone's points move no faster than its fastest particle plus its turn; the
+    // particles sit inside the shape, so bound the points by the fastest particle
+    // scaled by how far the shape reaches beyond them.
+    scratch.speeds.clear();
+    scratch.margins.clear();
+    for (i, b) in bones.iter().enumerate() {
+        let f = 4 * i;
+        let c = (p.v[f] + p.v[f + 1] + p.v[f + 2] + p.v[f + 3]) * 0.25;
+        let spin = (0..4)
+            .map(|k| (p.v[f + k] - c).length())
+            .fold(0.0, f32::max);
+        let inner = b.rest.iter().map(|r| r.length()).fold(1e-6, f32::max);
+        let outer = b
+            .shape
+            .get()
+            .shape()
+            .compute_local_aabb()
+            .half_extents()
+            .length()
+            + b.shape_in_bone.position.length();
+        let speed = c.length() + spin * (outer / inner).max(1.0);
+        scratch.speeds.push(speed);
+        scratch.margins.push(speed * span + reach);
+    }
+    let mut tree = Reused::default();
+    let boxes = broad_phase_on(
+        &mut tree,
+        bones,
+        &scratch.margins,
+        filter,
+        &mut scratch.pairs,
+    );
+    for &(i, j) in &scratch.pairs {
+        let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
+        let mu = (bones[i].friction * bones[j].friction).sqrt();
+        let restitution = bones[i].restitution.max(bones[j].restitution);
+        shape_pair(
+            bones,
+            i,
+            j,
+            prediction,
+            &mut scratch.manifolds,
+            |pa, pb, n, _| {
+                out.push(Contact {
+                    a: attach(bones, rest_inv, i, pa),
+                    b: attach(bones, rest_inv, j, pb),
+                    n,
+                    mu,
+                    restitution,
+                    vn_before: 0.0,
+                    active: false,
+                    floor: 0.0,
+                });
+            },
+        );
+    }
+    if let Some(ground) = &settings.ground {
+        let plane = ground_plane(ground);
+        for i in 0..bones.len() {
+            if bones[i].is_static() || !reaches_ground(plane, &boxes[i]) {
+                continue;
+            }
+            let mu = (bones[i].friction * ground.friction).sqrt();
+            let restitution = bones[i].restitution.max(ground.restitution);
+            ground_pair(
+                bones,
+                i,
+                ground,
+                scratch.margins[i],
+                &mut scratch.manifolds,
+                |pa, pb, n, _| {
+                    out.push(Contact {
+                        a: attach(bones, rest_inv, i, pa),
+                        b: Anchor::World(pb),
+                        n,
+                        mu,
+                        restitution,
+                        vn_before: 0.0,
+                        active: false,
+                        floor: 0.0,
+                    });
+                },
+            );
+        }
+    }
+}
+
+/// Relative normal velocity of a contact's points, `(v_b − v_a) · n`.
+fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
+    (c.b.velocity(p) - c.a.velocity(p)).dot(c.n)
+}
+
+/// Before a substep of `h`: each contact's approach, and how deep it may still be at
+/// the end of the substep. A penetration the substep starts with (an overlapping start,
+/// a deep hit) is pushed out at `push_speed` at most (the scene's
+/// `max_push_out_speed`, Box2D's contact push speed): pushed out at once, the
+/// particles' displacement would become their velocity (a box started 25 cm in the
+/// ground left it at 175 m/s).
+pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed: f32, h: f32) {
+    for c in contacts.iter_mut() {
+        c.vn_before = normal_velocity(c, p);
+        c.active = false;
+        let depth = (c.b.point(p) - c.a.point(p)).dot(c.n);
+        c.floor = (depth + push_speed * h).min(0.0);
+    }
+}
+
+/// After the velocities are derived: the velocity pass of Müller et al. 2020
+/// (section 3.6, eq. 34). A contact that pushed leaves with the normal velocity
+/// Newton's law of restitution gives, `v_n = max(−e ṽ_n, 0)` with `ṽ_n` its approach
+/// before the substep (`e = 0` below `threshold`), set by a velocity change of its
+/// points on the same barycentric weights. Without it the push-out of a position
+/// correction would stay in the velocities as energy the contact never had.
+pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, threshold: f32) {
+    for c in contacts.iter().filter(|c| c.active) {
+        let e = if -c.vn_before > threshold {
+            c.restitution
+        } else {
+            0.0
+        };
+        let target = (-e * c.vn_before).max(0.0);
+        let dv = target - normal_velocity(c, p);
+        let w = c.a.inv_mass(p) + c.b.inv_mass(p);
+        if w <= 0.0 || dv.abs() < 1e-9 {
+            continue;
+        }
+        let dl = dv / w;
+        c.a.kick(p, -c.n * dl);
+        c.b.kick(p, c.n * dl);
+    }
+}
+
+/// One pass over the contacts (module doc).
+pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
+    for c in contacts.iter_mut() {
+        let (pa, pb) = (c.a.point(p), c.b.point(p));
+        let depth = (pb - pa).dot(c.n) - c.floor;
+        if depth >= 0.0 {
+            continue;
+        }
+        // Push `a` back along −n and `b` along n until the points meet along n.
+        let dl = pull(p, &c.a, &c.b, c.n * depth, 0.0);
+        c.active = true;
+        if dl <= 0.0 || c.mu <= 0.0 {
+            continue;
+        }
+        // Relative motion of the points over the substep, its tangential part.
+        let (pa, pb) = (c.a.point(p), c.b.point(p));
+        let moved = (pa - c.a.prev_point(p)) - (pb - c.b.prev_point(p));
+        let slip = moved - c.n * c.n.dot(moved);
+        let s = slip.length();
+        if s < 1e-12 {
+            continue;
+        }
+        let w = c.a.inv_mass(p) + c.b.inv_mass(p);
+        if w <= 0.0 {
+            continue;
+        }
+        // Undo the slip (Δλ_t = s / w) as far as the cone `Δλ_t ≤ μ Δλ_n` allows.
+        let take = (c.mu * dl * w).min(s);
+        pull(p, &c.a, &c.b, -slip * (take / s), 0.0);
+    }
+}

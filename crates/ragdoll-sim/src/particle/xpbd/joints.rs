@@ -1,0 +1,345 @@
+//! Joints and limits as constraints on particles.
+//!
+//! **Points.** A joint's anchor on a bone is the fixed affine combination `Σ β_k x_k`
+//! of the bone's particles (`frame`); the ball constraint `C = p_b − p_a = 0` moves
+//! particle `k` of side `a` by `β_k w_k Δλ n` with `Δλ = |C| / (Σ_a β² w + Σ_b β² w + α̃)`
+//! (XPBD, Macklin et al. 2016, eq. 18, one iteration from `λ = 0` per substep).
+//!
+//! **Angles.** Hinge axes, universal shafts, a fixed joint's orientation and the
+//! limits are functions of the bones' frames, and the frame is read from the particles
+//! (`frame::read`). To first order it turns by `δθ = I⁻¹ Σ m r_k × Δx_k`, so an angle
+//! `C` with world gradient `n` (per unit turn of the frame) has gradient
+//! `∇_k C = m_k (I⁻¹ n) × r_k` on particle `k` and generalised inverse mass
+//! `Σ w_k |∇_k C|² = nᵀ I⁻¹ n` — the rigid body's. The XPBD update
+//! `Δx_k = w_k ∇_k C Δλ = (I⁻¹ n Δλ) × r_k` turns every particle about the centre of
+//! mass; the sticks then take back the second-order stretch of the linear turn.
+
+use super::super::bone::{Bone, Side};
+use super::super::joints::{Joint, JointType, hinge_turn_ratio};
+use super::super::limits::{Swing, SwingLimit, perpendicular};
+use super::frame::combine;
+use super::particles::{PER_BONE, XParticles};
+use glam::{Quat, Vec3};
+
+/// One side of a point constraint: a bone and the point's weights on its particles,
+/// or a point fixed in the world.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Anchor {
+    /// On bone `.0` with barycentric weights `.1`.
+    Bone(u32, [f32; 4]),
+    /// Fixed in the world.
+    World(Vec3),
+}
+
+impl Anchor {
+    /// Where the point is now.
+    #[inline]
+    pub fn point(&self, p: &XParticles) -> Vec3 {
+        match *self {
+            Anchor::Bone(i, ref w) => combine(&p.bone(i as usize), w),
+            Anchor::World(x) => x,
+        }
+    }
+
+    /// Where the point was at the start of the substep.
+    #[inline]
+    pub fn prev_point(&self, p: &XParticles) -> Vec3 {
+        match *self {
+            Anchor::Bone(i, ref w) => {
+                let f = PER_BONE * i as usize;
+                let x = &p.x_prev;
+                combine(&[x[f], x[f + 1], x[f + 2], x[f + 3]], w)
+            }
+            Anchor::World(x) => x,
+        }
+    }
+
+    /// The point's velocity, `Σ β_k v_k` (0 for the world).
+    #[inline]
+    pub fn velocity(&self, p: &XParticles) -> Vec3 {
+        match *self {
+            Anchor::Bone(i, ref w) => {
+                let f = PER_BONE * i as usize;
+                let v = &p.v;
+                combine(&[v[f], v[f + 1], v[f + 2], v[f + 3]], w)
+            }
+            Anchor::World(_) => Vec3::ZERO,
+        }
+    }
+
+    /// Changes the point's velocity by `d` times its inverse mass: particle `k`'s by
+    /// `β_k w_k d`.
+    #[inline]
+    pub fn kick(&self, p: &mut XParticles, d: Vec3) {
+        if let Anchor::Bone(i, ref w) = *self {
+            let f = PER_BONE * i as usize;
+            for (k, wk) in w.iter().enumerate() {
+                p.v[f + k] += d * (wk * p.w[f + k]);
+            }
+        }
+    }
+
+    /// Its generalised inverse mass, `Σ β_k² w_k`.
+    #[inline]
+    pub fn inv_mass(&self, p: &XParticles) -> f32 {
+        match *self {
+            Anchor::Bone(i, ref w) => {
+                let f = PER_BONE * i as usize;
+                (0..PER_BONE).map(|k| w[k] * w[k] * p.w[f + k]).sum()
+            }
+            Anchor::World(_) => 0.0,
+        }
+    }
+
+    /// Moves the point by `d` times its inverse mass: particle `k` by `β_k w_k d`.
+    #[inline]
+    pub fn shift(&self, p: &mut XParticles, d: Vec3) {
+        if let Anchor::Bone(i, ref w) = *self {
+            let f = PER_BONE * i as usize;
+            for (k, wk) in w.iter().enumerate() {
+                p.x[f + k] += d * (wk * p.w[f + k]);
+            }
+        }
+    }
+}
+
+/// Closes `delta` (from `a`'s point towards `b`'s) with compliance `alpha_tilde`
+/// (`α / h²`): the XPBD point correction. Returns `Δλ` (its magnitude, m·kg).
+pub(crate) fn pull(
+    p: &mut XParticles,
+    a: &Anchor,
+    b: &Anchor,
+    delta: Vec3,
+    alpha_tilde: f32,
+) -> f32 {
+    let c = delta.length();
+    if c < 1e-9 {
+        return 0.0;
+    }
+    let w = a.inv_mass(p) + b.inv_mass(p);
+    if w + alpha_tilde <= 0.0 {
+        return 0.0;
+    }
+    let n = delta / c;
+    let dl = c / (w + alpha_tilde);
+    a.shift(p, n * dl);
+    b.shift(p, -n * dl);
+    dl
+}
+
+/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for a unit `n`, 0 if it takes no
+/// correction.
+#[inline]
+fn inertia_lever(p: &XParticles, bones: &[Bone], s: Side, n: Vec3) -> (f32, Vec3) {
+    match s {
+        Some(i) if p.moves(i) => {
+            let b = &bones[i];
+            let local = b.rot.inverse() * n;
+            let turn = b.rot * (Vec3::from(b.inv_inertia_local) * local);
+            (n.dot(turn), turn)
+        }
+        _ => (0.0, Vec3::ZERO),
+    }
+}
+
+/// Turns bone `i`'s particles by the world rotation `omega` about their centre of
+/// mass, and its read frame with them. To first order this is `Δx_k = ω × (x_k − c)`
+/// (module doc); the rotation itself, `x_k ← c + exp(ω)(x_k − c)`, keeps every stick's
+/// length where the linear step would stretch it by `√(1 + |ω|²)`.
+fn turn_bone(p: &mut XParticles, bones: &mut [Bone], i: usize, omega: Vec3) {
+    let f = PER_BONE * i;
+    let x = p.bone(i);
+    let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
+    let q = Quat::from_scaled_axis(omega);
+    for (k, xk) in x.iter().enumerate() {
+        p.x[f + k] = c + q * (*xk - c);
+    }
+    let b = &mut bones[i];
+    b.rot = (q * b.rot).normalize();
+}
+
+/// Turns side `a` by `dphi` relative to side `b` (a world rotation vector: the angle
+/// `|dphi|` about its direction), split by the sides' inverse inertias, with
+/// compliance `alpha_tilde` (module doc).
+pub(crate) fn turn(
+    p: &mut XParticles,
+    bones: &mut [Bone],
+    a: Side,
+    b: Side,
+    dphi: Vec3,
+    alpha_tilde: f32,
+) {
+    let c = dphi.length();
+    if c < 1e-9 || !c.is_finite() {
+        return;
+    }
+    let n = dphi / c;
+    let (wa, ta) = inertia_lever(p, bones, a, n);
+    let (wb, tb) = inertia_lever(p, bones, b, n);
+    let den = wa + wb + alpha_tilde;
+    if den <= 0.0 {
+        return;
+    }
+    let dl = c / den;
+    if let Some(i) = a.filter(|_| wa > 0.0) {
+        turn_bone(p, bones, i, ta * dl);
+    }
+    if let Some(i) = b.filter(|_| wb > 0.0) {
+        turn_bone(p, bones, i, -tb * dl);
+    }
+}
+
+/// Orientation of a side (identity for the world).
+#[inline]
+fn rot(bones: &[Bone], s: Side) -> Quat {
+    s.map_or(Quat::IDENTITY, |i| bones[i].rot)
+}
+
+/// The angular parts of joint `j`, then its limits, on the frames in `bones` (read
+/// from the particles this substep and turned with them since).
+pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h: f32) {
+    let (a, b) = (j.a, j.b);
+    match j.kind {
+        JointType::Hinge { axis_a, axis_b } => {
+            // Turn body1's axis onto body2's: by `asin(s)` about `c / s`, `c = t_a × t_b`.
+            let ta = rot(bones, a) * axis_a;
+            let tb = rot(bones, b) * axis_b;
+            let c = ta.cross(tb);
+            let s2 = c.length_squared();
+            if s2 > 1e-18 {
+                turn(p, bones, a, b, c * hinge_turn_ratio(s2), 0.0);
+            }
+        }
+        JointType::Universal { shaft_a, shaft_b } => {
+            // Keep the shafts perpendicular: turn by `asin(s₁ · s₂)` about `s₂ × s₁`.
+            let s1 = rot(bones, a) * shaft_a;
+            let s2 = rot(bones, b) * shaft_b;
+            let n = s2.cross(s1);
+            let l = n.length();
+            if l > 1e-9 {
+                turn(
+                    p,
+                    bones,
+                    a,
+                    b,
+                    n / l * s1.dot(s2).clamp(-1.0, 1.0).asin(),
+                    0.0,
+                );
+            }
+        }
+        JointType::Fixed | JointType::Slider { .. } => {
+            // Body1's rotation onto its rest orientation relative to body2:
+            // `e = q_b q_rest q_a⁻¹`, turned by its rotation vector.
+            let mut e = rot(bones, b) * j.rest_rel * rot(bones, a).inverse();
+            if e.w < 0.0 {
+                e = -e;
+            }
+            turn(p, bones, a, b, Vec3::new(e.x, e.y, e.z) * 2.0, 0.0);
+        }
+        JointType::Ball | JointType::Spring { .. } => {}
+    }
+    let alpha = j.limit_compliance / (h * h);
+    if let Some(s) = &j.swing
+        && let Some(dphi) = swing_correction(s, bones, a, b)
+    {
+        turn(p, bones, a, b, dphi, alpha);
+    }
+    for l in &j.angle_limits {
+        // `C = φ − clamp(φ)` along its gradient `J` (per unit turn of body1): a turn
+        // `J (target − φ) / |J|²` restores it.
+        let (phi, grad) = l.angle(bones, a, b);
+        let target = phi.clamp(l.min, l.max);
+        let g2 = grad.length_squared();
+        if target != phi && g2 > 1e-12 {
+            turn(p, bones, a, b, grad * ((target - phi) / g2), alpha);
+        }
+    }
+}
+
+/// The turn of body1 that brings a swing limit's shaft back onto its cone or pyramid,
+/// if it is outside: about `s × t` by the angle between the shaft `s` and the nearest
+/// allowed direction `t`.
+fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side) -> Option<Vec3> {
+    let qb = rot(bones, b);
+    let shaft = rot(bones, a) * s.shaft_a;
+    let axis = qb * s.axis_b;
+    let t = match s.kind {
+        Swing::Cone { half_angle, .. } => {
+            let phi = shaft.dot(axis).clamp(-1.0, 1.0).acos();
+            if phi <= half_angle {
+                return None;
+            }
+            // The nearest direction on the cone lies in the plane of shaft and axis.
+            let mut n = axis.cross(shaft);
+            if n.length_squared() < 1e-12 {
+                n = perpendicular(axis);
+            }
+            Quat::from_axis_angle(n.normalize(), half_angle) * axis
+        }
+        Swing::Pyramid { h1, h2, u, v } => {
+            // Angles in the planes (axis, u) and (axis, v), each clamped to its range;
+            // the allowed direction with the clamped angles.
+            let (u, v) = (qb * u, qb * v);
+            let (x, y, z) = (shaft.dot(u), shaft.dot(v), shaft.dot(axis));
+            let (a1, a2) = (x.atan2(z), y.atan2(z));
+            if a1.abs() <= h1 && a2.abs() <= h2 {
+                return None;
+            }
+            let most = 89f32.to_radians();
+            let c1 = a1.clamp(-h1.min(most), h1.min(most));
+            let c2 = a2.clamp(-h2.min(most), h2.min(most));
+            (axis + u * c1.tan() + v * c2.tan()).normalize()
+        }
+    };
+    let mut n = shaft.cross(t);
+    if n.length_squared() < 1e-12 {
+        n = perpendicular(shaft);
+    }
+    Some(n.normalize() * shaft.dot(t).clamp(-1.0, 1.0).acos())
+}
+
+/// The point part of joint `j` between its anchors `ends`, with `h` the substep.
+pub(crate) fn solve_point(
+    p: &mut XParticles,
+    bones: &[Bone],
+    j: &Joint,
+    ends: &[Anchor; 2],
+    h: f32,
+) {
+    let [a, b] = ends;
+    let (pa, pb) = (a.point(p), b.point(p));
+    let d = pb - pa;
+    match j.kind {
+        JointType::Spring {
+            stretch,
+            compress,
+            rest,
+            min,
+            max,
+        } => {
+            let len = d.length();
+            if len < 1e-9 {
+                return;
+            }
+            let n = d / len;
+            let target = if max > 0.0 && len > max {
+                Some((max, 0.0))
+            } else if min > 0.0 && len < min {
+                Some((min, 0.0))
+            } else {
+                let k = if len > rest { stretch } else { compress };
+                (k > 0.0).then(|| (rest, 1.0 / (k * h * h)))
+            };
+            if let Some((l0, alpha)) = target {
+                pull(p, a, b, n * (len - l0), alpha);
+            }
+        }
+        JointType::Slider { axis_b } => {
+            let axis = rot(bones, j.b) * axis_b;
+            pull(p, a, b, d - axis * axis.dot(d), 0.0);
+        }
+        _ => {
+            pull(p, a, b, d, 0.0);
+        }
+    }
+}

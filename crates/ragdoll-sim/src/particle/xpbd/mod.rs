@@ -1,0 +1,99 @@
+//! The XPBD particle solver: a ragdoll made of particles (Macklin et al. 2019, "Small
+//! steps in physics simulation", on the particles of the paper's section 3).
+//!
+//! Each particle has its own position and velocity (`particles`). A bone is four
+//! particles placed by exact particulation (`placement`, the paper's future work of
+//! section 5.4: they reproduce the bone's mass, centre of mass and inertia tensor), held
+//! by six sticks (`sticks`). Joints couple points that are fixed affine combinations of
+//! their bones' particles, and hinge axes and limits are angles of the frames the
+//! particles imply, corrected by turning the particles (`joints`). Contacts come from
+//! a broad phase and parry3d's narrow phase on those frames and push particles with
+//! barycentric weights (`contacts`). The bone frame is read from the particles by shape
+//! matching (`frame`) — for drawing, collision shapes, limits and metrics — and never
+//! moved as a rigid body. The loop is in `step`; islands sleep in `sleeping`; the
+//! metrics read the particles' own velocities (`measure`).
+
+pub(crate) mod contacts;
+pub(crate) mod frame;
+pub(crate) mod joints;
+pub(crate) mod measure;
+pub(crate) mod particles;
+pub(crate) mod sleeping;
+pub(crate) mod step;
+pub(crate) mod sticks;
+
+use super::bone::{Bone, EDGES};
+use super::joints::Joint;
+use glam::{Mat3, Vec3};
+use joints::Anchor;
+use particles::XParticles;
+use sticks::Stick;
+
+/// The solver's own state, beside the world's bones (whose frames it writes) and joints.
+#[derive(Default)]
+pub(crate) struct XpbdState {
+    /// Every particle; bone `i` owns `4i .. 4i + 4`.
+    pub particles: XParticles,
+    /// Per bone, `D⁻¹` of its rest tetrahedron (`frame::weights`).
+    pub rest_inv: Vec<Mat3>,
+    /// Six per bone, index pairs with rest lengths.
+    pub sticks: Vec<Stick>,
+    /// Per joint, its point on each side.
+    pub anchors: Vec<[Anchor; 2]>,
+    /// The contacts of the current detection.
+    pub contacts: Vec<contacts::Contact>,
+    /// What detections reuse.
+    pub scratch: contacts::Scratch,
+    /// Per bone, its rest timers.
+    pub rest: Vec<sleeping::Rest>,
+}
+
+impl XpbdState {
+    /// Adds bone `i`'s particles, at rest positions in its frame moving with its initial
+    /// velocities, and its sticks.
+    pub fn add_bone(&mut self, i: usize, b: &Bone) {
+        debug_assert_eq!(self.rest_inv.len(), i);
+        let x = std::array::from_fn(|k| Vec3::from(b.world(b.rest[k])));
+        let (v, om) = (glam::Vec3::from(b.lin_vel), glam::Vec3::from(b.ang_vel));
+        let c = Vec3::from(b.center());
+        let vel = x.map(|xk: Vec3| v + om.cross(xk - c));
+        self.particles.push_bone(x, vel, b.mass * 0.25, !b.fixed);
+        self.rest_inv.push(frame::rest_inverse(&b.rest));
+        let f = (4 * i) as u32;
+        for (k, &(a, bb)) in EDGES.iter().enumerate() {
+            self.sticks.push(Stick {
+                a: f + a as u32,
+                b: f + bb as u32,
+                rest: b.stick_rest[k],
+            });
+        }
+        self.rest.push(sleeping::Rest {
+            anchor: c,
+            ..Default::default()
+        });
+    }
+
+    /// The state for `bones` (particulated, at their rest frames) and `joints`.
+    pub fn new(bones: &mut [Bone], joints: &[Joint]) -> XpbdState {
+        let mut st = XpbdState::default();
+        for (i, b) in bones.iter_mut().enumerate() {
+            b.particles = std::array::from_fn(|k| (4 * i + k) as u32);
+            st.add_bone(i, b);
+        }
+        st.anchors = joints
+            .iter()
+            .map(|j| {
+                let side = |s: Option<usize>, local: Vec3| match s {
+                    Some(i) => Anchor::Bone(
+                        i as u32,
+                        frame::weights(&st.rest_inv[i], bones[i].rest[0], local),
+                    ),
+                    None => Anchor::World(local),
+                };
+                [side(j.a, j.anchor_a), side(j.b, j.anchor_b)]
+            })
+            .collect();
+        st.particles.shrink_to_fit();
+        st
+    }
+}

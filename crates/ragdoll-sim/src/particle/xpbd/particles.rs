@@ -1,0 +1,89 @@
+//! The particle state of the XPBD solver: dense arrays addressed by particle index.
+//!
+//! Bone `i` owns particles `4i .. 4i + 4` (its particulation, `placement`), so a bone's
+//! particles are found without a lookup and lie side by side in memory. Each particle
+//! has its own position and velocity; nothing about a bone's motion is stored elsewhere.
+
+use glam::Vec3;
+
+/// Particles per bone.
+pub(crate) const PER_BONE: usize = 4;
+
+/// Every particle of the world, structure of arrays.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct XParticles {
+    /// Positions now.
+    pub x: Vec<Vec3>,
+    /// Positions at the start of the current substep (velocity update, friction).
+    pub x_prev: Vec<Vec3>,
+    /// Velocities. Integration is `v += g h; x += v h` (symplectic Euler), then
+    /// `v = (x − x_prev)/h` after the constraints (Macklin et al. 2019, algorithm 1).
+    pub v: Vec<Vec3>,
+    /// Mass (kg); a quarter of the bone's.
+    pub mass: Vec<f32>,
+    /// Inverse mass as built: 0 for the particles of fixed bones.
+    pub inv_mass: Vec<f32>,
+    /// Inverse mass the solver sees: [`XParticles::inv_mass`], or 0 while the bone sleeps.
+    pub w: Vec<f32>,
+}
+
+impl XParticles {
+    /// Appends one bone's particles at `x` with velocities `v`, each `mass`; a fixed
+    /// bone's particles (`movable` false) never move.
+    pub fn push_bone(&mut self, x: [Vec3; 4], v: [Vec3; 4], mass: f32, movable: bool) {
+        let inv = if movable && mass > 0.0 {
+            1.0 / mass
+        } else {
+            0.0
+        };
+        for k in 0..PER_BONE {
+            self.x.push(x[k]);
+            self.x_prev.push(x[k]);
+            self.v.push(if movable { v[k] } else { Vec3::ZERO });
+            self.mass.push(if movable { mass } else { 0.0 });
+            self.inv_mass.push(inv);
+            self.w.push(inv);
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Bone `i`'s four positions.
+    #[inline]
+    pub fn bone(&self, i: usize) -> [Vec3; 4] {
+        let f = PER_BONE * i;
+        [self.x[f], self.x[f + 1], self.x[f + 2], self.x[f + 3]]
+    }
+
+    /// Whether bone `i` takes corrections (movable and awake).
+    #[inline]
+    pub fn moves(&self, i: usize) -> bool {
+        self.w[PER_BONE * i] > 0.0
+    }
+
+    /// Puts bone `i` to sleep (frozen, no velocity) or wakes it.
+    pub fn set_asleep(&mut self, i: usize, asleep: bool) {
+        for k in PER_BONE * i..PER_BONE * (i + 1) {
+            if asleep {
+                self.v[k] = Vec3::ZERO;
+                self.x_prev[k] = self.x[k];
+                self.w[k] = 0.0;
+            } else {
+                self.w[k] = self.inv_mass[k];
+            }
+        }
+    }
+
+    /// Gives back the room the arrays grew beyond their length.
+    pub fn shrink_to_fit(&mut self) {
+        self.x.shrink_to_fit();
+        self.x_prev.shrink_to_fit();
+        self.v.shrink_to_fit();
+        self.mass.shrink_to_fit();
+        self.inv_mass.shrink_to_fit();
+        self.w.shrink_to_fit();
+    }
+}
