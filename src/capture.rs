@@ -5,6 +5,7 @@
 use crate::app_state::{AppState, SCENES};
 use crate::cli::CaptureArgs;
 use crate::compose::Compositor;
+use crate::picking;
 use crate::render::camera::OrbitCamera;
 use crate::render::{Frame, Renderer, gpu};
 use crate::session::Session;
@@ -350,6 +351,11 @@ pub fn run(args: CaptureArgs) -> Result<(), AppError> {
     state.panel = args.ui;
     state.particle_solver = args.particle_solver;
     let mut session = Session::new(loaded, args.particle_solver)?;
+    state.camera = picking::scene_camera(
+        state.camera,
+        &session.snapshots,
+        half_aspect(width, height, args.ui),
+    );
     let mut target = Offscreen::new(width, height)?;
     log::info!("capturing on {}", target.adapter_name());
 
@@ -370,6 +376,17 @@ pub fn run(args: CaptureArgs) -> Result<(), AppError> {
         target.render(&state, &session)?.write_png(out)?;
     }
     Ok(())
+}
+
+/// Width / height of one half of a `width × height` image, with or without the panel.
+pub fn half_aspect(width: u32, height: u32, panel: bool) -> f32 {
+    let w = width as f32;
+    let view = if panel {
+        w - crate::ui::panel_width(w)
+    } else {
+        w
+    };
+    (view * 0.5) / (height.max(1) as f32)
 }
 
 /// The built-in scene index of a `--scene` argument (number or name).
