@@ -9,6 +9,7 @@ use crate::picking;
 use crate::render::camera::OrbitCamera;
 use crate::render::{Frame, Renderer, gpu};
 use crate::session::Session;
+use crate::ui::UiLayout;
 use crate::{AppError, scenes};
 use std::fs::File;
 use std::io::BufWriter;
@@ -75,6 +76,7 @@ pub struct Offscreen {
     compositor: Option<Compositor>,
     scene_only: Option<Renderer>,
     errors: Arc<Mutex<Vec<String>>>,
+    layout: Option<UiLayout>,
 }
 
 impl Offscreen {
@@ -143,6 +145,7 @@ impl Offscreen {
             compositor: None,
             scene_only: None,
             errors,
+            layout: None,
         })
     }
 
@@ -194,7 +197,7 @@ impl Offscreen {
         }
         let raw = self.raw_input();
         let compositor = self.compositor.as_mut().expect("made above");
-        let _ = compositor.frame(
+        let out = compositor.frame(
             &self.gpu.device,
             &self.gpu.queue,
             &self.view,
@@ -205,7 +208,13 @@ impl Offscreen {
             state,
             session,
         );
+        self.layout = Some(out.layout);
         self.read()
+    }
+
+    /// Where the last [`Offscreen::render`] put the panel and the view's texts.
+    pub fn last_layout(&self) -> Option<&UiLayout> {
+        self.layout.as_ref()
     }
 
     /// Renders only the 3D halves of `frame`, no egui (for renderer tests).

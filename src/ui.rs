@@ -204,7 +204,14 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
             continue;
         }
         let inner = half.width() - 30.0;
-        let title = text(&painter, side_title(session, i), font, inner, 2);
+        // A word longer than a row would be broken inside: in a narrow half the title is
+        // only the method's name, cut with "…" if even that does not fit.
+        let title = if inner >= 150.0 {
+            text(&painter, side_title(session, i), font, inner, 2)
+        } else {
+            let name = if i == 0 { "particle" } else { "multibody" };
+            text(&painter, name.to_string(), font, inner, 1)
+        };
         let step = text(
             &painter,
             format!("step {:.2} ms", session.step_ms[i]),
@@ -405,26 +412,26 @@ fn names(painter: &Painter, vps: &[Viewport; 2], model: &mut UiModel) {
     }
 }
 
-/// The side panel.
+/// The side panel: the scene and its running first, then the solver and its settings,
+/// the live numbers and their plot (all visible without scrolling at 720 points), then
+/// the inspected body, and what is looked up less often in collapsed sections.
 fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     let (state, session) = (model.state, model.session);
     let actions = &mut *model.actions;
     let width = ui.available_width();
-    ui.spacing_mut().slider_width = (width - 120.0).clamp(60.0, 140.0);
-    ui.strong("ragdoll-lab");
     ui.horizontal_wrapped(|ui| {
+        ui.strong("ragdoll-lab");
         ui.colored_label(BLUE, "left: particles");
         ui.colored_label(RED, "right: multibody");
     });
-    ui.separator();
 
     let current = state.scene.map_or_else(
         || session.loaded.desc.name.clone(),
         |i| format!("{} {}", i + 1, SCENES[i]),
     );
-    egui::ComboBox::new("scene", "scene")
+    egui::ComboBox::new("scene", "")
         .selected_text(current)
-        .width((width - 60.0).max(80.0))
+        .width(width - 8.0)
         .show_ui(ui, |ui| {
             for (i, name) in SCENES.iter().enumerate() {
                 if ui
@@ -442,20 +449,18 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
             .iter()
             .find(|v| v.number == desc.variant)
             .map_or_else(
-                || desc.variant.to_string(),
-                |v| format!("{} {}", v.number, v.name),
+                || format!("variant {}", desc.variant),
+                |v| format!("variant {} {}", v.number, v.name),
             );
-        egui::ComboBox::new("variant", "variant")
+        egui::ComboBox::new("variant", "")
             .selected_text(now)
-            .width((width - 60.0).max(80.0))
+            .width(width - 8.0)
             .truncate()
             .show_ui(ui, |ui| {
                 for v in &desc.variants {
+                    let text = format!("{} {}", v.number, v.name);
                     if ui
-                        .selectable_label(
-                            desc.variant == v.number,
-                            format!("{} {}", v.number, v.name),
-                        )
+                        .selectable_label(desc.variant == v.number, text)
                         .clicked()
                     {
                         actions.push(Action::Variant(v.number));
@@ -513,8 +518,8 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     });
     ui.separator();
 
-    ui.strong("Particle solver");
     ui.horizontal_wrapped(|ui| {
+        ui.strong("Particle solver");
         for (solver, name) in [
             (ParticleSolverArg::Paper, "paper"),
             (ParticleSolverArg::RigidFrames, "rigid frames"),
@@ -527,73 +532,14 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     if state.particle_solver != ParticleSolverArg::Paper
         && desc.variants.iter().any(|v| v.name.contains("particles"))
     {
-        ui.small(
-            "These variants move only the particles the paper's solver uses; \
-             rigid frames and the multibody method run them alike. Pick \"paper\" to see \
-             them differ.",
-        );
+        ui.small("Variants alike here: only the paper solver uses their particles.")
+            .on_hover_text(
+                "These variants move only the particles the paper's solver places in each \
+                 box; rigid frames and the multibody method do not use them, so both variants \
+                 run the same. Pick \"paper\" to see them differ.",
+            );
     }
     settings_sliders(ui, state, session, actions);
-    ui.separator();
-
-    ui.strong("Shoot (B: through the cursor)");
-    let mut shot = state.shot;
-    let mut edge_cm = shot.edge * 100.0;
-    let mut moved = ui
-        .add(egui::Slider::new(&mut edge_cm, 4.0..=60.0).text("edge cm"))
-        .changed();
-    moved |= ui
-        .add(egui::Slider::new(&mut shot.speed, 1.0..=40.0).text("speed m/s"))
-        .changed();
-    if moved {
-        shot.edge = edge_cm / 100.0;
-        actions.push(Action::Shot(shot));
-    }
-    ui.horizontal_wrapped(|ui| {
-        if ui.button("Shoot box").clicked() {
-            actions.push(Action::ShootBox(None));
-        }
-        ui.small(format!("{:.2} kg", shot.mass()));
-    });
-    ui.separator();
-
-    ui.strong("Show");
-    let mut show = state.show;
-    let mut toggled = false;
-    ui.horizontal_wrapped(|ui| {
-        toggled |= ui.checkbox(&mut show.particles, "particles").changed();
-        toggled |= ui.checkbox(&mut show.sticks, "sticks").changed();
-        toggled |= ui.checkbox(&mut show.contacts, "contacts").changed();
-        toggled |= ui.checkbox(&mut show.limits, "limits").changed();
-        toggled |= ui.checkbox(&mut show.names, "names").changed();
-    });
-    if toggled {
-        actions.push(Action::Show(show));
-    }
-    ui.horizontal_wrapped(|ui| {
-        for (layout, name) in [
-            (ViewLayout::Both, "both"),
-            (ViewLayout::Particle, "particle"),
-            (ViewLayout::Multibody, "multibody"),
-        ] {
-            if ui
-                .selectable_label(state.layout == layout, name)
-                .on_hover_text("M")
-                .clicked()
-                && state.layout != layout
-            {
-                // M cycles; step until the wanted layout.
-                let mut l = state.layout;
-                while l != layout {
-                    actions.push(Action::CycleLayout);
-                    l = l.next();
-                }
-            }
-        }
-    });
-    egui::CollapsingHeader::new("Legend").show(ui, |ui| {
-        ui.small(LEGEND);
-    });
     ui.separator();
 
     numbers(ui, session);
@@ -603,9 +549,81 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
         ui.separator();
         inspector(ui, session, body);
     }
+    ui.separator();
+
+    egui::CollapsingHeader::new("Show")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut show = state.show;
+            let mut toggled = false;
+            ui.horizontal_wrapped(|ui| {
+                toggled |= ui.checkbox(&mut show.particles, "particles").changed();
+                toggled |= ui.checkbox(&mut show.sticks, "sticks").changed();
+                toggled |= ui.checkbox(&mut show.contacts, "contacts").changed();
+                toggled |= ui.checkbox(&mut show.limits, "limits").changed();
+                toggled |= ui.checkbox(&mut show.names, "names").changed();
+            });
+            if toggled {
+                actions.push(Action::Show(show));
+            }
+            ui.horizontal_wrapped(|ui| {
+                ui.label("view (M)");
+                for (layout, name) in [
+                    (ViewLayout::Both, "both"),
+                    (ViewLayout::Particle, "particle"),
+                    (ViewLayout::Multibody, "multibody"),
+                ] {
+                    if ui.selectable_label(state.layout == layout, name).clicked() {
+                        // M cycles; step until the wanted layout.
+                        let mut l = state.layout;
+                        while l != layout {
+                            actions.push(Action::CycleLayout);
+                            l = l.next();
+                        }
+                    }
+                }
+            });
+            ui.small(LEGEND);
+        });
+    egui::CollapsingHeader::new("Shoot (B)").show(ui, |ui| {
+        let mut shot = state.shot;
+        let mut edge_cm = shot.edge * 100.0;
+        let mut moved = slider(ui, egui::Slider::new(&mut edge_cm, 4.0..=60.0), "edge (cm)");
+        moved |= slider(
+            ui,
+            egui::Slider::new(&mut shot.speed, 1.0..=40.0),
+            "speed (m/s)",
+        );
+        if moved {
+            shot.edge = edge_cm / 100.0;
+            actions.push(Action::Shot(shot));
+        }
+        ui.small("B shoots through the cursor; this button through the left view's centre.");
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("Shoot box").clicked() {
+                actions.push(Action::ShootBox(None));
+            }
+            ui.small(format!("{:.2} kg", shot.mass()));
+        });
+    });
     egui::CollapsingHeader::new("Keys").show(ui, |ui| {
         ui.small(KEYS);
     });
+}
+
+/// A slider with its name beside it where the panel is wide enough, above it where not,
+/// so neither the name nor the number is cut at the panel's edge. Returns whether it moved.
+fn slider(ui: &mut egui::Ui, slider: egui::Slider, name: &str) -> bool {
+    let width = ui.available_width();
+    // The number box and spacing take about 70 points, a name beside it about 95.
+    if width >= 250.0 {
+        ui.spacing_mut().slider_width = width - 170.0;
+        ui.add(slider.text(name)).changed()
+    } else {
+        ui.small(name);
+        ui.spacing_mut().slider_width = (width - 75.0).max(40.0);
+        ui.add(slider).changed()
+    }
 }
 
 /// What the colours mean.
@@ -626,31 +644,32 @@ fn short(v: f64) -> String {
     }
 }
 
-/// The live numbers per method: now, and the worst since the start.
+/// The live numbers per method: now, and the worst since the start. Text is 12.5
+/// points in a wide panel and 10 in a narrow one, so the three columns always fit.
 fn numbers(ui: &mut egui::Ui, session: &Session) {
+    let wide = ui.available_width() >= 250.0;
+    let size = if wide { 12.5 } else { 10.0 };
+    let t = |s: String| egui::RichText::new(s).size(size);
     egui::Grid::new("numbers")
         .striped(true)
         .num_columns(3)
-        .spacing([6.0, 2.0])
+        .spacing([6.0, 1.0])
         .show(ui, |ui| {
-            ui.small("");
-            ui.colored_label(BLUE, "particle");
-            ui.colored_label(RED, "multib.");
+            ui.label(t("now (worst)".into()));
+            ui.label(t("particle".into()).color(BLUE));
+            let multibody = if wide { "multibody" } else { "multib." };
+            ui.label(t(multibody.into()).color(RED));
             ui.end_row();
             let mut row = |name: &str, hover: &str, f: &dyn Fn(usize) -> String| {
-                ui.small(name).on_hover_text(hover);
-                ui.small(f(0));
-                ui.small(f(1));
+                ui.label(t(name.into())).on_hover_text(hover);
+                ui.label(t(f(0)));
+                ui.label(t(f(1)));
                 ui.end_row();
             };
             let (s, w) = (&session.samples, &session.worst);
-            row("step ms", "wall-clock time of one step", &|i| {
-                format!("{:.2}", session.step_ms[i])
-            });
             row("energy J", "kinetic + potential now", &|i| {
                 short(s[i].energy)
             });
-            row("kinetic J", "kinetic now", &|i| short(s[i].kinetic));
             row(
                 "gained J",
                 "largest rise above the start's energy so far",
@@ -668,20 +687,16 @@ fn numbers(ui: &mut egui::Ui, session: &Session) {
                     w[i].penetration * 1e3
                 )
             });
-            row(
-                "joint gap mm",
-                "widest joint gap now (worst so far)",
-                &|i| {
-                    format!(
-                        "{:.1} ({:.1})",
-                        s[i].max_joint_gap * 1e3,
-                        w[i].joint_gap * 1e3
-                    )
-                },
-            );
+            row("gap mm", "widest joint gap now (worst so far)", &|i| {
+                format!(
+                    "{:.1} ({:.1})",
+                    s[i].max_joint_gap * 1e3,
+                    w[i].joint_gap * 1e3
+                )
+            });
             row(
                 "limit °",
-                "largest excess beyond a joint limit now (worst)",
+                "largest excess beyond a joint limit now (worst so far)",
                 &|i| {
                     format!(
                         "{:.1} ({:.1})",
@@ -691,20 +706,13 @@ fn numbers(ui: &mut egui::Ui, session: &Session) {
             );
             row(
                 "stretch %",
-                "largest stick-length error of a bone now (worst)",
+                "largest stick-length error of a bone now (worst so far)",
                 &|i| match s[i].max_bone_stretch {
                     Some(v) => format!("{:.2} ({:.2})", v * 100.0, w[i].stretch * 100.0),
                     None => "—".into(),
                 },
             );
-            row("bodies", "bodies and particles simulated", &|i| {
-                let m = &session.methods[i];
-                match m.particle_count() {
-                    0 => m.body_count().to_string(),
-                    p => format!("{} / {p} p", m.body_count()),
-                }
-            });
-            row("asleep", "every body sleeps", &|i| {
+            row("asleep", "every body sleeps (drawn darker)", &|i| {
                 if s[i].all_asleep { "yes" } else { "no" }.to_string()
             });
         });
@@ -780,7 +788,7 @@ fn plot(ui: &mut egui::Ui, session: &Session) -> Rect {
         })
         .collect();
     let shown = Plot::new("history")
-        .height(130.0)
+        .height(120.0)
         .width(ui.available_width())
         .legend(Legend::default())
         .x_axis_label("t (s)")
@@ -878,24 +886,19 @@ fn settings_sliders(
     let mut iterations = settings.iterations;
     let mut substeps = settings.substeps;
     let mut chosen = SettingsOverride::default();
-    if ui
-        .add(egui::Slider::new(&mut timestep_ms, 2.0..=50.0).text("timestep (ms)"))
-        .changed()
-    {
+    if slider(
+        ui,
+        egui::Slider::new(&mut timestep_ms, 2.0..=50.0),
+        "timestep (ms)",
+    ) {
         chosen.timestep = Some(timestep_ms * 1e-3);
     }
-    if ui
-        .add(egui::Slider::new(&mut iterations, 1..=50).text("iterations"))
-        .changed()
-    {
+    if slider(ui, egui::Slider::new(&mut iterations, 1..=50), "iterations") {
         chosen.iterations = Some(iterations);
     }
     // The slider sets both methods' substeps; a scene's own multibody count
     // (`multibodySubsteps`, shown in the solver labels) gives way to it once moved.
-    if ui
-        .add(egui::Slider::new(&mut substeps, 1..=32).text("substeps"))
-        .changed()
-    {
+    if slider(ui, egui::Slider::new(&mut substeps, 1..=32), "substeps") {
         chosen.substeps = Some(substeps);
     }
     if !chosen.is_empty() {
