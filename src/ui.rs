@@ -262,6 +262,9 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
     if rate.frame_ms > 0.0 {
         clock += &format!(" · {:.0} fps, {:.1} ms", rate.fps(), rate.frame_ms);
     }
+    if session.samples.iter().all(|s| s.all_asleep) {
+        clock += " · all asleep";
+    }
     if state.follow {
         clock += " · following (F)";
     }

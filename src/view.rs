@@ -648,6 +648,12 @@ impl ApplicationHandler for App {
         // buttons on Space) except while a slider's number field is being edited.
         let editing = w.compositor.ctx.text_edit_focused();
         let is_key = matches!(event, WindowEvent::KeyboardInput { .. });
+        // egui is not told of redraws: it answers every event with "repaint", and a
+        // redraw asked for on each redraw never lets the loop wait.
+        if matches!(event, WindowEvent::RedrawRequested) {
+            self.redraw(event_loop);
+            return;
+        }
         let response = (!is_key || editing).then(|| w.egui.on_window_event(&w.window, &event));
         let consumed = response.as_ref().is_some_and(|r| r.consumed);
         if response.is_some_and(|r| r.repaint) {
@@ -671,10 +677,6 @@ impl ApplicationHandler for App {
             WindowEvent::Occluded(occluded) => {
                 self.set_hidden(*occluded);
                 None
-            }
-            WindowEvent::RedrawRequested => {
-                self.redraw(event_loop);
-                return;
             }
             WindowEvent::DroppedFile(path) => Some(Action::OpenFile(path.clone())),
             WindowEvent::ModifiersChanged(m) => {
