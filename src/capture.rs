@@ -149,6 +149,11 @@ impl Offscreen {
         })
     }
 
+    /// Width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
     /// The adapter's name ("llvmpipe (LLVM ...)" on the software path).
     pub fn adapter_name(&self) -> String {
         self.gpu.adapter.get_info().name

@@ -69,6 +69,7 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         shots_taken: 0,
         record_dir: None,
         recorded: 0,
+        offscreen: None,
     };
     app.watched = app.session.loaded.path.as_deref().and_then(modified);
     event_loop
@@ -115,6 +116,8 @@ struct App {
     record_dir: Option<std::path::PathBuf>,
     /// Frames written into it.
     recorded: u32,
+    /// Where screenshots are rendered when the surface cannot be read back.
+    offscreen: Option<crate::capture::Offscreen>,
 }
 
 /// Width / height of one half at the window's first size (1280×720 with the panel), for
@@ -510,6 +513,23 @@ impl App {
             w.surface.configure(&w.gpu.device, &w.config);
         }
         if let Some(image) = image {
+            // A surface that cannot be read back (GL on X11, for one): the same frame,
+            // rendered offscreen as `capture` does.
+            let image = image.or_else(|e| {
+                log::info!("{e}; rendering the screenshot offscreen");
+                let (width, height) = (size.width, size.height);
+                if self
+                    .offscreen
+                    .as_ref()
+                    .is_none_or(|o| o.size() != (width, height))
+                {
+                    self.offscreen = Some(crate::capture::Offscreen::new(width, height)?);
+                }
+                match self.offscreen.as_mut() {
+                    Some(o) => o.render(&self.state, &self.session),
+                    None => Err(AppError::Gpu("no offscreen target".into())),
+                }
+            });
             self.save(image);
         }
         let egui_soon = out.repaint_after < std::time::Duration::from_millis(100);
