@@ -254,4 +254,66 @@ mod tests {
         assert!((r - (1.5 + corner)).abs() < 1e-4, "{r}");
         assert!(bounding_sphere(&[RenderSnapshot::default()], |_| true).is_none());
     }
+
+    #[test]
+    fn a_figure_is_what_its_joints_connect_and_following_closes_in_on_it() {
+        use ragdoll_sim::scene::{
+            BodyDesc, BodyRef, ConstraintDesc, JointKind, MassSpec, Motion, Pose, Shape,
+        };
+        let body = |name: &str| {
+            BodyDesc::new(
+                name.to_string(),
+                Shape::Box {
+                    half_extents: Vec3::splat(0.1),
+                },
+                Pose::default(),
+                MassSpec::Mass(1.0),
+            )
+        };
+        let joint = |a: u32, b: u32| ConstraintDesc {
+            name: format!("{a}-{b}"),
+            body1: BodyId(a),
+            body2: BodyRef::Body(BodyId(b)),
+            kind: JointKind::BallAndSocket {
+                anchor: Vec3::ZERO,
+                swing: None,
+                twist: None,
+                limit_style: Default::default(),
+            },
+            friction: 0.0,
+        };
+        // Two figures, 0-1-2 and 3-4, and a fixed body 5 that 2 hangs from.
+        let mut bodies: Vec<BodyDesc> = ["a", "b", "c", "d", "e", "post"]
+            .iter()
+            .map(|n| body(n))
+            .collect();
+        bodies[5].motion = Motion::Fixed;
+        let desc = SceneDesc {
+            bodies,
+            constraints: vec![joint(1, 0), joint(2, 1), joint(3, 4), joint(2, 5)],
+            ..Default::default()
+        };
+        let of = |sel: Option<u32>| {
+            let f = figure(&desc, sel.map(BodyId));
+            (0..7).filter(|&i| f(i)).collect::<Vec<_>>()
+        };
+        assert_eq!(of(Some(0)), [0, 1, 2], "through joints, not the fixed post");
+        assert_eq!(of(Some(4)), [3, 4]);
+        assert_eq!(
+            of(None),
+            [0, 1, 2, 3, 4, 6],
+            "every dynamic body and projectiles"
+        );
+
+        let mut cam = camera();
+        let (centre, radius) = (Vec3::new(5.0, 1.0, -3.0), 1.0);
+        let mut goal = cam;
+        goal.fit(centre, radius, FILL);
+        for _ in 0..120 {
+            follow(&mut cam, centre, radius, 1.0 / 60.0);
+        }
+        // Two seconds close 1 − e^(−4.6) ≈ 99 % of the way.
+        assert!(cam.target.distance(centre) < 0.02 * centre.distance(camera().target));
+        assert!((cam.distance - goal.distance).abs() < 0.02 * goal.distance.max(1.0));
+    }
 }
