@@ -936,6 +936,8 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
         .show(ctx, |ui| {
             egui::Frame::menu(ui.style()).show(ui, |ui| {
                 ui.set_min_width(180.0);
+                // The sliders would take every point offered: keep the menu a menu.
+                ui.set_max_width(300.0);
                 let item = |ui: &mut egui::Ui, text: &str, action: Action| {
                     if ui.button(text).clicked() {
                         chosen.borrow_mut().push(action);
@@ -973,9 +975,13 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                     ParticleSolverArg::Paper => ParticleSolverArg::RigidFrames,
                     ParticleSolverArg::RigidFrames => ParticleSolverArg::Paper,
                 };
+                let other_name = match other {
+                    ParticleSolverArg::Paper => "paper",
+                    ParticleSolverArg::RigidFrames => "rigid frames",
+                };
                 item(
                     ui,
-                    &format!("Particle solver: {other:?}"),
+                    &format!("Particle solver: {other_name}"),
                     Action::ParticleSolver(other),
                 );
                 let s = state.show;
