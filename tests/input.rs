@@ -149,3 +149,52 @@ fn tab_walks_the_built_in_scenes_in_table_order() {
         .collect();
     assert_eq!(names, SCENES.to_vec());
 }
+
+#[test]
+fn our_new_keys_and_a_click_that_is_not_a_drag() {
+    let (mut input, mut state) = setup();
+    let key = |input: &mut InputMapper, k: Key| input.key(&k, true);
+    assert_eq!(key(&mut input, ch("f")), Some(Action::Follow));
+    assert_eq!(key(&mut input, ch("p")), Some(Action::Screenshot));
+    assert_eq!(key(&mut input, ch("m")), Some(Action::CycleLayout));
+    assert_eq!(
+        key(&mut input, Key::Named(NamedKey::Home)),
+        Some(Action::ResetCamera)
+    );
+    input.set_modifiers(ModifiersState::SHIFT);
+    assert_eq!(key(&mut input, ch("P")), Some(Action::Record));
+    assert_eq!(key(&mut input, ch("T")), Some(Action::StepFrames(10)));
+    input.set_modifiers(ModifiersState::empty());
+
+    // B aims through the cursor.
+    input.cursor_moved(Vec2::new(420.0, 310.0));
+    assert_eq!(
+        key(&mut input, ch("b")),
+        Some(Action::ShootBox(Some(Vec2::new(420.0, 310.0))))
+    );
+
+    // Press and release in place: a pick there. Press, move away, release: an orbit.
+    input.button(MouseButton::Left, true);
+    input.cursor_moved(Vec2::new(422.0, 311.0));
+    assert_eq!(
+        input.button(MouseButton::Left, false),
+        Some(Action::Pick(Vec2::new(422.0, 311.0)))
+    );
+    input.button(MouseButton::Left, true);
+    let orbit = input.cursor_moved(Vec2::new(460.0, 311.0));
+    assert!(matches!(orbit, Some(Action::Orbit(_))));
+    assert_eq!(
+        input.button(MouseButton::Left, false),
+        None,
+        "a drag picks nothing"
+    );
+
+    for a in [Action::Follow, Action::CycleLayout, Action::Record] {
+        state.apply(a);
+    }
+    assert!(state.follow && state.recording);
+    assert_eq!(state.layout, ragdoll_lab::app_state::ViewLayout::Particle);
+    state.apply(Action::NextScene);
+    assert!(!state.follow, "another scene: nothing to follow");
+    assert_eq!(state.selected, None);
+}
