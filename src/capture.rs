@@ -5,9 +5,11 @@
 use crate::app_state::{AppState, SCENES};
 use crate::cli::CaptureArgs;
 use crate::compose::Compositor;
+use crate::picking;
 use crate::render::camera::OrbitCamera;
 use crate::render::{Frame, Renderer, gpu};
 use crate::session::Session;
+use crate::ui::UiLayout;
 use crate::{AppError, scenes};
 use std::fs::File;
 use std::io::BufWriter;
@@ -74,6 +76,7 @@ pub struct Offscreen {
     compositor: Option<Compositor>,
     scene_only: Option<Renderer>,
     errors: Arc<Mutex<Vec<String>>>,
+    layout: Option<UiLayout>,
 }
 
 impl Offscreen {
@@ -142,7 +145,13 @@ impl Offscreen {
             compositor: None,
             scene_only: None,
             errors,
+            layout: None,
         })
+    }
+
+    /// Width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
     }
 
     /// The adapter's name ("llvmpipe (LLVM ...)" on the software path).
@@ -193,7 +202,7 @@ impl Offscreen {
         }
         let raw = self.raw_input();
         let compositor = self.compositor.as_mut().expect("made above");
-        let _ = compositor.frame(
+        let out = compositor.frame(
             &self.gpu.device,
             &self.gpu.queue,
             &self.view,
@@ -204,7 +213,13 @@ impl Offscreen {
             state,
             session,
         );
+        self.layout = Some(out.layout);
         self.read()
+    }
+
+    /// Where the last [`Offscreen::render`] put the panel and the view's texts.
+    pub fn last_layout(&self) -> Option<&UiLayout> {
+        self.layout.as_ref()
     }
 
     /// Renders only the 3D halves of `frame`, no egui (for renderer tests).
@@ -350,6 +365,11 @@ pub fn run(args: CaptureArgs) -> Result<(), AppError> {
     state.panel = args.ui;
     state.particle_solver = args.particle_solver;
     let mut session = Session::new(loaded, args.particle_solver)?;
+    state.camera = picking::scene_camera(
+        state.camera,
+        &session.snapshots,
+        half_aspect(width, height, args.ui),
+    );
     let mut target = Offscreen::new(width, height)?;
     log::info!("capturing on {}", target.adapter_name());
 
@@ -370,6 +390,17 @@ pub fn run(args: CaptureArgs) -> Result<(), AppError> {
         target.render(&state, &session)?.write_png(out)?;
     }
     Ok(())
+}
+
+/// Width / height of one half of a `width × height` image, with or without the panel.
+pub fn half_aspect(width: u32, height: u32, panel: bool) -> f32 {
+    let w = width as f32;
+    let view = if panel {
+        w - crate::ui::panel_width(w)
+    } else {
+        w
+    };
+    (view * 0.5) / (height.max(1) as f32)
 }
 
 /// The built-in scene index of a `--scene` argument (number or name).

@@ -74,6 +74,18 @@ pub struct ViewArgs {
     /// The particle method's solver.
     #[arg(long, value_enum, default_value_t)]
     pub particle_solver: ParticleSolverArg,
+    /// Override the scene's timestep (s); kept across resets, as the panel's slider.
+    #[arg(long)]
+    pub timestep: Option<f32>,
+    /// Override the scene's iterations.
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Override the scene's substeps (both methods).
+    #[arg(long)]
+    pub substeps: Option<u32>,
+    /// Open stopped at t = 0 (Space or S starts).
+    #[arg(long)]
+    pub paused: bool,
 }
 
 /// `capture` options.

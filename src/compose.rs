@@ -7,6 +7,19 @@ use crate::session::Session;
 use crate::ui::{self, UiModel};
 use ragdoll_sim::MethodKind;
 
+/// What one frame's UI pass produced besides pixels.
+pub struct FrameOutput {
+    /// Actions the user took.
+    pub actions: Vec<Action>,
+    /// egui's platform output (cursor, clipboard).
+    pub platform: egui::PlatformOutput,
+    /// egui wants another frame within this long (an animation, a hover); `Duration::MAX`
+    /// when nothing in the UI changes by itself.
+    pub repaint_after: std::time::Duration,
+    /// Where the UI put its parts (points), for layout tests.
+    pub layout: ui::UiLayout,
+}
+
 /// The scene renderer and the egui context and renderer for one target format.
 pub struct Compositor {
     /// The egui context (kept across frames: panel sizes, plot state).
@@ -51,7 +64,7 @@ impl Compositor {
 
     /// Runs the UI on `raw` and draws the frame into `target` (`size` physical pixels), the
     /// egui layer through `ui_target` (a view of the same texture in the UI format).
-    /// Returns the actions the UI produced and egui's platform output (cursor, clipboard).
+    /// Returns the actions the UI produced, egui's platform output and the layout.
     #[allow(clippy::too_many_arguments)]
     pub fn frame(
         &mut self,
@@ -64,21 +77,23 @@ impl Compositor {
         raw: egui::RawInput,
         state: &AppState,
         session: &Session,
-    ) -> (Vec<Action>, egui::PlatformOutput) {
+    ) -> FrameOutput {
         let mut actions = Vec::new();
-        let mut area = egui::Rect::NOTHING;
+        let mut layout = ui::UiLayout::default();
         let full = self.ctx.run_ui(raw, |ui| {
             let mut model = UiModel {
                 state,
                 session,
                 pixels_per_point,
                 actions: &mut actions,
+                layout: &mut layout,
             };
-            area = ui::build(ui, &mut model);
+            ui::build(ui, &mut model);
         });
-        let viewports = ui::viewports(area, pixels_per_point);
+        let area = layout.view;
+        let viewports = ui::viewports(area, pixels_per_point, state.layout);
         self.viewports = viewports;
-        let sides = [
+        let all = [
             SideView {
                 kind: MethodKind::Particle,
                 snapshot: &session.snapshots[0],
@@ -90,6 +105,11 @@ impl Compositor {
                 viewport: viewports[1],
             },
         ];
+        // A side the layout hides has no pixels and is not drawn.
+        let sides: Vec<SideView> = all
+            .into_iter()
+            .filter(|s| s.viewport.width >= 1.0)
+            .collect();
         let frame = Frame {
             camera: &state.camera,
             ground: session.settings().ground,
@@ -141,6 +161,15 @@ impl Compositor {
         for id in &full.textures_delta.free {
             self.egui.free_texture(id);
         }
-        (actions, full.platform_output)
+        let repaint_after = full
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .map_or(std::time::Duration::MAX, |v| v.repaint_delay);
+        FrameOutput {
+            actions,
+            platform: full.platform_output,
+            repaint_after,
+            layout,
+        }
     }
 }

@@ -15,7 +15,13 @@ pub struct InputMapper {
     orbiting: bool,
     panning: bool,
     grabbing: bool,
+    /// Where the left button went down, while it has not moved more than a click's
+    /// tolerance: a release then is a click (select), not the end of an orbit.
+    press: Option<Vec2>,
 }
+
+/// A left press and release within this many pixels is a click, not a drag.
+const CLICK_TOLERANCE: f32 = 4.0;
 
 impl InputMapper {
     /// A mapper with no buttons held.
@@ -48,14 +54,20 @@ impl InputMapper {
                 Action::NextScene
             }),
             Key::Named(NamedKey::F1) => Some(Action::TogglePanel),
+            Key::Named(NamedKey::Home) => Some(Action::ResetCamera),
             Key::Character(c) => match c.to_lowercase().as_str() {
+                "t" if self.modifiers.shift_key() => Some(Action::StepFrames(10)),
                 "t" => Some(Action::StepOnce),
                 "s" => Some(Action::ToggleRun),
                 "q" => Some(Action::Quit),
                 "1" => Some(Action::Variant(1)),
                 "2" => Some(Action::Variant(2)),
                 "3" => Some(Action::Variant(3)),
-                "b" => Some(Action::ShootBox),
+                "b" => Some(Action::ShootBox(Some(self.cursor))),
+                "f" => Some(Action::Follow),
+                "p" if self.modifiers.shift_key() => Some(Action::Record),
+                "p" => Some(Action::Screenshot),
+                "m" => Some(Action::CycleLayout),
                 "r" => Some(Action::Reload),
                 "[" => Some(Action::Slower),
                 "]" => Some(Action::Faster),
@@ -75,11 +87,17 @@ impl InputMapper {
             }
             (MouseButton::Left, true) => {
                 self.orbiting = true;
+                self.press = Some(self.cursor);
                 Some(Action::CloseMenu)
             }
             (MouseButton::Left, false) => {
                 self.orbiting = false;
-                std::mem::take(&mut self.grabbing).then_some(Action::GrabEnd)
+                if std::mem::take(&mut self.grabbing) {
+                    self.press = None;
+                    Some(Action::GrabEnd)
+                } else {
+                    self.press.take().map(|_| Action::Pick(self.cursor))
+                }
             }
             (MouseButton::Middle, pressed) => {
                 self.panning = pressed;
@@ -94,6 +112,9 @@ impl InputMapper {
     pub fn cursor_moved(&mut self, to: Vec2) -> Option<Action> {
         let delta = to - self.cursor;
         self.cursor = to;
+        if self.press.is_some_and(|p| p.distance(to) > CLICK_TOLERANCE) {
+            self.press = None;
+        }
         if self.grabbing {
             Some(Action::GrabMove(to))
         } else if self.orbiting {
@@ -101,7 +122,7 @@ impl InputMapper {
         } else if self.panning {
             Some(Action::Pan(delta))
         } else {
-            None
+            Some(Action::Hover(to))
         }
     }
 
@@ -114,6 +135,7 @@ impl InputMapper {
     pub fn release_all(&mut self) -> Option<Action> {
         self.orbiting = false;
         self.panning = false;
+        self.press = None;
         std::mem::take(&mut self.grabbing).then_some(Action::GrabEnd)
     }
 }

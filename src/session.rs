@@ -1,21 +1,97 @@
 //! One scene running in both methods: stepping, snapshots, live numbers and the energy
 //! history the panel plots, grabbing and shooting. Used by the window and by capture.
 
+use crate::app_state::SettingsOverride;
 use crate::cli::ParticleSolverArg;
 use crate::scenes::LoadedScene;
 use crate::{AppError, methods};
 use glam::{Quat, Vec3};
 use ragdoll_sim::scene::{BodyDesc, BodyId, MassSpec, Pose, Settings, Shape};
+use ragdoll_sim::snapshot::BodyRole;
 use ragdoll_sim::{Grab, Method, RenderSnapshot, Sample};
 use std::time::Instant;
 
-/// Energy samples kept per method for the plot (a minute at 60 Hz).
+/// Samples kept per method for the plots (a minute at 60 Hz).
 const HISTORY: usize = 3600;
 
-/// Edge half-length (m), mass (kg) and speed (m/s) of a box shot with B.
-const SHOT_HALF_EXTENT: f32 = 0.08;
-const SHOT_MASS: f32 = 2.0;
-const SHOT_SPEED: f32 = 12.0;
+/// A box shot with B: its edge (m), density (kg/m³) and speed (m/s). The defaults are a
+/// 16 cm box of 2 kg at 12 m/s; the panel changes size and speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShotSettings {
+    /// Edge length (m).
+    pub edge: f32,
+    /// Speed along the ray (m/s).
+    pub speed: f32,
+    /// Density (kg/m³); the mass follows the edge.
+    pub density: f32,
+}
+
+impl Default for ShotSettings {
+    fn default() -> Self {
+        ShotSettings {
+            edge: 0.16,
+            speed: 12.0,
+            density: 2.0 / (0.16 * 0.16 * 0.16),
+        }
+    }
+}
+
+impl ShotSettings {
+    /// Mass of one box (kg).
+    pub fn mass(&self) -> f32 {
+        self.density * self.edge.powi(3)
+    }
+}
+
+/// One frame's measurements of one method, for the plots.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HistoryPoint {
+    /// Simulated time (s).
+    pub t: f64,
+    /// The method's sample then.
+    pub sample: Sample,
+}
+
+/// Worst values seen since the scene (re)started, per method: what `stats` reports at
+/// the end of a run, live.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Worst {
+    /// Energy at the start (J).
+    pub start_energy: f64,
+    /// Largest rise of the energy above its start (J, ≥ 0).
+    pub energy_rise: f64,
+    /// Largest fall of the energy below its start (J, ≥ 0).
+    pub energy_loss: f64,
+    /// Deepest penetration (m).
+    pub penetration: f32,
+    /// Widest joint gap (m).
+    pub joint_gap: f32,
+    /// Largest limit excess (degrees).
+    pub limit_excess_deg: f32,
+    /// Largest relative bone stretch (particle method).
+    pub stretch: f32,
+}
+
+impl Worst {
+    fn start(s: &Sample) -> Worst {
+        let mut w = Worst {
+            start_energy: s.energy,
+            ..Default::default()
+        };
+        w.record(s);
+        w
+    }
+
+    fn record(&mut self, s: &Sample) {
+        let change = s.energy - self.start_energy;
+        self.energy_rise = self.energy_rise.max(change);
+        self.energy_loss = self.energy_loss.max(-change);
+        self.penetration = self.penetration.max(s.max_penetration);
+        self.joint_gap = self.joint_gap.max(s.max_joint_gap);
+        self.limit_excess_deg = self.limit_excess_deg.max(s.max_limit_violation_deg);
+        self.stretch = self.stretch.max(s.max_bone_stretch.unwrap_or(0.0));
+    }
+}
 
 /// A grab in progress: the body, the point on it, and how far along the ray it was hit.
 #[derive(Clone, Copy, Debug)]
@@ -40,8 +116,11 @@ pub struct Session {
     pub step_ms: [f64; 2],
     /// The latest metrics sample.
     pub samples: [Sample; 2],
-    /// (simulated time, energy) per method.
-    pub energy: [Vec<[f64; 2]>; 2],
+    /// Every frame's sample per method (the last [`HISTORY`] of them).
+    pub history: [Vec<HistoryPoint>; 2],
+    /// Worst values per method since the start.
+    pub worst: [Worst; 2],
+
     grab: Option<GrabDrag>,
     shots: u32,
 }
@@ -49,10 +128,29 @@ pub struct Session {
 impl Session {
     /// Builds both methods from `loaded`.
     pub fn new(loaded: LoadedScene, solver: ParticleSolverArg) -> Result<Session, AppError> {
-        let methods = [
-            methods::build_particle(&loaded.desc, solver)?,
-            methods::build_multibody(&loaded.desc)?,
-        ];
+        Session::configured(loaded, solver, &SettingsOverride::default())
+    }
+
+    /// Builds both methods from `loaded` with the user's `overrides` over its settings;
+    /// `loaded` keeps the scene's own (the panel shows which are overridden).
+    pub fn configured(
+        loaded: LoadedScene,
+        solver: ParticleSolverArg,
+        overrides: &SettingsOverride,
+    ) -> Result<Session, AppError> {
+        let methods = if overrides.is_empty() {
+            [
+                methods::build_particle(&loaded.desc, solver)?,
+                methods::build_multibody(&loaded.desc)?,
+            ]
+        } else {
+            let mut desc = loaded.desc.clone();
+            desc.settings = overrides.apply(&desc.settings);
+            [
+                methods::build_particle(&desc, solver)?,
+                methods::build_multibody(&desc)?,
+            ]
+        };
         Ok(Session::with_methods(loaded, solver, methods))
     }
 
@@ -69,11 +167,14 @@ impl Session {
             snapshots: Default::default(),
             step_ms: [0.0; 2],
             samples: [Sample::default(); 2],
-            energy: [Vec::new(), Vec::new()],
+            history: [Vec::new(), Vec::new()],
+            worst: [Worst::default(); 2],
+
             grab: None,
             shots: 0,
         };
         session.record();
+        session.worst = session.samples.map(|s| Worst::start(&s));
         session.refresh();
         session
     }
@@ -113,12 +214,17 @@ impl Session {
 
     fn record(&mut self) {
         for (i, m) in self.methods.iter().enumerate() {
-            self.samples[i] = m.sample();
-            let history = &mut self.energy[i];
+            let sample = m.sample();
+            self.samples[i] = sample;
+            self.worst[i].record(&sample);
+            let history = &mut self.history[i];
             if history.len() >= HISTORY {
                 history.drain(..HISTORY / 2);
             }
-            history.push([m.time(), self.samples[i].energy]);
+            history.push(HistoryPoint {
+                t: m.time(),
+                sample,
+            });
         }
     }
 
@@ -129,21 +235,35 @@ impl Session {
         }
     }
 
-    /// Shoots a small box from `origin` along unit `dir` into both scenes.
-    pub fn shoot(&mut self, origin: Vec3, dir: Vec3) {
+    /// Shows `body` as selected (lighter, as a grabbed body) in both snapshots.
+    pub fn highlight(&mut self, body: Option<BodyId>) {
+        let Some(body) = body else { return };
+        for snap in &mut self.snapshots {
+            for b in snap.bodies.iter_mut().filter(|b| b.body == body) {
+                if b.role != BodyRole::Fixed {
+                    b.role = BodyRole::Grabbed;
+                }
+            }
+        }
+    }
+
+    /// Shoots a box of `shot`'s size and speed from `origin` along unit `dir` (the
+    /// cursor's ray) into both scenes. It starts 0.3 m and one edge along the ray, clear
+    /// of the eye, so it is seen leaving the camera.
+    pub fn shoot(&mut self, origin: Vec3, dir: Vec3, shot: &ShotSettings) {
         self.shots += 1;
         let mut body = BodyDesc::new(
             format!("projectile {}", self.shots),
             Shape::Box {
-                half_extents: Vec3::splat(SHOT_HALF_EXTENT),
+                half_extents: Vec3::splat(shot.edge * 0.5),
             },
             Pose {
-                position: origin + dir * 0.3,
+                position: origin + dir * (0.3 + shot.edge),
                 rotation: Quat::IDENTITY,
             },
-            MassSpec::Mass(SHOT_MASS),
+            MassSpec::Mass(shot.mass()),
         );
-        body.linear_velocity = dir * SHOT_SPEED;
+        body.linear_velocity = dir * shot.speed;
         for m in &mut self.methods {
             m.add_body(&body);
         }

@@ -6,7 +6,7 @@ use crate::cli::{MethodArg, ParticleSolverArg, StatsArgs};
 use crate::{AppError, methods, scenes};
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::scene::scene_mass_props;
-use ragdoll_sim::{BodyState, Method, SceneDesc};
+use ragdoll_sim::{BodyState, Method, Sample, SceneDesc};
 use serde_json::{Value, json};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -124,6 +124,7 @@ fn trace_header(scene: &SceneDesc) -> Result<Value, AppError> {
 
 fn trace_frame(
     method: &dyn Method,
+    sample: &Sample,
     states: &mut Vec<BodyState>,
     particles: &mut Vec<glam::Vec3>,
 ) -> Value {
@@ -144,6 +145,8 @@ fn trace_frame(
         "type": "frame",
         "method": method.kind().name(),
         "t": method.time(),
+        "energy": sample.energy,
+        "kinetic": sample.kinetic,
         "bodies": bodies,
     });
     if !particles.is_empty() {
@@ -196,14 +199,15 @@ pub fn measure(
             let t0 = Instant::now();
             m.step();
             *ms += t0.elapsed().as_secs_f64() * 1e3;
-            rec.record(m.time(), &m.sample());
+            let sample = m.sample();
+            rec.record(m.time(), &sample);
             m.body_states(&mut states);
             rec.record_speeds(&states);
             if let Some((w, path)) = trace_out.as_mut() {
                 writeln!(
                     w,
                     "{}",
-                    trace_frame(m.as_ref(), &mut states, &mut particles)
+                    trace_frame(m.as_ref(), &sample, &mut states, &mut particles)
                 )
                 .map_err(|source| AppError::Io {
                     path: path.display().to_string(),

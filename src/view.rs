@@ -4,10 +4,11 @@
 //! event first and keeps the ones over its panel and menu.
 
 use crate::AppError;
-use crate::app_state::{Action, AppState, Rebuild, SCENES};
+use crate::app_state::{Action, AppState, Rebuild, SCENES, SettingsOverride};
 use crate::cli::{SceneArgs, ViewArgs};
 use crate::compose::Compositor;
 use crate::input::InputMapper;
+use crate::picking;
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{self, Gpu};
 use crate::scenes::{self, LoadedScene};
@@ -18,7 +19,7 @@ use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::window::{Window, WindowId};
 
 /// Opens the window and runs until the user quits.
@@ -42,7 +43,15 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         OrbitCamera::from_desc(&loaded.desc.settings.camera),
     );
     state.particle_solver = args.particle_solver;
-    let session = Session::new(loaded, args.particle_solver)?;
+    state.running = !args.paused;
+    state.overrides = SettingsOverride {
+        timestep: args.timestep,
+        iterations: args.iterations,
+        substeps: args.substeps,
+    };
+    let mut session = Session::configured(loaded, args.particle_solver, &state.overrides)?;
+    session.refresh();
+    state.camera = fitted_camera(&session, INITIAL_HALF_ASPECT);
     let event_loop =
         EventLoop::new().map_err(|e| AppError::Gpu(format!("cannot open a window: {e}")))?;
     let mut app = App {
@@ -55,7 +64,14 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         last: Instant::now(),
         grab_viewport: None,
         hidden: false,
+        idle: false,
+        watched: None,
+        shots_taken: 0,
+        record_dir: None,
+        recorded: 0,
+        offscreen: None,
     };
+    app.watched = app.session.loaded.path.as_deref().and_then(modified);
     event_loop
         .run_app(&mut app)
         .map_err(|e| AppError::Gpu(format!("event loop: {e}")))?;
@@ -89,6 +105,38 @@ struct App {
     /// drawn or simulated, and the event loop sleeps until something happens, instead
     /// of a hidden demo keeping a core busy.
     hidden: bool,
+    /// The last frame asked for no next one: nothing moved and nothing was pending. The
+    /// clock restarts on the next frame, so the idle time is not caught up.
+    idle: bool,
+    /// The scene file's modification time when it was loaded, polled to reload on change.
+    watched: Option<std::time::SystemTime>,
+    /// Screenshots written so far (numbers the files).
+    shots_taken: u32,
+    /// The directory a recording writes into, while recording.
+    record_dir: Option<std::path::PathBuf>,
+    /// Frames written into it.
+    recorded: u32,
+    /// Where screenshots are rendered when the surface cannot be read back.
+    offscreen: Option<crate::capture::Offscreen>,
+}
+
+/// Width / height of one half at the window's first size (1280×720 with the panel), for
+/// fitting the first camera before the window exists.
+const INITIAL_HALF_ASPECT: f32 = 490.0 / 720.0;
+
+/// How often the scene file's modification time is read (s).
+const WATCH_SECONDS: f64 = 0.5;
+
+/// The file's modification time, if it can be read.
+fn modified(path: &std::path::Path) -> Option<std::time::SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// The scene's own camera, pulled back if the bodies at rest do not all fit in a view of
+/// `aspect` clear of the labels (see [`picking::fits`]).
+fn fitted_camera(session: &Session, aspect: f32) -> OrbitCamera {
+    let desc = &session.loaded.desc.settings.camera;
+    picking::scene_camera(OrbitCamera::from_desc(desc), &session.snapshots, aspect)
 }
 
 impl App {
@@ -133,6 +181,10 @@ impl App {
             .ok_or_else(|| AppError::Gpu("the adapter cannot draw into the window".into()))?;
         config.format = format;
         config.present_mode = wgpu::PresentMode::AutoVsync;
+        // Screenshots and recordings read the frame back, where the platform allows it.
+        if caps.usages.contains(wgpu::TextureUsages::COPY_SRC) {
+            config.usage |= wgpu::TextureUsages::COPY_SRC;
+        }
         // egui wants the non-sRGB view of an sRGB surface, where the platform allows one.
         let view_formats_ok = gpu
             .adapter
@@ -199,11 +251,58 @@ impl App {
                 self.grab_viewport = None;
                 self.session.grab_end();
             }
+            Action::Pick(p) | Action::Hover(p) => {
+                let click = matches!(action, Action::Pick(_));
+                self.state.apply(action);
+                let hit = picking::cursor_ray(&self.state.camera, &viewports, p).and_then(|r| {
+                    self.session.methods[r.side]
+                        .raycast(r.origin, r.dir)
+                        .map(|h| h.body)
+                });
+                if click {
+                    self.state.selected = hit;
+                } else if self.state.hovered == hit {
+                    return; // nothing to draw anew
+                } else {
+                    self.state.hovered = hit;
+                }
+            }
             other => {
-                self.state.viewport_height = viewports[0].height;
+                self.state.viewport_height = viewports[0].height.max(viewports[1].height);
                 self.state.apply(other);
             }
         }
+        self.wake();
+    }
+
+    /// Something changed: draw a frame (the loop otherwise waits for input).
+    fn wake(&self) {
+        if let Some(w) = &self.window {
+            w.window.request_redraw();
+        }
+    }
+
+    /// Whether the next frame must come without input: the simulation moves, steps or a
+    /// rebuild are pending, a notice is counting down, something is being recorded or
+    /// dragged, or egui animates.
+    fn busy(&self, egui_soon: bool) -> bool {
+        let s = &self.state;
+        let moving = s.running && !self.session.samples.iter().all(|x| x.all_asleep);
+        let notice = s.notice.as_ref().is_some_and(|(_, at)| {
+            at.elapsed().as_secs_f32() < crate::app_state::NOTICE_SECONDS + 0.1
+        });
+        moving
+            || s.pending_steps > 0
+            || s.rebuild.is_some()
+            || s.pending_settings
+            || s.pending_camera_reset
+            || !s.pending_shots.is_empty()
+            || s.pending_screenshot
+            || s.recording
+            || s.follow && moving
+            || notice
+            || self.session.grabbing()
+            || egui_soon
     }
 
     /// A failed action keeps the scene that runs: the state goes back to its variant,
@@ -239,26 +338,52 @@ impl App {
                         Err(e) => return self.report(e),
                     }
                 }
-                Session::new(loaded, self.state.particle_solver)
+                // What the new variant sets itself (hinge-chain's iterations) shows.
+                self.state.overrides = self
+                    .state
+                    .overrides
+                    .without_changed(&self.session.loaded.desc.settings, &loaded.desc.settings);
+                Session::configured(loaded, self.state.particle_solver, &self.state.overrides)
             }
-            Rebuild::Load => self
-                .load(true)
-                .and_then(|l| Session::new(l, self.state.particle_solver)),
+            Rebuild::Load => {
+                if let Some(path) = self.state.pending_open.take() {
+                    self.args.scene.af = Some(path);
+                    self.args.scene.scene = None;
+                }
+                self.load(true).and_then(|l| {
+                    Session::configured(l, self.state.particle_solver, &self.state.overrides)
+                })
+            }
         };
         match result {
-            Ok(session) => {
-                let scene_changed = session.loaded.desc.name != self.session.loaded.desc.name;
+            Ok(mut session) => {
+                let scene_changed = session.loaded.desc.name != self.session.loaded.desc.name
+                    || session.loaded.path != self.session.loaded.path;
+                session.refresh();
                 if scene_changed {
-                    self.state.camera =
-                        OrbitCamera::from_desc(&session.loaded.desc.settings.camera);
+                    let aspect = self.half_aspect();
+                    self.state.camera = fitted_camera(&session, aspect);
                 }
                 self.state.variant = session.loaded.desc.variant;
                 self.state.notice = None;
+                self.watched = session.loaded.path.as_deref().and_then(modified);
                 self.session = session;
                 self.grab_viewport = None;
             }
             Err(e) => self.report(e),
         }
+    }
+
+    /// Width / height of the widest half now.
+    fn half_aspect(&self) -> f32 {
+        self.window.as_ref().map_or(INITIAL_HALF_ASPECT, |w| {
+            let v = w.compositor.viewports;
+            if v[0].width >= v[1].width {
+                v[0].aspect()
+            } else {
+                v[1].aspect()
+            }
+        })
     }
 
     /// Loads the state's scene and variant; `from_disk` prefers the file on disk (R).
@@ -284,22 +409,55 @@ impl App {
         if let Some(kind) = self.state.rebuild.take() {
             self.rebuild(kind);
         }
-        if let Some(settings) = self.state.pending_settings.take() {
+        if std::mem::take(&mut self.state.pending_settings) {
+            let settings = self
+                .state
+                .overrides
+                .apply(&self.session.loaded.desc.settings);
             self.session.set_settings(&settings);
         }
+        if std::mem::take(&mut self.state.pending_camera_reset) {
+            self.state.follow = false;
+            self.state.camera = fitted_camera(&self.session, self.half_aspect());
+        }
         let now = Instant::now();
-        let dt = (now - self.last).as_secs_f64();
+        // After an idle wait the clock starts afresh: nothing moved meanwhile.
+        let dt = if std::mem::take(&mut self.idle) {
+            0.0
+        } else {
+            (now - self.last).as_secs_f64()
+        };
         self.last = now;
         let timestep = self.session.settings().timestep as f64;
         for _ in 0..self.state.steps_due(dt, timestep) {
             self.session.step();
         }
-        for _ in 0..std::mem::take(&mut self.state.pending_shots) {
-            let eye = self.state.camera.eye();
-            let dir = (self.state.camera.target - eye).normalize();
-            self.session.shoot(eye, dir);
+        let viewports = self.window.as_ref().map_or(
+            [crate::render::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: 1.0,
+                height: 1.0,
+            }; 2],
+            |w| w.compositor.viewports,
+        );
+        for at in std::mem::take(&mut self.state.pending_shots) {
+            let camera = &self.state.camera;
+            let ray = at
+                .and_then(|p| picking::cursor_ray(camera, &viewports, p))
+                .unwrap_or_else(|| picking::centre_ray(camera, &viewports));
+            self.session.shoot(ray.origin, ray.dir, &self.state.shot);
         }
         self.session.refresh();
+        if self.state.follow {
+            let figure = picking::figure(&self.session.loaded.desc, self.state.selected);
+            if let Some((centre, radius)) =
+                picking::bounding_sphere(&self.session.snapshots, figure)
+            {
+                picking::follow(&mut self.state.camera, centre, radius, dt as f32);
+            }
+        }
+        self.session.highlight(self.state.selected);
 
         let Some(w) = self.window.as_mut() else {
             return;
@@ -334,7 +492,7 @@ impl App {
         });
         let raw = w.egui.take_egui_input(&w.window);
         let ppp = egui_winit::pixels_per_point(&w.compositor.ctx, &w.window);
-        let (actions, output) = w.compositor.frame(
+        let out = w.compositor.frame(
             &w.gpu.device,
             &w.gpu.queue,
             &view,
@@ -345,17 +503,123 @@ impl App {
             &self.state,
             &self.session,
         );
-        w.egui.handle_platform_output(&w.window, output);
+        w.egui.handle_platform_output(&w.window, out.platform);
+        let want_image = self.state.pending_screenshot || self.state.recording;
+        let image = want_image
+            .then(|| crate::readback::read_texture(&w.gpu.device, &w.gpu.queue, &frame.texture));
         w.window.pre_present_notify();
         w.gpu.queue.present(frame);
         if (w.config.width, w.config.height) != (size.width, size.height) {
             w.surface.configure(&w.gpu.device, &w.config);
         }
-        for a in actions {
+        if let Some(image) = image {
+            // A surface that cannot be read back (GL on X11, for one): the same frame,
+            // rendered offscreen as `capture` does.
+            let image = image.or_else(|e| {
+                log::info!("{e}; rendering the screenshot offscreen");
+                let (width, height) = (size.width, size.height);
+                if self
+                    .offscreen
+                    .as_ref()
+                    .is_none_or(|o| o.size() != (width, height))
+                {
+                    self.offscreen = Some(crate::capture::Offscreen::new(width, height)?);
+                }
+                match self.offscreen.as_mut() {
+                    Some(o) => o.render(&self.state, &self.session),
+                    None => Err(AppError::Gpu("no offscreen target".into())),
+                }
+            });
+            self.save(image);
+        }
+        let egui_soon = out.repaint_after < std::time::Duration::from_millis(100);
+        for a in out.actions {
             self.act(a);
         }
         if self.state.quit {
             event_loop.exit();
+        }
+        self.idle = !self.busy(egui_soon);
+        if !self.idle && !self.hidden {
+            self.wake();
+        }
+    }
+
+    /// Writes a frame read back from the window: one numbered screenshot (P), or the next
+    /// frame of a recording (Shift+P), as `capture --every` numbers them.
+    fn save(&mut self, image: Result<crate::capture::Image, AppError>) {
+        let result = image.and_then(|image| {
+            if std::mem::take(&mut self.state.pending_screenshot) {
+                let path = loop {
+                    self.shots_taken += 1;
+                    let p = std::path::PathBuf::from(format!(
+                        "ragdoll-lab-{:04}.png",
+                        self.shots_taken
+                    ));
+                    if !p.exists() {
+                        break p;
+                    }
+                };
+                image.write_png(&path)?;
+                self.state.notice =
+                    Some((format!("screenshot: {}", path.display()), Instant::now()));
+            }
+            if self.state.recording {
+                let dir = match &self.record_dir {
+                    Some(d) => d.clone(),
+                    None => {
+                        let mut n = 1;
+                        let dir = loop {
+                            let d = std::path::PathBuf::from(format!("ragdoll-lab-rec-{n:03}"));
+                            if !d.exists() {
+                                break d;
+                            }
+                            n += 1;
+                        };
+                        std::fs::create_dir_all(&dir).map_err(|source| AppError::Io {
+                            path: dir.display().to_string(),
+                            source,
+                        })?;
+                        self.recorded = 0;
+                        self.record_dir = Some(dir.clone());
+                        dir
+                    }
+                };
+                image.write_png(&dir.join(format!("frame_{:05}.png", self.recorded)))?;
+                self.recorded += 1;
+            }
+            Ok(())
+        });
+        if let Err(e) = result {
+            self.state.recording = false;
+            self.state.pending_screenshot = false;
+            self.report(e);
+        }
+    }
+
+    /// A recording that stopped says where its frames went.
+    fn finish_recording(&mut self) {
+        if !self.state.recording
+            && let Some(dir) = self.record_dir.take()
+        {
+            self.state.notice = Some((
+                format!("recorded {} frames into {}", self.recorded, dir.display()),
+                Instant::now(),
+            ));
+        }
+    }
+
+    /// Reloads the scene when its file changed on disk since it was loaded.
+    fn poll_file(&mut self) {
+        let Some(path) = self.session.loaded.path.clone() else {
+            return;
+        };
+        let now = modified(&path);
+        if now.is_some() && now != self.watched {
+            self.watched = now;
+            log::info!("{} changed on disk: reloading", path.display());
+            self.state.apply(Action::Reload);
+            self.wake();
         }
     }
 }
@@ -404,7 +668,17 @@ impl ApplicationHandler for App {
         // buttons on Space) except while a slider's number field is being edited.
         let editing = w.compositor.ctx.text_edit_focused();
         let is_key = matches!(event, WindowEvent::KeyboardInput { .. });
-        let consumed = (!is_key || editing) && w.egui.on_window_event(&w.window, &event).consumed;
+        // egui is not told of redraws: it answers every event with "repaint", and a
+        // redraw asked for on each redraw never lets the loop wait.
+        if matches!(event, WindowEvent::RedrawRequested) {
+            self.redraw(event_loop);
+            return;
+        }
+        let response = (!is_key || editing).then(|| w.egui.on_window_event(&w.window, &event));
+        let consumed = response.as_ref().is_some_and(|r| r.consumed);
+        if response.is_some_and(|r| r.repaint) {
+            w.window.request_redraw();
+        }
         let action = match &event {
             WindowEvent::CloseRequested => {
                 event_loop.exit();
@@ -415,6 +689,7 @@ impl ApplicationHandler for App {
                     w.config.width = size.width;
                     w.config.height = size.height;
                     w.surface.configure(&w.gpu.device, &w.config);
+                    w.window.request_redraw();
                 }
                 self.set_hidden(size.width == 0 || size.height == 0);
                 None
@@ -423,10 +698,7 @@ impl ApplicationHandler for App {
                 self.set_hidden(*occluded);
                 None
             }
-            WindowEvent::RedrawRequested => {
-                self.redraw(event_loop);
-                return;
-            }
+            WindowEvent::DroppedFile(path) => Some(Action::OpenFile(path.clone())),
             WindowEvent::ModifiersChanged(m) => {
                 self.input.set_modifiers(m.state());
                 None
@@ -459,15 +731,22 @@ impl ApplicationHandler for App {
         };
         if let Some(a) = action {
             self.act(a);
+            self.finish_recording();
         }
         if self.state.quit {
             event_loop.exit();
         }
     }
 
-    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
-        if let Some(w) = self.window.as_ref().filter(|_| !self.hidden) {
-            w.window.request_redraw();
+    /// Waits for input; wakes every [`WATCH_SECONDS`] to see whether the scene file
+    /// changed. Frames are asked for only while something changes ([`App::busy`]), so a
+    /// paused or sleeping scene costs next to no CPU.
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if !self.hidden {
+            self.poll_file();
         }
+        event_loop.set_control_flow(ControlFlow::WaitUntil(
+            Instant::now() + std::time::Duration::from_secs_f64(WATCH_SECONDS),
+        ));
     }
 }

@@ -73,7 +73,7 @@ fn the_papers_keys_drive_the_state() {
     assert_eq!(state.time_scale(), 0.5, "[ slows down");
 
     press(&mut input, &mut state, ch("b"));
-    assert_eq!(state.pending_shots, 1, "B shoots a box");
+    assert_eq!(state.pending_shots.len(), 1, "B shoots a box");
     press(&mut input, &mut state, ch("r"));
     assert_eq!(state.rebuild.take(), Some(Rebuild::Load), "R reloads");
 
@@ -95,7 +95,11 @@ fn the_mouse_opens_the_menu_orbits_pans_zooms_and_grabs() {
     };
 
     let a = input.cursor_moved(Vec2::new(100.0, 80.0));
-    assert_eq!(a, None, "moving with no button does nothing");
+    assert_eq!(
+        a,
+        Some(Action::Hover(Vec2::new(100.0, 80.0))),
+        "moving with no button only hovers"
+    );
     apply(&mut state, input.button(MouseButton::Right, true));
     assert_eq!(
         state.menu,
@@ -144,4 +148,53 @@ fn tab_walks_the_built_in_scenes_in_table_order() {
         .map(|s| s.name)
         .collect();
     assert_eq!(names, SCENES.to_vec());
+}
+
+#[test]
+fn our_new_keys_and_a_click_that_is_not_a_drag() {
+    let (mut input, mut state) = setup();
+    let key = |input: &mut InputMapper, k: Key| input.key(&k, true);
+    assert_eq!(key(&mut input, ch("f")), Some(Action::Follow));
+    assert_eq!(key(&mut input, ch("p")), Some(Action::Screenshot));
+    assert_eq!(key(&mut input, ch("m")), Some(Action::CycleLayout));
+    assert_eq!(
+        key(&mut input, Key::Named(NamedKey::Home)),
+        Some(Action::ResetCamera)
+    );
+    input.set_modifiers(ModifiersState::SHIFT);
+    assert_eq!(key(&mut input, ch("P")), Some(Action::Record));
+    assert_eq!(key(&mut input, ch("T")), Some(Action::StepFrames(10)));
+    input.set_modifiers(ModifiersState::empty());
+
+    // B aims through the cursor.
+    input.cursor_moved(Vec2::new(420.0, 310.0));
+    assert_eq!(
+        key(&mut input, ch("b")),
+        Some(Action::ShootBox(Some(Vec2::new(420.0, 310.0))))
+    );
+
+    // Press and release in place: a pick there. Press, move away, release: an orbit.
+    input.button(MouseButton::Left, true);
+    input.cursor_moved(Vec2::new(422.0, 311.0));
+    assert_eq!(
+        input.button(MouseButton::Left, false),
+        Some(Action::Pick(Vec2::new(422.0, 311.0)))
+    );
+    input.button(MouseButton::Left, true);
+    let orbit = input.cursor_moved(Vec2::new(460.0, 311.0));
+    assert!(matches!(orbit, Some(Action::Orbit(_))));
+    assert_eq!(
+        input.button(MouseButton::Left, false),
+        None,
+        "a drag picks nothing"
+    );
+
+    for a in [Action::Follow, Action::CycleLayout, Action::Record] {
+        state.apply(a);
+    }
+    assert!(state.follow && state.recording);
+    assert_eq!(state.layout, ragdoll_lab::app_state::ViewLayout::Particle);
+    state.apply(Action::NextScene);
+    assert!(!state.follow, "another scene: nothing to follow");
+    assert_eq!(state.selected, None);
 }

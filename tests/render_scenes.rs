@@ -2,10 +2,13 @@
 //! software adapter in CI, with assertions on the pixels. One binary, one capture run per
 //! scene (frames 0 and 120 from a single `--every 120` run) to keep llvmpipe time small.
 
+use ragdoll_lab::capture::half_aspect;
 use ragdoll_lab::cli::SceneArgs;
+use ragdoll_lab::picking;
 use ragdoll_lab::render::camera::OrbitCamera;
 use ragdoll_lab::render::{Viewport, split};
 use ragdoll_lab::scenes;
+use ragdoll_sim::snapshot::RenderSnapshot;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -147,7 +150,14 @@ fn every_scene_is_blue_left_red_right_with_bodies_in_place_and_moving() {
             ..Default::default()
         })
         .unwrap();
-        let camera = OrbitCamera::from_desc(&loaded.desc.settings.camera);
+        // The camera capture uses: the scene's, pulled back where the bodies at rest do
+        // not fit clear of the labels.
+        let rest = RenderSnapshot::from_scene_rest(&loaded.desc);
+        let camera = picking::scene_camera(
+            OrbitCamera::from_desc(&loaded.desc.settings.camera),
+            &[rest.clone(), rest],
+            half_aspect(W, H, false),
+        );
         let halves = split(Viewport {
             x: 0.0,
             y: 0.0,

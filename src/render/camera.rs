@@ -86,6 +86,16 @@ impl OrbitCamera {
         self.distance = (self.distance * 0.88f32.powf(steps)).clamp(0.2, 200.0);
     }
 
+    /// Looks at `centre` from the same direction, from just far enough that a sphere of
+    /// `radius` around it fills at most `fill` of the view's smaller field of view. The
+    /// smaller half-angle is the vertical `FOV_Y / 2` in any viewport (`view_proj` only
+    /// ever widens a field), and a sphere seen from distance `d` subtends `asin(r / d)`.
+    pub fn fit(&mut self, centre: Vec3, radius: f32, fill: f32) {
+        let half = (FOV_Y * 0.5) * fill.clamp(0.1, 1.0);
+        self.target = centre;
+        self.distance = (radius.max(0.01) / half.sin()).clamp(0.2, 200.0);
+    }
+
     /// The world ray through a point of a viewport, `ndc` in [−1, 1]² (y up).
     pub fn ray(&self, ndc: Vec2, aspect: f32) -> (Vec3, Vec3) {
         let inv = self.view_proj(aspect).inverse();
@@ -120,6 +130,31 @@ mod tests {
             cam.orbit(Vec2::new(0.0, 40.0));
         }
         assert!(cam.pitch <= MAX_PITCH);
+    }
+
+    #[test]
+    fn a_fitted_sphere_lies_inside_the_view_at_any_aspect() {
+        let centre = Vec3::new(3.0, 1.0, -2.0);
+        let radius = 2.5;
+        for aspect in [0.6f32, 1.0, 1.36, 2.2] {
+            let mut cam = OrbitCamera::from_desc(&CameraDesc::default());
+            cam.fit(centre, radius, 0.8);
+            let vp = cam.view_proj(aspect);
+            // The sphere's extreme points along the view's axes and diagonals.
+            let fwd = (cam.target - cam.eye()).normalize();
+            let right = fwd.cross(Vec3::Y).normalize();
+            let up = right.cross(fwd);
+            for k in 0..16 {
+                let a = k as f32 * std::f32::consts::TAU / 16.0;
+                let p = centre + radius * (right * a.cos() + up * a.sin());
+                let clip = vp * p.extend(1.0);
+                let ndc = clip.truncate() / clip.w;
+                assert!(
+                    ndc.x.abs() < 1.0 && ndc.y.abs() < 1.0,
+                    "aspect {aspect}: {p} at {ndc}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! The metrics (`docs/metrics.md`) for the particle method, computed from the
 //! particles and the bone frames they imply.
 //!
-//! - E(t) = Σ ½ m_p |v_p|² + m_p g h_p over particles, `v_p = (x_p(t) − x_p(t−dt))/dt`
-//!   over the frame (not the substep), potential from [`crate::metrics`].
+//! - E(t) = Σ ½ m_p |v_p|² + m_p g h_p over particles, `v_p` the velocity the state
+//!   holds (see [`state_energy`]), potential from [`crate::metrics`].
 //! - Penetration: deepest overlap of colliding pairs (the solver's own filter) and of
 //!   each shape with the ground, from parry contact manifolds at the current frames.
 //! - Joint gap: distance between the anchor as seen from each bone's frame.
@@ -18,36 +18,7 @@ use glam::Vec3;
 
 /// The sample for the current state.
 pub(crate) fn sample(w: &ParticleWorld) -> Sample {
-    let dt = w.settings.timestep;
-    let mut kinetic = 0.0f64;
-    let mut potential = 0.0f64;
-    let mut add = |m: f32, x: Vec3, x_start: Vec3| {
-        let v = (x - x_start) / dt;
-        kinetic += 0.5 * m as f64 * v.length_squared() as f64;
-        potential += potential_energy(&w.settings, m, x);
-    };
-    match w.solver {
-        ParticleSolver::RigidFrames => {
-            for (b, &(com, rot)) in w.bones.iter().zip(&w.frame_starts) {
-                if b.fixed {
-                    continue;
-                }
-                for (k, r) in b.rest.iter().enumerate() {
-                    add(b.mass * 0.25, b.corner(k), com + (Vec3::ZERO + rot * *r));
-                }
-            }
-        }
-        ParticleSolver::Paper => {
-            let p = &w.particles;
-            for i in 0..p.len() {
-                if p.mass[i] > 0.0 {
-                    add(p.mass[i], p.x[i], p.frame_start[i]);
-                }
-            }
-        }
-        // Its own particles' velocities (`ParticleWorld::sample` fills them in).
-        ParticleSolver::Xpbd => {}
-    }
+    let (kinetic, potential) = energy_parts(w);
     let mut pen = 0.0f32;
     let zero = vec![0.0; w.bones.len()];
     let mut pairs = Vec::new();
@@ -98,29 +69,45 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
 }
 
 /// The state's energy: particle velocities as the integrator holds them (paper mode:
-/// Verlet's `(x − x_old)/Δt`; improved mode: the velocities after the last substep).
+/// Verlet's `(x − x_old)/Δt`; rigid frames: each corner's `v + ω × r` after the last
+/// substep, the velocity the next step starts from).
 pub(crate) fn state_energy(w: &ParticleWorld) -> f64 {
+    let (kinetic, potential) = energy_parts(w);
+    kinetic + potential
+}
+
+/// (kinetic, potential) energy (J) of the state, `Σ ½ m_p |v_p|²` and `Σ m_p g h_p` over
+/// the particles, with the velocities of [`state_energy`]. A velocity differenced over
+/// the frame, `(x(t) − x(t−Δt))/Δt`, is the velocity of half a frame ago: in free fall
+/// it reads `½ m g² (t − Δt/2)²` and the total loses `m g² t Δt / 2` that the state
+/// never lost, and at an impact it under-reads.
+fn energy_parts(w: &ParticleWorld) -> (f64, f64) {
     let dt = w.settings.timestep;
-    let energy = |m: f32, v: Vec3, x: Vec3| {
-        0.5 * m as f64 * v.length_squared() as f64 + potential_energy(&w.settings, m, x)
+    let mut kinetic = 0.0f64;
+    let mut potential = 0.0f64;
+    let mut add = |m: f32, v: Vec3, x: Vec3| {
+        kinetic += 0.5 * m as f64 * v.length_squared() as f64;
+        potential += potential_energy(&w.settings, m, x);
     };
     match w.solver {
-        ParticleSolver::RigidFrames => w
-            .bones
-            .iter()
-            .filter(|b| !b.fixed)
-            .flat_map(|b| (0..4).map(|k| energy(b.mass * 0.25, b.corner_velocity(k), b.corner(k))))
-            .sum(),
-        // Answered by `ParticleWorld::state_energy` from its own particles.
-        ParticleSolver::Xpbd => 0.0,
+        ParticleSolver::RigidFrames => {
+            for b in w.bones.iter().filter(|b| !b.fixed) {
+                for k in 0..4 {
+                    add(b.mass * 0.25, b.corner_velocity(k), b.corner(k));
+                }
+            }
+        }
+        // Its own particles' velocities (`ParticleWorld::sample` and `state_energy`
+        // answer from them).
+        ParticleSolver::Xpbd => {}
         ParticleSolver::Paper => {
             let p = &w.particles;
-            (0..p.len())
-                .filter(|&i| p.mass[i] > 0.0)
-                .map(|i| energy(p.mass[i], (p.x[i] - p.x_prev[i]) / dt, p.x[i]))
-                .sum()
+            for i in (0..p.len()).filter(|&i| p.mass[i] > 0.0) {
+                add(p.mass[i], (p.x[i] - p.x_prev[i]) / dt, p.x[i]);
+            }
         }
     }
+    (kinetic, potential)
 }
 
 /// Kinematic state of every bone, as its frame implies.

