@@ -184,4 +184,8 @@ pub struct BenchArgs {
     /// or humans), e.g. `--only 1920` to profile one size.
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<f64>,
+    /// Sleeping off in both methods: every body stays awake, so the figures compare
+    /// solvers, not sleep policies (scale and rain; the paper's tests never sleep).
+    #[arg(long)]
+    pub no_sleep: bool,
 }
