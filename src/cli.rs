@@ -165,6 +165,8 @@ pub enum BenchKind {
     Iterations,
     /// The pile of humans: ms per frame, 1 and all threads.
     Scale,
+    /// Humans dropped in groups at a steady rate: µs per moving body per step.
+    Rain,
 }
 
 /// `bench` options.

@@ -149,3 +149,37 @@ fn check_scale(s: &Value, sleep: bool) {
 fn the_scale_table_takes_sleeping_off() {
     check_scale(&bench_with("scale", &["--no-sleep"]), false);
 }
+
+/// The rain (`bench rain`): every row's cost per moving body, with the airborne bodies
+/// (always awake) among the moving ones and the landed ones fewer, so that charging the
+/// frames to the landed ones alone costs more per body.
+#[test]
+fn the_rain_reports_its_cost_per_moving_body() {
+    let r = bench("rain");
+    assert_eq!(r["sleep"].as_bool(), Some(true));
+    let bodies = positive(&r["bodies"], "bodies");
+    let humans = r["humans"].as_u64().unwrap();
+    assert_eq!(bodies as u64, 16 * humans);
+    assert_eq!(humans, 3 * r["groups"].as_u64().unwrap());
+    let mut single = 0;
+    for row in rows(&r) {
+        assert!(row["method"].is_string());
+        assert_eq!(row["finite"].as_bool(), Some(true));
+        positive(&row["mean_ms_per_frame"], "mean ms");
+        let moving = check_busy(&row["busy"], bodies);
+        assert_eq!(row["mean_moving_bodies"].as_f64(), Some(moving));
+        let airborne = row["mean_airborne_bodies"].as_f64().unwrap();
+        assert!(
+            airborne > 0.0 && airborne <= moving,
+            "{airborne} of {moving}"
+        );
+        let all = positive(&row["us_per_moving_body_step"], "us per moving body");
+        let landed = positive(
+            &row["us_per_landed_moving_body_step"],
+            "us per landed moving body",
+        );
+        assert!(landed >= all, "{landed} < {all}");
+        single += usize::from(row["threads"].as_u64() == Some(1));
+    }
+    assert_eq!(single, 2, "both methods on one thread");
+}

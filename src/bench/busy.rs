@@ -54,6 +54,11 @@ impl FrameLog {
         &self.ms
     }
 
+    /// The bodies awake when each frame's step began, in order.
+    pub fn awake(&self) -> &[usize] {
+        &self.awake
+    }
+
     /// The figures of the run.
     pub fn summary(&self) -> Busy {
         let mut sorted = self.ms.clone();

@@ -13,6 +13,8 @@
 //! - [`bones`]: test 11, t_real/t_sim against the number of bones.
 //! - [`iterations`]: test 12, t_real/t_sim against the iterations.
 //! - [`scale`]: the pile of humans, milliseconds per frame.
+//! - [`rain`]: humans dropped in groups at a steady rate, µs per moving body per step
+//!   (Box3D's rain benchmark).
 //! - [`busy`]: the busy-phase figures every run reports beside its mean (slowest and
 //!   95th-percentile frame, time per simulated second, µs per awake body per step).
 //! - [`scenes`]: the benches' scenes, built as `SceneDesc` in code.
@@ -21,6 +23,7 @@ pub mod bones;
 pub mod busy;
 pub mod iterations;
 pub mod memory;
+pub mod rain;
 pub mod scale;
 pub mod scenes;
 mod table;
@@ -302,6 +305,7 @@ pub fn run(args: BenchArgs) -> Result<(), AppError> {
         BenchKind::Bones => bones::run(size, &only)?,
         BenchKind::Iterations => iterations::run(size, &only)?,
         BenchKind::Scale => scale::run(size, &only, args.no_sleep)?,
+        BenchKind::Rain => rain::run(size, args.no_sleep)?,
     };
     if args.json {
         println!("{}", report.json);

@@ -278,7 +278,7 @@ fn main() {
                 let b = c.busy;
                 let sec = |k: usize| b.first_seconds_ms[k].map_or("-".into(), |x| format!("{x:.1}"));
                 let ratio = |k: usize| match (b.first_seconds_ms[k], rapier.busy.first_seconds_ms[k]) {
-                    (Some(x), Some(r)) if r > 0.0 => format!(" ({:.2}x)", x / r),
+                    (Some(x), Some(r)) if r > 0.0 && name != "rapier" => format!(" ({:.2}x)", x / r),
                     _ => String::new(),
                 };
                 format!(
