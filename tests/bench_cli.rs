@@ -94,6 +94,19 @@ fn every_bench_prints_its_json_shape() {
         }
     }
 
+    // The pile of humans, joints included.
+    let piles = m["pile_rows"].as_array().expect("pile rows");
+    assert!(!piles.is_empty());
+    for row in piles {
+        let bones = row["bones"].as_u64().unwrap() as f64;
+        assert_eq!(bones, 16.0 * row["humans"].as_u64().unwrap() as f64);
+        for f in FLAVORS {
+            let bytes = positive(&row[f]["bytes"], "pile bytes");
+            let per_bone = positive(&row[f]["bytes_per_bone"], "pile bytes per bone");
+            assert!((bytes / bones - per_bone).abs() < 1e-6);
+        }
+    }
+
     let t = bench("timestep");
     for row in rows(&t) {
         positive(&row["timestep"], "timestep");
