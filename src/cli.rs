@@ -181,6 +181,8 @@ pub enum BenchKind {
     Iterations,
     /// The pile of humans: ms per frame, 1 and all threads.
     Scale,
+    /// Humans dropped in groups at a steady rate: µs per moving body per step.
+    Rain,
 }
 
 /// `bench` options.
@@ -200,4 +202,8 @@ pub struct BenchArgs {
     /// or humans), e.g. `--only 1920` to profile one size.
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<f64>,
+    /// Sleeping off in both methods: every body stays awake, so the figures compare
+    /// solvers, not sleep policies (scale and rain; the paper's tests never sleep).
+    #[arg(long)]
+    pub no_sleep: bool,
 }

@@ -13,11 +13,17 @@
 //! - [`bones`]: test 11, t_real/t_sim against the number of bones.
 //! - [`iterations`]: test 12, t_real/t_sim against the iterations.
 //! - [`scale`]: the pile of humans, milliseconds per frame.
+//! - [`rain`]: humans dropped in groups at a steady rate, µs per moving body per step
+//!   (Box3D's rain benchmark).
+//! - [`busy`]: the busy-phase figures every run reports beside its mean (slowest and
+//!   95th-percentile frame, time per simulated second, µs per awake body per step).
 //! - [`scenes`]: the benches' scenes, built as `SceneDesc` in code.
 
 pub mod bones;
+pub mod busy;
 pub mod iterations;
 pub mod memory;
+pub mod rain;
 pub mod scale;
 pub mod scenes;
 mod table;
@@ -26,6 +32,7 @@ pub mod timestep;
 use crate::AppError;
 use crate::cli::{BenchArgs, BenchKind, ParticleSolverArg};
 use crate::methods;
+use busy::{Busy, FrameLog};
 use ragdoll_sim::{Method, SceneDesc};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -132,12 +139,14 @@ pub struct RunTiming {
     pub t_real: f64,
     /// Wall-clock seconds spent in `step`.
     pub t_wall: f64,
-    /// Median wall-clock time of one step (ms).
+    /// Median step (ms): CPU time on a one-thread pool, wall-clock on several.
     pub median_step_ms: f64,
-    /// Slowest step, wall-clock (ms).
+    /// Slowest step (ms), timed as the median.
     pub max_step_ms: f64,
     /// The state was still finite at the end (a blown-up run is fast for the wrong reason).
     pub finite: bool,
+    /// The busy-phase figures (steps timed as the median).
+    pub busy: Busy,
 }
 
 impl RunTiming {
@@ -168,6 +177,7 @@ impl RunTiming {
             "median_step_ms": self.median_step_ms,
             "max_step_ms": self.max_step_ms,
             "finite": self.finite,
+            "busy": self.busy.to_json(),
         })
     }
 }
@@ -195,28 +205,44 @@ pub fn time_steps(flavor: Flavor, scene: &SceneDesc, steps: usize) -> Result<Run
     })
 }
 
-/// Times `steps` steps of an already built method, each one measured on its own.
+/// Times `steps` steps of an already built method, each one measured on its own: on a
+/// one-thread pool by the stepping thread's CPU time, on several by the wall clock (the
+/// other threads' work is not on the stepping thread's clock). The bodies awake at each
+/// step's start are counted outside the timed span.
 pub fn time_method(method: &mut dyn Method, steps: usize) -> RunTiming {
+    time_method_logged(method, steps).0
+}
+
+/// [`time_method`], also returning the frame-by-frame log.
+pub fn time_method_logged(method: &mut dyn Method, steps: usize) -> (RunTiming, FrameLog) {
     let dt = method.settings().timestep as f64;
-    let mut per_step = Vec::with_capacity(steps);
-    let cpu0 = thread_cpu_seconds();
+    let on_cpu_clock = rayon::current_num_threads() == 1;
+    let mut log = FrameLog::new(dt, steps);
+    let mut t_wall = 0.0;
+    let mut t_real = 0.0;
     for _ in 0..steps {
+        let awake = method.awake_body_count();
+        let cpu0 = thread_cpu_seconds();
         let t0 = Instant::now();
         method.step();
-        per_step.push(t0.elapsed().as_secs_f64());
+        let wall = t0.elapsed().as_secs_f64();
+        let cpu = thread_cpu_seconds() - cpu0;
+        t_wall += wall;
+        t_real += cpu;
+        log.push(1e3 * if on_cpu_clock { cpu } else { wall }, awake);
     }
-    let t_real = thread_cpu_seconds() - cpu0;
-    let t_wall = per_step.iter().sum();
-    let max = per_step.iter().copied().fold(0.0, f64::max);
-    RunTiming {
+    let busy = log.summary();
+    let timing = RunTiming {
         steps,
         t_sim: steps as f64 * dt,
         t_real,
         t_wall,
-        median_step_ms: 1e3 * median(&mut per_step),
-        max_step_ms: 1e3 * max,
+        median_step_ms: busy.median_ms,
+        max_step_ms: busy.max_ms,
         finite: method.sample().energy.is_finite(),
-    }
+        busy,
+    };
+    (timing, log)
 }
 
 /// Times each flavor in turn on `scene` for `seconds` of simulated time.
@@ -278,7 +304,8 @@ pub fn run(args: BenchArgs) -> Result<(), AppError> {
         BenchKind::Timestep => timestep::run(size, &only)?,
         BenchKind::Bones => bones::run(size, &only)?,
         BenchKind::Iterations => iterations::run(size, &only)?,
-        BenchKind::Scale => scale::run(size, &only)?,
+        BenchKind::Scale => scale::run(size, &only, args.no_sleep)?,
+        BenchKind::Rain => rain::run(size, args.no_sleep)?,
     };
     if args.json {
         println!("{}", report.json);
@@ -315,6 +342,7 @@ mod tests {
             median_step_ms: 0.0,
             max_step_ms: 0.0,
             finite: true,
+            busy: FrameLog::default().summary(),
         };
         assert_eq!(t.percent_of_realtime().round(), 303.0);
         assert!((t.t_sim_per_10s() - 3.3).abs() < 1e-12);

@@ -113,7 +113,7 @@ pub fn nine_boxes(iterations: u32) -> SceneDesc {
 /// A scene with sleeping off: the paper's methods never slept, and a figure asleep
 /// after its first second would make the realtime tables time nothing.
 fn base_scene(name: String, mut settings: Settings) -> SceneDesc {
-    settings.sleep.time = f32::MAX;
+    settings.sleep.disable();
     SceneDesc {
         name,
         settings,

@@ -6,7 +6,14 @@
 //! cargo bench -p peer-bench --bench pile -- 100 270 --frames 300
 //! cargo bench -p peer-bench --bench pile -- 100 --timeline   # and CPU ms per second
 //! cargo bench -p peer-bench --bench pile -- 100 270 --rounds 5
+//! cargo bench -p peer-bench --bench pile -- 100 1000 --no-sleep   # sleeping off in all
+//! cargo bench -p peer-bench --bench rain -- --no-sleep             # the rain benchmark
 //! ```
+//!
+//! Beside each mean, the busy phase (`ragdoll_lab::bench::busy`): the 95th-percentile
+//! and slowest frame, the CPU time of the first and second simulated seconds with our
+//! time over Rapier's, and µs per awake body per step. `--no-sleep` turns sleeping off
+//! in all three engines, so the ratios compare solvers, not sleep policies.
 //!
 //! All three run single-threaded (Rapier without its `parallel` feature), the same
 //! scene description, timestep and solver budget; see `rapier_scene.rs` for how the
@@ -21,20 +28,38 @@
 
 mod rapier_scene;
 
+use ragdoll_lab::bench::busy::FrameLog;
 use ragdoll_lab::bench::scale::{self, FrameCost};
 use ragdoll_lab::bench::{Flavor, median, on_threads, thread_cpu_seconds};
+use rapier3d::prelude::PhysicsWorld;
 use std::time::Instant;
+
+/// Dynamic bodies of a Rapier world that are awake.
+fn rapier_awake(world: &PhysicsWorld) -> usize {
+    world
+        .bodies
+        .iter()
+        .filter(|(_, b)| b.is_dynamic() && !b.is_sleeping())
+        .count()
+}
 
 fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec<String>) {
     let mut r = rapier_scene::build(scene);
-    let mut per_frame = Vec::with_capacity(frames);
-    let cpu0 = thread_cpu_seconds();
+    let mut log = FrameLog::new(scene.settings.timestep as f64, frames);
+    let mut t_real = 0.0;
+    let mut t_wall = 0.0;
     for _ in 0..frames {
+        // Counted outside the timed span, as for our methods.
+        let awake = rapier_awake(&r.world);
+        let cpu0 = thread_cpu_seconds();
         let t0 = Instant::now();
         r.world.step();
-        per_frame.push(t0.elapsed().as_secs_f64() * 1e3);
+        t_wall += t0.elapsed().as_secs_f64();
+        let cpu = thread_cpu_seconds() - cpu0;
+        t_real += cpu;
+        log.push(1e3 * cpu, awake);
     }
-    let mean_ms = 1e3 * (thread_cpu_seconds() - cpu0) / frames as f64;
+    let mean_ms = 1e3 * t_real / frames as f64;
     let finite = r
         .world
         .bodies
@@ -52,17 +77,17 @@ fn rapier_cost(scene: &ragdoll_sim::SceneDesc, frames: usize) -> (FrameCost, Vec
         .sum::<f64>()
         / dynamic.len().max(1) as f64;
     let asleep_at_end = dynamic.iter().all(|(_, b)| b.is_sleeping());
-    let wall_ms = per_frame.iter().sum::<f64>() / frames as f64;
-    let max_ms = per_frame.iter().copied().fold(0.0, f64::max);
+    let busy = log.summary();
     (
         FrameCost {
             mean_ms,
-            wall_ms,
-            median_ms: median(&mut per_frame),
-            max_ms,
+            wall_ms: 1e3 * t_wall / frames as f64,
+            median_ms: busy.median_ms,
+            max_ms: busy.max_ms,
             finite,
             final_mean_height,
             asleep_at_end,
+            busy,
         },
         r.approximations,
     )
@@ -120,11 +145,14 @@ fn main() {
     let mut humans: Vec<u32> = Vec::new();
     let mut frames = scale::FRAMES;
     let mut show_timeline = false;
+    let mut no_sleep = false;
     let mut rounds = 1usize;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         if a == "--timeline" {
             show_timeline = true;
+        } else if a == "--no-sleep" {
+            no_sleep = true;
         } else if a == "--frames" {
             frames = args.next().and_then(|f| f.parse().ok()).unwrap_or(frames);
         } else if a == "--rounds" {
@@ -146,20 +174,25 @@ fn main() {
         String::new()
     };
     println!(
-        "Pile of humans, {frames} frames at 1/60 s, one thread; ms per frame (mean CPU / median wall-clock){medians}"
+        "Pile of humans, {frames} frames at 1/60 s, one thread, sleeping {}; ms per frame (mean CPU / median CPU){medians}",
+        if no_sleep { "off in all three" } else { "on" }
     );
     println!(
         "{:>6} {:>6} {:>17} {:>17} {:>6} {:>17} {:>6}",
         "humans", "bones", "rapier", "multibody", "ratio", "particle", "ratio"
     );
     for n in humans {
-        let scene = match scale::pile(n) {
+        let mut scene = match scale::pile(n) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("pile of {n}: {e}");
                 std::process::exit(1);
             }
         };
+        if no_sleep {
+            // In all three engines (Rapier: `can_sleep(false)`, rapier_scene.rs).
+            scene.settings.sleep.disable();
+        }
         let bones = scene.dynamic_body_count();
         // On a one-thread pool: our methods share islands out over the pool they run in,
         // and Rapier here runs without its `parallel` feature.
@@ -237,6 +270,42 @@ fn main() {
         .flatten()
         .collect();
         println!("  mean body height at the end: {}", states.join(", "));
+        // The busy phase, from the same runs: the frames a player feels and the first
+        // seconds, while the pile falls and lands, with our time over Rapier's.
+        let busy = |name: &str, c: Option<FrameCost>| {
+            c.map(|c| {
+                let b = c.busy;
+                let sec = |k: usize| b.first_seconds_ms[k].map_or("-".into(), |x| format!("{x:.1}"));
+                let ratio = |k: usize| match (b.first_seconds_ms[k], rapier.busy.first_seconds_ms[k]) {
+                    (Some(x), Some(r)) if r > 0.0 && name != "rapier" => format!(" ({:.2}x)", x / r),
+                    _ => String::new(),
+                };
+                format!(
+                    "    {name:<9} p95 {:.3} max {:.3} ms; 1st s {}{} 2nd s {}{} ms; {} us per awake body-step (mean {:.0} awake)",
+                    b.p95_ms,
+                    b.max_ms,
+                    sec(0),
+                    ratio(0),
+                    sec(1),
+                    ratio(1),
+                    b.us_per_awake_body_step.map_or("-".into(), |x| format!("{x:.3}")),
+                    b.mean_awake,
+                )
+            })
+        };
+        println!(
+            "  busy phase (frames CPU ms; seconds CPU ms per simulated second, over Rapier's):"
+        );
+        for line in [
+            busy("rapier", Some(rapier)),
+            busy("multibody", mb_cost),
+            busy("particle", pa_cost),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            println!("{line}");
+        }
         if show_timeline {
             match timeline(&scene, frames) {
                 Ok(rows) => {

@@ -10,6 +10,7 @@
 //!   at rest as in `SceneDesc`. A ball joint's cone becomes limits of ±half-angle on the
 //!   two swing axes (a pyramid circumscribing the cone: Rapier has no cone limit), its
 //!   twist a limit on the twist axis; a hinge's range a limit on its axis.
+//! - Sleeping: Rapier's own policy, or none when the scene turns sleeping off.
 //! - Solver budget: `substeps` solver iterations (Rapier's substeps) of `iterations` PGS
 //!   iterations each, one step per frame of `timestep`.
 
@@ -90,6 +91,8 @@ pub fn build(scene: &SceneDesc) -> RapierScene {
             .angvel(b.angular_velocity)
             .linear_damping(b.friction.linear)
             .angular_damping(b.friction.angular)
+            // Sleeping off in the scene (`SleepSettings::disable`, `--no-sleep`): off here.
+            .can_sleep(s.sleep.enabled())
             .build();
         let h = world.bodies.insert(body);
         let c = collider(&b.shape)

@@ -102,6 +102,10 @@ pub trait Method: Send {
     fn sample(&self) -> Sample;
     /// Number of bodies (scene bodies + projectiles).
     fn body_count(&self) -> usize;
+    /// Number of dynamic bodies awake now (neither fixed nor asleep): the bodies the next
+    /// step moves. A counter for the benchmarks' cost per moving body; one pass over a
+    /// flag per body, cheap enough to call every frame.
+    fn awake_body_count(&self) -> usize;
     /// Number of particles (0 for the multibody method).
     fn particle_count(&self) -> usize;
     /// Kinematic state of every body, indexed by `BodyId`.

@@ -624,6 +624,10 @@ impl Method for ParticleWorld {
         self.bones.len()
     }
 
+    fn awake_body_count(&self) -> usize {
+        self.bones.iter().filter(|b| !b.is_static()).count()
+    }
+
     fn particle_count(&self) -> usize {
         match self.solver {
             ParticleSolver::RigidFrames => 4 * self.bones.len(),

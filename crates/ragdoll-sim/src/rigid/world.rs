@@ -342,6 +342,12 @@ impl Method for MultibodyWorld {
         self.info.len()
     }
 
+    fn awake_body_count(&self) -> usize {
+        (0..self.info.len())
+            .filter(|&i| self.dynamic[i] && !self.islands.asleep[i])
+            .count()
+    }
+
     fn particle_count(&self) -> usize {
         0
     }

@@ -524,6 +524,23 @@ pub struct SleepSettings {
     pub max_move_time: f32,
 }
 
+impl SleepSettings {
+    /// Turns sleeping off: `noMoveTime` infinite, so no island is ever still for long
+    /// enough, and no forced sleep (`maxMoveTime` 0). These two are all either method
+    /// reads to put an island to sleep, so neither needs a check of its own. The speed
+    /// thresholds stay, for what else reads them (the multibody's position pass holds
+    /// bodies slower than them in place). The benchmarks' `--no-sleep`.
+    pub fn disable(&mut self) {
+        self.time = f32::INFINITY;
+        self.max_move_time = 0.0;
+    }
+
+    /// Whether a body can ever fall asleep under these settings.
+    pub fn enabled(&self) -> bool {
+        self.time.is_finite() || self.max_move_time > 0.0
+    }
+}
+
 impl Default for SleepSettings {
     fn default() -> Self {
         // Doom 3's defaults, converted to metres (suspendSpeed 20 30 40 60 in/s, deg/s...).

@@ -1,0 +1,71 @@
+//! Sleeping turned off through the scene's settings (`SleepSettings::disable`, the
+//! benchmarks' `--no-sleep`) keeps every body of both methods awake, where the same
+//! scene with its own settings falls asleep; and `Method::awake_body_count` counts what
+//! the sleep flags say.
+
+use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::rigid::MultibodyWorld;
+use ragdoll_sim::scene::af::{AfOptions, load};
+use ragdoll_sim::{Method, SceneDesc};
+use std::path::PathBuf;
+
+/// The paper's human (scene 8): 16 bones dropped onto the floor, asleep within 5.3 s in
+/// both methods with the scene's own settings.
+fn human() -> SceneDesc {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/human.af");
+    load(&path, &AfOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc
+}
+
+fn methods(scene: &SceneDesc) -> Vec<Box<dyn Method>> {
+    vec![
+        Box::new(ParticleWorld::new(scene, ParticleSolver::RigidFrames).unwrap()),
+        Box::new(MultibodyWorld::new(scene).unwrap()),
+    ]
+}
+
+/// Steps `m` for `seconds`; returns the fewest bodies awake at the start of any step and
+/// the number awake at the end.
+fn run(m: &mut dyn Method, seconds: f64) -> (usize, usize) {
+    let steps = (seconds / m.settings().timestep as f64).round() as usize;
+    let mut fewest = usize::MAX;
+    for _ in 0..steps {
+        fewest = fewest.min(m.awake_body_count());
+        m.step();
+    }
+    (fewest, m.awake_body_count())
+}
+
+#[test]
+fn the_human_falls_asleep_with_its_own_settings() {
+    let scene = human();
+    assert!(scene.settings.sleep.enabled());
+    for mut m in methods(&scene) {
+        let dynamic = scene.dynamic_body_count();
+        assert_eq!(
+            m.awake_body_count(),
+            dynamic,
+            "{:?}: awake at the start",
+            m.kind()
+        );
+        let (_, end) = run(m.as_mut(), 7.0);
+        assert_eq!(end, 0, "{:?}: asleep by 7 s", m.kind());
+        assert!(m.sample().all_asleep);
+    }
+}
+
+#[test]
+fn with_sleeping_off_every_body_stays_awake() {
+    let mut scene = human();
+    scene.settings.sleep.disable();
+    assert!(!scene.settings.sleep.enabled());
+    let dynamic = scene.dynamic_body_count();
+    for mut m in methods(&scene) {
+        let (fewest, end) = run(m.as_mut(), 7.0);
+        assert_eq!(fewest, dynamic, "{:?}: a body slept", m.kind());
+        assert_eq!(end, dynamic, "{:?}", m.kind());
+        assert!(!m.sample().all_asleep);
+        assert!(m.sample().energy.is_finite());
+    }
+}
