@@ -1,10 +1,10 @@
-//! `ragdoll-lab check FILE.af [--mesh M]`: reads a file, every variant of it, and prints
+//! `ragdoll-lab check FILE.af [--mesh M]` (or `--doom3 BASE --entity NAME`): reads a file, every variant of it, and prints
 //! a summary — bodies by shape, constraints by type, total mass, ignored keys — or the
 //! first error as `FILE:LINE:COL: error: ...`.
 
 use crate::AppError;
 use crate::cli::CheckArgs;
-use ragdoll_sim::scene::af::{self, AfOptions, AfScene};
+use ragdoll_sim::scene::af::{self, AfOptions, AfScene, FigureSource};
 use ragdoll_sim::scene::{MassSpec, SceneDesc};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -16,16 +16,54 @@ pub fn run(args: CheckArgs) -> Result<(), AppError> {
         mesh: args.mesh.clone(),
         count: None,
     };
-    let scene = af::load(&args.file, &opts).map_err(|e| AppError::Scene(e.to_string()))?;
+    if let (Some(base), Some(entity)) = (&args.doom3, &args.entity) {
+        let (scene, c) = crate::scenes::load_entity(base, entity, &opts)?;
+        let mut out = summary(&c.af_file.display().to_string(), &scene);
+        let _ = writeln!(
+            out,
+            "entity \"{}\": figure \"{}\", mesh {}, pose {}, skin {}, anims: {}",
+            c.entity.name,
+            c.figure,
+            c.mesh
+                .as_ref()
+                .map_or("none".into(), |p| p.display().to_string()),
+            c.af_pose
+                .as_ref()
+                .map_or("bind pose".into(), |p| format!("af_pose {}", p.display())),
+            c.skin.as_deref().unwrap_or("none"),
+            if c.anims.is_empty() {
+                "none".into()
+            } else {
+                c.anims
+                    .iter()
+                    .map(|(n, _)| n.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+        );
+        print!("{out}");
+        return Ok(());
+    }
+    let Some(file) = &args.file else {
+        return Err(AppError::Usage(
+            "check needs an .af file, or --doom3 BASE --entity NAME".into(),
+        ));
+    };
+    let source = FigureSource {
+        base: args.doom3.clone(),
+        ..FigureSource::default()
+    };
+    let scene =
+        af::load_figure(file, &opts, &source).map_err(|e| AppError::Scene(e.to_string()))?;
     // Every variant must build too; a broken override is an error in the file.
     for v in scene.desc.variants.iter().filter(|v| v.number != 1) {
         let o = AfOptions {
             variant: v.number,
             ..opts.clone()
         };
-        af::load(&args.file, &o).map_err(|e| AppError::Scene(e.to_string()))?;
+        af::load_figure(file, &o, &source).map_err(|e| AppError::Scene(e.to_string()))?;
     }
-    print!("{}", summary(&args.file.display().to_string(), &scene));
+    print!("{}", summary(&file.display().to_string(), &scene));
     Ok(())
 }
 

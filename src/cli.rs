@@ -48,6 +48,14 @@ pub struct SceneArgs {
     /// Number of humans for the pile scene.
     #[arg(long)]
     pub count: Option<u32>,
+    /// A Doom 3 mod's base folder (holding def/, af/, models/): `--entity` is looked up
+    /// in it, and an --af file's `settings { model }` resolves through its declarations.
+    #[arg(long, value_name = "BASE")]
+    pub doom3: Option<PathBuf>,
+    /// An entityDef of the --doom3 folder: its figure (`ragdoll` or
+    /// `articulatedFigure`), built on its model's mesh in the `af_pose` frame.
+    #[arg(long, requires = "doom3", conflicts_with_all = ["scene", "af"])]
+    pub entity: Option<String>,
 }
 
 /// The particle method's solver.
@@ -162,10 +170,17 @@ pub struct StatsArgs {
 #[derive(Args, Debug, Clone)]
 pub struct CheckArgs {
     /// The .af file.
-    pub file: PathBuf,
+    #[arg(required_unless_present = "entity")]
+    pub file: Option<PathBuf>,
     /// The .md5mesh bind pose for joint("name") references.
     #[arg(long)]
     pub mesh: Option<PathBuf>,
+    /// A Doom 3 mod's base folder (see `view --doom3`).
+    #[arg(long, value_name = "BASE")]
+    pub doom3: Option<PathBuf>,
+    /// An entityDef of the --doom3 folder to check instead of a file.
+    #[arg(long, requires = "doom3", conflicts_with = "file")]
+    pub entity: Option<String>,
 }
 
 /// Which benchmark.

@@ -7,7 +7,8 @@
 use crate::AppError;
 use crate::cli::SceneArgs;
 use ragdoll_sim::SceneDesc;
-use ragdoll_sim::scene::af::{self, AfOptions, AfScene};
+use ragdoll_sim::scene::af::{self, AfOptions, AfScene, FigureSource};
+use ragdoll_sim::scene::decl::{Doom3Base, Doom3Character};
 use std::path::{Path, PathBuf};
 
 /// A scene loaded for a run.
@@ -88,8 +89,17 @@ pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
         mesh: args.mesh.clone(),
         count: args.count,
     };
+    if let (Some(base), Some(entity)) = (&args.doom3, &args.entity) {
+        let (scene, c) = load_entity(base, entity, &opts)?;
+        return Ok(loaded(scene, Some(c.af_file)));
+    }
     if let Some(path) = &args.af {
-        let scene = af::load(path, &opts).map_err(|e| AppError::Scene(e.to_string()))?;
+        let source = FigureSource {
+            base: args.doom3.clone(),
+            ..FigureSource::default()
+        };
+        let scene =
+            af::load_figure(path, &opts, &source).map_err(|e| AppError::Scene(e.to_string()))?;
         return Ok(loaded(scene, Some(path.clone())));
     }
     let key = args.scene.as_deref().unwrap_or("8");
@@ -104,6 +114,33 @@ pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
         ))
     })?;
     load_builtin(builtin, &opts)
+}
+
+/// Reads the figure of Doom 3 entity `entity` from the mod folder `base`: the entity's
+/// `ragdoll` (or `articulatedFigure`) figure on its model's mesh, posed by the model's
+/// `af_pose` when it has one, else in the bind pose. `opts.mesh` overrides the mesh.
+pub fn load_entity(
+    base: &Path,
+    entity: &str,
+    opts: &AfOptions,
+) -> Result<(AfScene, Doom3Character), AppError> {
+    let scene_err = |e: af::AfError| AppError::Scene(e.to_string());
+    let decls = Doom3Base::open(base).map_err(scene_err)?;
+    for w in &decls.warnings {
+        eprintln!("warning: {w}");
+    }
+    let c = decls.character(entity).map_err(scene_err)?;
+    let opts = AfOptions {
+        mesh: opts.mesh.clone().or(c.mesh.clone()),
+        ..opts.clone()
+    };
+    let source = FigureSource {
+        figure: Some(c.figure.clone()),
+        pose_anim: c.af_pose.clone(),
+        base: Some(base.to_path_buf()),
+    };
+    let scene = af::load_figure(&c.af_file, &opts, &source).map_err(scene_err)?;
+    Ok((scene, c))
 }
 
 /// Reads a built-in scene from its embedded text (messages name its asset path).

@@ -32,7 +32,7 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         .as_deref()
         .and_then(scenes::find_builtin)
         .map(|b| b.number as usize - 1)
-        .or(if args.scene.af.is_some() {
+        .or(if args.scene.af.is_some() || args.scene.entity.is_some() {
             None
         } else {
             Some(7)

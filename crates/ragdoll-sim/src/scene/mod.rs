@@ -3,14 +3,20 @@
 //! - [`desc`]: `SceneDesc` and everything in it, plain data.
 //! - [`mass`]: mass properties from shapes, shared by both methods.
 //! - [`af`]: the Doom 3 articulated-figure reader with our extensions.
-//! - [`md5mesh`]: the joints section of an `.md5mesh` bind pose for `joint("name")`.
+//! - [`md5mesh`]: `.md5mesh` skeletons (the bind pose `joint("name")` reads) and meshes.
+//! - [`md5anim`]: `.md5anim` animations and their frames' joint poses.
+//! - [`decl`]: Doom 3 `.def` declarations: entities, models, where figures are.
+//! - [`rig`]: skeleton joints from body poses (how a figure's bodies move its mesh).
 //! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform.
 
 pub mod af;
 pub mod collider;
+pub mod decl;
 pub mod desc;
 pub mod mass;
+pub mod md5anim;
 pub mod md5mesh;
+pub mod rig;
 mod transform;
 mod validate;
 

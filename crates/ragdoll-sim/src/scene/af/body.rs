@@ -27,7 +27,7 @@ pub(super) fn read_body(ctx: &mut Ctx, b: &Block, name: &str, d: &Defaults) -> R
     for e in &b.entries {
         match e.key.to_ascii_lowercase().as_str() {
             "joint" => body.skeleton_joint = Some(ctx.string(&e.values[0], "`joint`")?.to_string()),
-            "mod" => ctx.ignore(e, "`mod` says how the body drives its skeleton joint; there is no skinned mesh to drive"),
+            "mod" => ctx.ignore(e, "read into the figure's rig (the joint poses the bodies give the mesh); the window does not draw the skinned mesh yet"),
             "model" => {
                 ctx.arity(e, 1..=1, "one collision model")?;
                 model = Some(&e.values[0]);

@@ -8,7 +8,9 @@ use super::ctx::{Conv, Ctx, Defaults, R, angles_to_quat, unknown_key};
 use super::lexer::Pos;
 use super::parser::{Block, Entry, Value};
 use super::place::replicate_figure;
-use super::{AfError, AfOptions, AfScene};
+use super::{AfError, AfOptions, AfScene, FigureSource};
+use crate::scene::md5mesh::Md5Skeleton;
+use crate::scene::rig::{JointMod, Rig};
 use crate::scene::{
     BodyId, CameraDesc, Friction, Pose, SceneDesc, SceneError, Settings, VariantInfo, validate,
 };
@@ -37,10 +39,16 @@ pub(super) fn canonical(kind: &str) -> Option<&'static str> {
 }
 
 /// Builds the scene. See the module docs of [`super`] for the pipeline.
-pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfScene> {
+pub(super) fn build(
+    blocks: Vec<Block>,
+    file: &Path,
+    opts: &AfOptions,
+    source: &FigureSource,
+) -> R<AfScene> {
     let fname = file.display().to_string();
     let err = |pos: Pos, m: String| AfError::at(&fname, pos, m);
 
+    let blocks = select_figure(blocks, source, &fname)?;
     let (figure_name, merged, variant_info) = select_variant(blocks, opts, &fname)?;
     let (conv, mesh_key) = read_units(&merged, &fname)?;
     let mut ctx = Ctx {
@@ -48,10 +56,17 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
         dir: file.parent().map(Path::to_path_buf).unwrap_or_default(),
         conv,
         opts,
+        source,
         mesh_key,
         mesh: None,
         ignored: Vec::new(),
     };
+
+    if opts.mesh.is_some() || source.pose_anim.is_some() {
+        // A mesh or pose named on the command line must be readable even when no
+        // vector of the figure refers to a joint.
+        ctx.mesh(Pos { line: 1, col: 1 }, "the figure")?;
+    }
 
     let mut settings = Settings::default();
     let mut defaults = Defaults {
@@ -185,13 +200,108 @@ pub(super) fn build(blocks: Vec<Block>, file: &Path, opts: &AfOptions) -> R<AfSc
             format!("the number of copies must be from 1 to {MAX_COPIES}; found {count}"),
         ));
     }
+    let one_copy_in_place = count == 1 && replicate.is_none() && transform == Pose::IDENTITY;
     if count > 1 || replicate.is_some() {
         let grid = replicate.unwrap_or_default();
         replicate_figure(&mut desc, &grid, count);
     }
+    // The skeleton the bodies drive, for one figure where the file put it.
+    let rig = match &ctx.mesh {
+        Some(skel) if one_copy_in_place => Some(figure_rig(&ctx, skel, &merged, &desc)?),
+        _ => None,
+    };
     let mut ignored = ctx.ignored;
     ignored.sort_by_key(|i| (i.line, i.col));
-    Ok(AfScene { desc, ignored })
+    Ok(AfScene { desc, ignored, rig })
+}
+
+/// The rig of a figure built on `skel` (file units and axes): joints converted to ours,
+/// each body's `joint` and `mod` (Doom 3's defaults: joint "origin", orientation), the
+/// origin body driving the first child of joint 0 by orientation, as idAF does.
+fn figure_rig(ctx: &Ctx, skel: &Md5Skeleton, merged: &[Block], desc: &SceneDesc) -> R<Rig> {
+    let axes = glam::Quat::from_mat3(&ctx.conv.matrix());
+    let joints: Vec<(String, Option<usize>, Pose)> = skel
+        .joints
+        .iter()
+        .map(|j| {
+            let pose = Pose {
+                position: ctx.conv.point(j.position),
+                rotation: (axes * j.orientation * axes.inverse()).normalize(),
+            };
+            (j.name.clone(), j.parent, pose)
+        })
+        .collect();
+    let first_child = skel.joints.iter().position(|j| j.parent == Some(0));
+    let mut drivers = Vec::new();
+    let mut origin_body = None;
+    let bodies = merged.iter().filter(|b| canonical(&b.kind) == Some("body"));
+    for (i, b) in bodies.enumerate() {
+        let mut joint = ("origin".to_string(), b.pos);
+        let mut mode = JointMod::Orientation;
+        for e in &b.entries {
+            match (e.key.to_ascii_lowercase().as_str(), e.values.first()) {
+                ("joint", Some(Value::Str(s, p))) => joint = (s.clone(), *p),
+                ("mod", Some(Value::Ident(m, p) | Value::Str(m, p))) => {
+                    mode = match m.to_ascii_lowercase().as_str() {
+                        "orientation" => JointMod::Orientation,
+                        "position" => JointMod::Position,
+                        "both" => JointMod::Both,
+                        _ => {
+                            return Err(ctx.err(
+                                *p,
+                                format!(
+                                    "unknown `mod` {m}; expected orientation, position or both"
+                                ),
+                            ));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        // Doom 3 tests the origin body's joint name exactly.
+        if joint.0 == "origin" {
+            if origin_body.is_none()
+                && let Some(child) = first_child
+            {
+                origin_body = Some(i);
+                drivers.push((i, child, JointMod::Orientation));
+            }
+            continue;
+        }
+        let j = skel.index(&joint.0).ok_or_else(|| {
+            ctx.err(
+                joint.1,
+                format!(
+                    "the mesh has no joint \"{}\" for body \"{}\" to drive",
+                    joint.0, desc.bodies[i].name
+                ),
+            )
+        })?;
+        drivers.push((i, j, mode));
+    }
+    let rest: Vec<Pose> = desc.bodies.iter().map(|b| b.pose).collect();
+    Ok(Rig::new(&joints, &drivers, &rest, origin_body))
+}
+
+/// Keeps only the `articulatedFigure` that `source` names, when it names one.
+fn select_figure(blocks: Vec<Block>, source: &FigureSource, fname: &str) -> R<Vec<Block>> {
+    let Some(want) = &source.figure else {
+        return Ok(blocks);
+    };
+    let is_it = |b: &Block| {
+        canonical(&b.kind) == Some("articulatedFigure")
+            && b.name().is_some_and(|(n, _)| n.eq_ignore_ascii_case(want))
+    };
+    if blocks.iter().any(is_it) {
+        Ok(blocks.into_iter().filter(is_it).take(1).collect())
+    } else {
+        Err(AfError::at(
+            fname,
+            Pos { line: 1, col: 1 },
+            format!("the file declares no `articulatedFigure {want}`"),
+        ))
+    }
 }
 
 /// Unwraps `articulatedFigure name { ... }`, then applies the chosen variant's blocks

@@ -3,8 +3,10 @@
 
 use super::lexer::Pos;
 use super::parser::{Entry, Value};
-use super::{AfError, AfOptions, Ignored};
+use super::{AfError, AfOptions, FigureSource, Ignored};
 use crate::scene::Friction;
+use crate::scene::decl::Doom3Base;
+use crate::scene::md5anim;
 use crate::scene::md5mesh::{self, Md5Skeleton};
 use glam::{Mat3, Quat, Vec3};
 use std::path::PathBuf;
@@ -56,6 +58,7 @@ pub(super) struct Ctx<'a> {
     pub(super) dir: PathBuf,
     pub(super) conv: Conv,
     pub(super) opts: &'a AfOptions,
+    pub(super) source: &'a FigureSource,
     /// The `mesh`/`model` path from settings and where it was written.
     pub(super) mesh_key: Option<(String, Pos)>,
     pub(super) mesh: Option<Md5Skeleton>,
@@ -159,28 +162,72 @@ impl Ctx<'_> {
 
     pub(super) fn mesh(&mut self, at: Pos, what: &str) -> R<&Md5Skeleton> {
         if self.mesh.is_none() {
-            let (path, pos) = match (&self.opts.mesh, &self.mesh_key) {
-                (Some(p), _) => (p.clone(), at),
-                (None, Some((p, pos))) => (self.dir.join(p), *pos),
-                (None, None) => {
-                    return Err(self.err(
-                        at,
-                        format!(
-                            "{what} cannot be resolved without the figure's mesh: add `mesh \"FILE.md5mesh\"` to settings (relative to this file) or pass --mesh FILE.md5mesh"
-                        ),
-                    ));
-                }
-            };
-            let skel = md5mesh::load(&path).map_err(|e| {
-                if e.message.starts_with("cannot read") {
-                    self.err(pos, format!("{what} needs the mesh {}, which cannot be read ({}); pass --mesh FILE.md5mesh to use another", path.display(), e.message.trim_start_matches("cannot read the mesh: ")))
-                } else {
-                    e
-                }
-            })?;
+            let skel = self.load_skeleton(at, what)?;
             self.mesh = Some(skel);
         }
         Ok(self.mesh.as_ref().expect("loaded above"))
+    }
+
+    /// The mesh's skeleton in the pose the figure is built from: the `af_pose`
+    /// animation's first instant when there is one (Doom 3 samples it at 1 ms), else the
+    /// bind pose.
+    fn load_skeleton(&self, at: Pos, what: &str) -> R<Md5Skeleton> {
+        let mut pose_anim = self.source.pose_anim.clone();
+        let (path, pos) = match (&self.opts.mesh, &self.mesh_key, &self.source.base) {
+            (Some(p), _, _) => (p.clone(), at),
+            (None, Some((key, pos)), Some(root)) => {
+                // Through the mod's declarations, as Doom 3 reads a model key.
+                let base = Doom3Base::open(root)?;
+                let (_, mesh, pose) = base
+                    .model_files(key)
+                    .map_err(|e| self.err(*pos, e.message))?;
+                if pose_anim.is_none() {
+                    pose_anim = pose;
+                }
+                match mesh {
+                    Some(m) => (m, *pos),
+                    None => {
+                        return Err(self.err(*pos, format!("model \"{key}\" has no mesh")));
+                    }
+                }
+            }
+            (None, Some((p, pos)), None) => (self.dir.join(p), *pos),
+            (None, None, _) => {
+                return Err(self.err(
+                    at,
+                    format!(
+                        "{what} cannot be resolved without the figure's mesh: add `mesh \"FILE.md5mesh\"` to settings (relative to this file) or pass --mesh FILE.md5mesh"
+                    ),
+                ));
+            }
+        };
+        let skel = md5mesh::load(&path).map(|m| m.skeleton).map_err(|e| {
+            let why = e.message.trim_start_matches("cannot read the mesh: ");
+            if e.message.starts_with("cannot read") && self.opts.mesh.is_some() {
+                self.err(pos, format!("the mesh {} given with --mesh cannot be read: {why}", path.display()))
+            } else if e.message.starts_with("cannot read") {
+                self.err(pos, format!("{what} needs the mesh {}, which cannot be read ({why}); pass --mesh FILE.md5mesh to use another", path.display()))
+            } else {
+                e
+            }
+        })?;
+        match pose_anim {
+            None => Ok(skel),
+            Some(a) => {
+                let anim = md5anim::load(&a)?;
+                anim.check_hierarchy(&skel).map_err(|m| {
+                    self.err(
+                        pos,
+                        format!(
+                            "the pose animation {} does not fit the mesh {}: {m}",
+                            a.display(),
+                            path.display()
+                        ),
+                    )
+                })?;
+                Ok(anim.pose_skeleton(&skel, AF_POSE_TIME))
+            }
+        }
     }
 
     pub(super) fn joint_pos(&mut self, name_v: &Value, form: &str) -> R<Vec3> {
@@ -254,6 +301,9 @@ impl Ctx<'_> {
         Ok(self.num(v, what)?.to_radians())
     }
 }
+
+/// When Doom 3 samples `af_pose` (idAF::Load: 1 ms, frame 0 a little toward frame 1).
+pub(super) const AF_POSE_TIME: f32 = 0.001;
 
 /// Figure-wide defaults from `settings`.
 pub(super) struct Defaults {

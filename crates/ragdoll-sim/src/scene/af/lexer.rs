@@ -1,8 +1,11 @@
-//! Tokens of the `.af` syntax, each with its line and column.
+//! Tokens of Doom 3's text formats, each with its line and column: the one lexer of the
+//! `.af`, `.md5mesh`, `.md5anim` and `.def` readers.
 //!
-//! The syntax is Doom 3's: C-style `//` and `/* */` comments, double-quoted strings,
-//! numbers, identifiers (letters, digits, `_`, and `*`/`-`/`.` inside names that real
-//! files use in bare words), and the punctuation `{ } ( ) ,`. Newlines carry no meaning.
+//! The syntax is idLexer's: C-style `//` and `/* */` comments, double-quoted strings
+//! (no escapes; `"a" \ "b"` concatenates), numbers, identifiers (letters, digits, `_`, and `*`/`-`/`.` inside
+//! names that real files use in bare words, and `/`, `\`, `:` inside the bare paths of
+//! `.def` files), and the punctuation `{ } ( ) ,`. Newlines carry no meaning. A UTF-8
+//! byte-order mark at the start is skipped (idLexer reads it as whitespace).
 
 use super::AfError;
 
@@ -117,9 +120,17 @@ impl<'a> Cursor<'a> {
 
 /// Splits `text` into tokens, ending with [`Tok::Eof`].
 pub fn tokenize(text: &str, file: &str) -> Result<Vec<Token>, AfError> {
+    tokenize_from(text, file, Pos { line: 1, col: 1 })
+}
+
+/// Splits `text`, which starts at `start` of `file`, into tokens ending with
+/// [`Tok::Eof`]; positions are in the whole file (a `.def` reader tokenizes one
+/// declaration at a time).
+pub(crate) fn tokenize_from(text: &str, file: &str, start: Pos) -> Result<Vec<Token>, AfError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let chars: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
-    let (mut i, mut line, mut col) = (0usize, 1u32, 1u32);
+    let (mut i, mut line, mut col) = (0usize, start.line, start.col);
     let err = |pos: Pos, message: String| AfError::at(file, pos, message);
     // Advances over one character, keeping line and column.
     macro_rules! bump {
@@ -192,7 +203,25 @@ pub fn tokenize(text: &str, file: &str) -> Result<Vec<Token>, AfError> {
                     }
                     Some('"') => {
                         bump!();
-                        break;
+                        // `"a" \ "b"` is one string "ab" (idLexer's backslash string
+                        // concatenation, which .def files use for long values).
+                        let mut j = i;
+                        while chars.get(j).is_some_and(|c| c.is_whitespace()) {
+                            j += 1;
+                        }
+                        if chars.get(j) != Some(&'\\') {
+                            break;
+                        }
+                        let mut k = j + 1;
+                        while chars.get(k).is_some_and(|c| c.is_whitespace()) {
+                            k += 1;
+                        }
+                        if chars.get(k) != Some(&'"') {
+                            break;
+                        }
+                        while i <= k {
+                            bump!();
+                        }
                     }
                     Some(&ch) => {
                         s.push(ch);
@@ -233,11 +262,21 @@ pub fn tokenize(text: &str, file: &str) -> Result<Vec<Token>, AfError> {
             });
             continue;
         }
-        if c.is_alphabetic() || c == '_' || c == '*' {
+        // A name may start with `-` where a .def names joints to leave out (`-*Waist`).
+        let minus_name = c == '-'
+            && chars
+                .get(i + 1)
+                .is_some_and(|d| d.is_alphabetic() || matches!(d, '_' | '*'));
+        if c.is_alphabetic() || c == '_' || c == '*' || minus_name {
             let start = i;
-            while i < chars.len()
-                && (chars[i].is_alphanumeric() || matches!(chars[i], '_' | '*' | '.' | '-'))
-            {
+            // `/` continues a bare path unless it opens a comment.
+            let continues = |i: usize| {
+                let c = chars[i];
+                c.is_alphanumeric()
+                    || matches!(c, '_' | '*' | '.' | '-' | '\\' | ':')
+                    || (c == '/' && !matches!(chars.get(i + 1), Some('/' | '*')))
+            };
+            while i < chars.len() && continues(i) {
                 bump!();
             }
             let s: String = chars[start..i].iter().collect();
@@ -269,6 +308,29 @@ mod tests {
         assert_eq!(t[7].tok, Tok::Num(-25.0));
         assert_eq!(t[9].tok, Tok::Num(0.5));
         assert_eq!(t.last().unwrap().tok, Tok::Eof);
+    }
+
+    #[test]
+    fn bare_paths_byte_order_mark_and_offsets() {
+        let t = tokenize("\u{feff}mesh models/md5/a.md5mesh// c\nx", "f").unwrap();
+        assert_eq!(t[0].pos, Pos { line: 1, col: 1 });
+        assert_eq!(t[1].tok, Tok::Ident("models/md5/a.md5mesh".into()));
+        assert_eq!(t[2].tok, Tok::Ident("x".into()));
+        let t = tokenize("\"ab\" \\\n\t\"cd\" x", "f").unwrap();
+        assert_eq!(t[0].tok, Tok::Str("abcd".into()));
+        assert_eq!(t[1].pos, Pos { line: 2, col: 7 });
+        let t = tokenize("( *a -*b )", "f").unwrap();
+        assert_eq!(t[2].tok, Tok::Ident("-*b".into()));
+        let t = tokenize_from("a\n b", "f", Pos { line: 5, col: 7 }).unwrap();
+        assert_eq!(t[0].pos, Pos { line: 5, col: 7 });
+        assert_eq!(t[1].pos, Pos { line: 6, col: 2 });
+    }
+
+    #[test]
+    fn control_characters_are_escaped_in_messages() {
+        let e = tokenize("a \u{1}", "f").unwrap_err();
+        assert!(!e.message.chars().any(char::is_control), "{}", e.message);
+        assert!(e.message.contains("\\u{1}"), "{}", e.message);
     }
 
     #[test]

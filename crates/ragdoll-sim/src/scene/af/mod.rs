@@ -55,6 +55,23 @@ impl Default for AfOptions {
     }
 }
 
+/// Where a Doom 3 figure's skeleton comes from beyond [`AfOptions::mesh`]: which figure
+/// of the file, which animation poses it, and the mod's base folder through which
+/// `settings { model "..." }` resolves. [`super::decl::Doom3Base::character`] fills it
+/// for an entity.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FigureSource {
+    /// The `articulatedFigure` to build when the file declares several (by name,
+    /// without regard to case); `None`: all of the file's blocks.
+    pub figure: Option<String>,
+    /// The `.md5anim` whose first frame poses the mesh (Doom 3's `anim af_pose`); `None`:
+    /// the mesh's bind pose.
+    pub pose_anim: Option<PathBuf>,
+    /// A Doom 3 base folder: a settings `model` then names a model declaration (its
+    /// mesh and `af_pose`) or a path relative to this folder, as the engine reads it.
+    pub base: Option<PathBuf>,
+}
+
 /// A key the reader understood but does not use, with why.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Ignored {
@@ -75,6 +92,10 @@ pub struct AfScene {
     pub desc: SceneDesc,
     /// Keys that were read but have no effect.
     pub ignored: Vec<Ignored>,
+    /// How the bodies drive the mesh's skeleton (joints in our units and axes, body
+    /// poses as the description's shape frames), when the figure was built on a mesh
+    /// and placed as one copy where the file put it.
+    pub rig: Option<crate::scene::rig::Rig>,
 }
 
 /// The first mistake in a file: where, and what was expected.
@@ -91,14 +112,29 @@ pub struct AfError {
 }
 
 impl AfError {
+    /// An error at `pos` of `file`. Control characters in the message (a stray byte
+    /// quoted from the file, a newline) are escaped so the error stays one visible line.
     pub(crate) fn at(file: &str, pos: lexer::Pos, message: String) -> AfError {
         AfError {
             file: file.to_string(),
             line: pos.line,
             col: pos.col,
-            message,
+            message: escape_controls(&message),
         }
     }
+}
+
+/// `s` with every control character written as Rust escapes it (`\n`, `\u{1}`).
+pub(crate) fn escape_controls(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_debug().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 impl fmt::Display for AfError {
@@ -115,19 +151,33 @@ impl std::error::Error for AfError {}
 
 /// Reads `.af` text. `file` names it in messages and anchors a relative `mesh` path.
 pub fn parse(text: &str, file: &Path, opts: &AfOptions) -> Result<AfScene, AfError> {
+    parse_figure(text, file, opts, &FigureSource::default())
+}
+
+/// Reads `.af` text with the skeleton from `source`.
+pub fn parse_figure(
+    text: &str,
+    file: &Path,
+    opts: &AfOptions,
+    source: &FigureSource,
+) -> Result<AfScene, AfError> {
     let name = file.display().to_string();
     let tokens = lexer::tokenize(text, &name)?;
     let blocks = parser::parse(&tokens, &name)?;
-    build::build(blocks, file, opts)
+    build::build(blocks, file, opts, source)
+}
+
+/// Reads an `.af` file from disk with the skeleton from `source`.
+pub fn load_figure(
+    path: &Path,
+    opts: &AfOptions,
+    source: &FigureSource,
+) -> Result<AfScene, AfError> {
+    let text = crate::scene::md5mesh::read_text(path, "file")?;
+    parse_figure(&text, path, opts, source)
 }
 
 /// Reads an `.af` file from disk.
 pub fn load(path: &Path, opts: &AfOptions) -> Result<AfScene, AfError> {
-    let text = std::fs::read_to_string(path).map_err(|e| AfError {
-        file: path.display().to_string(),
-        line: 1,
-        col: 1,
-        message: format!("cannot read the file: {e}"),
-    })?;
-    parse(&text, path, opts)
+    load_figure(path, opts, &FigureSource::default())
 }
