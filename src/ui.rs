@@ -980,6 +980,7 @@ fn menu(ctx: &egui::Context, at: Pos2, model: &mut UiModel) {
                 let other_name = match other {
                     ParticleSolverArg::Paper => "paper",
                     ParticleSolverArg::RigidFrames => "rigid frames",
+                    ParticleSolverArg::Xpbd => "xpbd",
                 };
                 item(
                     ui,
