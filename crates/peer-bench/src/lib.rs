@@ -9,4 +9,8 @@
 //! ```text
 //! cargo bench -p peer-bench --bench pile                 # 1, 10, 100, 270, 1000 humans
 //! cargo bench -p peer-bench --bench pile -- 100 --frames 300
+//! cargo bench -p peer-bench --bench pile -- 100 1000 --no-sleep --frames 180
+//! cargo bench -p peer-bench --bench rain                 # humans dropped at a steady rate
 //! ```
+//!
+//! `benches/rain.rs` does the same for the rain (`ragdoll_lab::bench::rain`).
