@@ -42,6 +42,8 @@ pub struct Session {
     pub samples: [Sample; 2],
     /// (simulated time, energy) per method.
     pub energy: [Vec<[f64; 2]>; 2],
+    /// Each side's skeleton as its bodies drive it (empty without a skinned mesh).
+    pub joint_poses: [Vec<Pose>; 2],
     grab: Option<GrabDrag>,
     shots: u32,
 }
@@ -70,6 +72,7 @@ impl Session {
             step_ms: [0.0; 2],
             samples: [Sample::default(); 2],
             energy: [Vec::new(), Vec::new()],
+            joint_poses: [Vec::new(), Vec::new()],
             grab: None,
             shots: 0,
         };
@@ -126,6 +129,16 @@ impl Session {
     pub fn refresh(&mut self) {
         for (m, snap) in self.methods.iter().zip(&mut self.snapshots) {
             m.snapshot(snap);
+        }
+        if let Some(skin) = &self.loaded.skin {
+            let n = self.loaded.desc.bodies.len();
+            for (snap, joints) in self.snapshots.iter().zip(&mut self.joint_poses) {
+                let mut bodies = vec![Pose::IDENTITY; n];
+                for b in snap.bodies.iter().filter(|b| (b.body.0 as usize) < n) {
+                    bodies[b.body.0 as usize] = b.pose;
+                }
+                *joints = skin.joint_poses(&bodies);
+            }
         }
     }
 
