@@ -120,6 +120,12 @@ impl Compositor {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
+        self.scene.set_skin(
+            device,
+            queue,
+            session.loaded.skin.as_ref(),
+            [&session.joint_poses[0], &session.joint_poses[1]],
+        );
         self.scene
             .render(device, queue, &mut encoder, target, size, &frame);
 

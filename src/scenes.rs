@@ -6,10 +6,13 @@
 
 use crate::AppError;
 use crate::cli::SceneArgs;
+use crate::render::skin::SkinModel;
 use ragdoll_sim::SceneDesc;
 use ragdoll_sim::scene::af::{self, AfOptions, AfScene, FigureSource};
 use ragdoll_sim::scene::decl::{Doom3Base, Doom3Character};
+use ragdoll_sim::scene::md5mesh;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A scene loaded for a run.
 #[derive(Clone, Debug)]
@@ -20,6 +23,8 @@ pub struct LoadedScene {
     pub path: Option<PathBuf>,
     /// Keys the reader read but ignored, for `check` and the log.
     pub ignored: Vec<String>,
+    /// The figure's skinned mesh and how its bodies drive it, when it has one.
+    pub skin: Option<Arc<SkinModel>>,
 }
 
 /// One scene of the built-in table, shipped as a file and embedded in the binary.
@@ -91,7 +96,12 @@ pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
     };
     if let (Some(base), Some(entity)) = (&args.doom3, &args.entity) {
         let (scene, c) = load_entity(base, entity, &opts)?;
-        return Ok(loaded(scene, Some(c.af_file)));
+        let mesh = opts.mesh.clone().or(c.mesh);
+        return with_skin(
+            loaded(scene.clone(), Some(c.af_file)),
+            &scene,
+            mesh.as_deref(),
+        );
     }
     if let Some(path) = &args.af {
         let source = FigureSource {
@@ -100,7 +110,11 @@ pub fn load(args: &SceneArgs) -> Result<LoadedScene, AppError> {
         };
         let scene =
             af::load_figure(path, &opts, &source).map_err(|e| AppError::Scene(e.to_string()))?;
-        return Ok(loaded(scene, Some(path.clone())));
+        return with_skin(
+            loaded(scene.clone(), Some(path.clone())),
+            &scene,
+            opts.mesh.as_deref(),
+        );
     }
     let key = args.scene.as_deref().unwrap_or("8");
     let builtin = find_builtin(key).ok_or_else(|| {
@@ -150,6 +164,22 @@ pub fn load_builtin(scene: &BuiltinScene, opts: &AfOptions) -> Result<LoadedScen
     Ok(loaded(parsed, Some(scene.asset_path())))
 }
 
+/// Adds the skinned mesh to a figure read with a rig from the mesh file `mesh`.
+fn with_skin(
+    mut out: LoadedScene,
+    scene: &AfScene,
+    mesh: Option<&Path>,
+) -> Result<LoadedScene, AppError> {
+    if let (Some(rig), Some(path)) = (&scene.rig, mesh) {
+        let mesh = md5mesh::load(path).map_err(|e| AppError::Scene(e.to_string()))?;
+        out.skin = Some(Arc::new(SkinModel {
+            rig: rig.clone(),
+            mesh,
+        }));
+    }
+    Ok(out)
+}
+
 fn loaded(scene: AfScene, path: Option<PathBuf>) -> LoadedScene {
     let ignored = scene
         .ignored
@@ -160,5 +190,6 @@ fn loaded(scene: AfScene, path: Option<PathBuf>) -> LoadedScene {
         desc: scene.desc,
         path,
         ignored,
+        skin: None,
     }
 }

@@ -120,7 +120,8 @@ pub struct Session {
     pub history: [Vec<HistoryPoint>; 2],
     /// Worst values per method since the start.
     pub worst: [Worst; 2],
-
+    /// Each side's skeleton as its bodies drive it (empty without a skinned mesh).
+    pub joint_poses: [Vec<Pose>; 2],
     grab: Option<GrabDrag>,
     shots: u32,
 }
@@ -169,7 +170,7 @@ impl Session {
             samples: [Sample::default(); 2],
             history: [Vec::new(), Vec::new()],
             worst: [Worst::default(); 2],
-
+            joint_poses: [Vec::new(), Vec::new()],
             grab: None,
             shots: 0,
         };
@@ -232,6 +233,16 @@ impl Session {
     pub fn refresh(&mut self) {
         for (m, snap) in self.methods.iter().zip(&mut self.snapshots) {
             m.snapshot(snap);
+        }
+        if let Some(skin) = &self.loaded.skin {
+            let n = self.loaded.desc.bodies.len();
+            for (snap, joints) in self.snapshots.iter().zip(&mut self.joint_poses) {
+                let mut bodies = vec![Pose::IDENTITY; n];
+                for b in snap.bodies.iter().filter(|b| (b.body.0 as usize) < n) {
+                    bodies[b.body.0 as usize] = b.pose;
+                }
+                *joints = skin.joint_poses(&bodies);
+            }
         }
     }
 

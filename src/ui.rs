@@ -566,6 +566,8 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
                 toggled |= ui.checkbox(&mut show.contacts, "contacts").changed();
                 toggled |= ui.checkbox(&mut show.limits, "limits").changed();
                 toggled |= ui.checkbox(&mut show.names, "names").changed();
+                toggled |= ui.checkbox(&mut show.bodies, "bodies").changed();
+                toggled |= ui.checkbox(&mut show.mesh, "mesh").changed();
             });
             if toggled {
                 actions.push(Action::Show(show));

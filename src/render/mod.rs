@@ -8,6 +8,7 @@ pub mod camera;
 pub mod gpu;
 pub mod mesh;
 pub mod palette;
+pub mod skin;
 
 use bytemuck::{Pod, Zeroable};
 use camera::OrbitCamera;
@@ -102,6 +103,10 @@ pub struct ShowOptions {
     pub limits: bool,
     /// Body names (drawn by the overlay, not here).
     pub names: bool,
+    /// The bodies' collision shapes.
+    pub bodies: bool,
+    /// The skinned mesh, when the figure has one.
+    pub mesh: bool,
 }
 
 impl Default for ShowOptions {
@@ -112,6 +117,8 @@ impl Default for ShowOptions {
             contacts: false,
             limits: false,
             names: false,
+            bodies: true,
+            mesh: true,
         }
     }
 }
@@ -261,6 +268,9 @@ pub struct Renderer {
     draws: Vec<SideDraws>,
     targets: Option<(u32, u32, Option<wgpu::TextureView>, wgpu::TextureView)>,
     format: wgpu::TextureFormat,
+    skin: skin::SkinRenderer,
+    show_bodies: bool,
+    show_mesh: bool,
 }
 
 impl Renderer {
@@ -492,7 +502,24 @@ impl Renderer {
             draws: Vec::new(),
             targets: None,
             format,
+            skin: skin::SkinRenderer::new(device, format, samples, &camera_layout),
+            show_bodies: true,
+            show_mesh: true,
         }
+    }
+
+    /// Sets the skinned mesh to draw (uploaded once per model) and each side's joint
+    /// poses; `None` draws none.
+    pub fn set_skin(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        model: Option<&Arc<skin::SkinModel>>,
+        poses: [&[ragdoll_sim::scene::Pose]; 2],
+    ) {
+        let tint = |kind| palette::body(kind, ragdoll_sim::snapshot::BodyRole::Dynamic, 0);
+        let colors = [tint(MethodKind::Particle), tint(MethodKind::Multibody)];
+        self.skin.update(device, queue, model, poses, colors);
     }
 
     /// MSAA sample count of the 3D pass.
@@ -597,6 +624,9 @@ impl Renderer {
         let mut instances: Vec<Instance> = Vec::new();
         let mut lines: Vec<LineVertex> = Vec::new();
         self.draws.clear();
+        self.show_mesh = frame.show.mesh;
+        // Without a mesh to show, the bodies are shown whatever the toggle says.
+        self.show_bodies = frame.show.bodies || !(self.show_mesh && self.skin.has_model());
         let ground = frame.ground;
         let light = LIGHT_DIR.normalize();
         let (normal, offset) = match ground {
@@ -733,9 +763,14 @@ impl Renderer {
                 pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
                 self.draw_meshes(pass, &side.bodies);
             }
-            pass.set_pipeline(&self.mesh_pipeline);
-            pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
-            self.draw_meshes(pass, &side.bodies);
+            if self.show_bodies {
+                pass.set_pipeline(&self.mesh_pipeline);
+                pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
+                self.draw_meshes(pass, &side.bodies);
+            }
+            if self.show_mesh {
+                self.skin.draw(pass, i);
+            }
             if !side.lines.is_empty() {
                 pass.set_pipeline(&self.line_pipeline);
                 pass.set_vertex_buffer(0, self.lines.buffer.slice(..));

@@ -115,6 +115,17 @@ impl ModelDecl {
     }
 }
 
+/// The files a model key names.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct ModelFiles {
+    /// The model declaration, when the key names one (else it is a path).
+    pub decl: Option<ModelDecl>,
+    /// The mesh file.
+    pub mesh: Option<PathBuf>,
+    /// The `af_pose` animation file, when the declaration has one.
+    pub af_pose: Option<PathBuf>,
+}
+
 /// What an entity needs to become a ragdoll: the resolved declarations and files.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Doom3Character {
@@ -512,11 +523,7 @@ impl Doom3Base {
     }
 
     /// A model key's value as Doom 3 reads it: a model declaration, else a path.
-    /// Returns the mesh file and the `af_pose` anim file.
-    pub fn model_files(
-        &self,
-        model: &str,
-    ) -> Result<(Option<ModelDecl>, Option<PathBuf>, Option<PathBuf>), AfError> {
+    pub fn model_files(&self, model: &str) -> Result<ModelFiles, AfError> {
         if self.find("model", model).is_some() {
             let m = self.model(model)?;
             let mesh = match &m.mesh {
@@ -529,9 +536,17 @@ impl Doom3Base {
                 }
                 None => None,
             };
-            Ok((Some(m), mesh, pose))
+            Ok(ModelFiles {
+                decl: Some(m),
+                mesh,
+                af_pose: pose,
+            })
         } else {
-            Ok((None, Some(self.file(model, "the model")?), None))
+            Ok(ModelFiles {
+                decl: None,
+                mesh: Some(self.file(model, "the model")?),
+                af_pose: None,
+            })
         }
     }
 
@@ -555,9 +570,13 @@ impl Doom3Base {
             message: format!("entityDef \"{}\" names no figure: it has neither `ragdoll` nor `articulatedFigure`", entity.name),
         })?;
         let (af_file, figure) = self.figure(figure_key)?;
-        let (model, mesh, af_pose) = match entity.get("model") {
+        let ModelFiles {
+            decl: model,
+            mesh,
+            af_pose,
+        } = match entity.get("model") {
             Some(m) if !m.is_empty() => self.model_files(m)?,
-            _ => (None, None, None),
+            _ => ModelFiles::default(),
         };
         let mut anims = Vec::new();
         if let Some(m) = &model {

@@ -75,6 +75,11 @@ pub struct Rig {
     pub origin: Option<(usize, Pose)>,
     /// The joints' world poses at load.
     pub rest: Vec<Pose>,
+    /// How a vector in a joint's frame in the skeleton file (a mesh weight's offset)
+    /// becomes ours: rotated by `file_axes`, scaled by `file_scale`.
+    pub file_axes: Quat,
+    /// Metres per file unit.
+    pub file_scale: f32,
 }
 
 /// `a · b` for rigid transforms (apply b, then a).
@@ -129,6 +134,8 @@ impl Rig {
             joints: out,
             origin: origin_body.map(|b| (b, body_rest[b])),
             rest,
+            file_axes: Quat::IDENTITY,
+            file_scale: 1.0,
         }
     }
 

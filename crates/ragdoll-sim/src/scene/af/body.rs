@@ -27,7 +27,7 @@ pub(super) fn read_body(ctx: &mut Ctx, b: &Block, name: &str, d: &Defaults) -> R
     for e in &b.entries {
         match e.key.to_ascii_lowercase().as_str() {
             "joint" => body.skeleton_joint = Some(ctx.string(&e.values[0], "`joint`")?.to_string()),
-            "mod" => ctx.ignore(e, "read into the figure's rig (the joint poses the bodies give the mesh); the window does not draw the skinned mesh yet"),
+            "mod" => ctx.ignore(e, "no effect on the simulation: it only sets how the body moves its joint of the skinned mesh, drawn when the figure comes with its mesh's triangles (--doom3 with --entity, or --mesh)"),
             "model" => {
                 ctx.arity(e, 1..=1, "one collision model")?;
                 model = Some(&e.values[0]);

@@ -281,7 +281,10 @@ fn figure_rig(ctx: &Ctx, skel: &Md5Skeleton, merged: &[Block], desc: &SceneDesc)
         drivers.push((i, j, mode));
     }
     let rest: Vec<Pose> = desc.bodies.iter().map(|b| b.pose).collect();
-    Ok(Rig::new(&joints, &drivers, &rest, origin_body))
+    let mut rig = Rig::new(&joints, &drivers, &rest, origin_body);
+    rig.file_axes = axes;
+    rig.file_scale = ctx.conv.scale;
+    Ok(rig)
 }
 
 /// Keeps only the `articulatedFigure` that `source` names, when it names one.

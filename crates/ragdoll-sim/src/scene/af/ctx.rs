@@ -178,9 +178,10 @@ impl Ctx<'_> {
             (None, Some((key, pos)), Some(root)) => {
                 // Through the mod's declarations, as Doom 3 reads a model key.
                 let base = Doom3Base::open(root)?;
-                let (_, mesh, pose) = base
+                let files = base
                     .model_files(key)
                     .map_err(|e| self.err(*pos, e.message))?;
+                let (mesh, pose) = (files.mesh, files.af_pose);
                 if pose_anim.is_none() {
                     pose_anim = pose;
                 }
