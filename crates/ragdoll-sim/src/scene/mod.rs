@@ -16,6 +16,7 @@ pub mod desc;
 pub mod mass;
 pub mod md5anim;
 pub mod md5mesh;
+mod pyramid;
 pub mod rig;
 mod transform;
 mod validate;
@@ -23,6 +24,7 @@ mod validate;
 pub use collider::{BodyCollider, Collider};
 pub use desc::*;
 pub use mass::{MassProps, collider, mass_props, scene_mass_props};
+pub use pyramid::pyramid_sides;
 pub use validate::validate;
 
 use thiserror::Error;
