@@ -48,8 +48,8 @@ pub(crate) struct Bone {
     /// dturn`): every turn of the frame is also made here. Kept apart for the same
     /// reason as `dcom`: read from `prev_rot⁻¹ rot`, the turn carries the rounding of
     /// the frame (an ulp, 6e-8), an angular velocity error of `ulp / h` a substep that
-    /// adds up as a random walk (at 1000 substeps a frame the capsule human gained
-    /// half its energy scale); near the identity the turn keeps its relative precision.
+    /// adds up as a random walk (the spider at 1/1000 s and 200 substeps gained a third
+    /// of its energy scale); near the identity the turn keeps its relative precision.
     pub dturn: Quat,
     /// The shape frame expressed in the bone frame.
     pub shape_in_bone: Pose,
