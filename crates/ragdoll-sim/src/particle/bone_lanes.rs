@@ -38,6 +38,8 @@ pub(super) struct SideLanes {
     dcom: Vec3x4,
     /// The frame now.
     pub rot: Quatx4,
+    /// The turn since the substep's start (`Bone::dturn`).
+    dturn: Quatx4,
     inv_mass: f32x4,
     inv_inertia: Vec3x4,
     /// Lanes whose bone takes corrections.
@@ -50,6 +52,7 @@ impl SideLanes {
         let mut com = [Vec3::ZERO; LANES];
         let mut dcom = [Vec3::ZERO; LANES];
         let mut rot = [Quat::IDENTITY; LANES];
+        let mut dturn = [Quat::IDENTITY; LANES];
         let mut inv_mass = [0.0; LANES];
         let mut inv_inertia = [Vec3::ZERO; LANES];
         let mut moving = [false; LANES];
@@ -58,6 +61,7 @@ impl SideLanes {
             let b = &bones[i];
             (com[k], dcom[k]) = (b.com.into(), b.dcom.into());
             rot[k] = b.rot;
+            dturn[k] = b.dturn;
             if !b.is_static() {
                 inv_mass[k] = 1.0 / b.mass;
                 inv_inertia[k] = b.inv_inertia_local.into();
@@ -68,6 +72,7 @@ impl SideLanes {
             com: Vec3x4::from_fn(|k| com[k]),
             dcom: Vec3x4::from_fn(|k| dcom[k]),
             rot: Quatx4::from_fn(|k| rot[k]),
+            dturn: Quatx4::from_fn(|k| dturn[k]),
             inv_mass: f32x4::new(inv_mass),
             inv_inertia: Vec3x4::from_fn(|k| inv_inertia[k]),
             moving: mask(|k| moving[k]),
@@ -84,6 +89,7 @@ impl SideLanes {
                 let b = &mut bones[i];
                 b.dcom = self.dcom.lane(k).into();
                 b.rot = self.rot.lane(k);
+                b.dturn = self.dturn.lane(k);
             }
         }
     }
@@ -116,6 +122,7 @@ impl SideLanes {
             self.dcom = Vec3x4::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
         }
         self.rot = Quatx4::select(mask, self.rot.rotate_local(turn), self.rot);
+        self.dturn = Quatx4::select(mask, self.dturn.rotate_local(turn), self.dturn);
     }
 }
 

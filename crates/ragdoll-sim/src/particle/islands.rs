@@ -387,6 +387,7 @@ pub(super) fn run_substeps(
         .filter(|b| b.is_static())
         .for_each(|b| {
             b.prev_rot = b.rot;
+            b.dturn = glam::Quat::IDENTITY;
             b.dcom = Vec3A::ZERO;
             b.lin_vel = Vec3A::ZERO;
             b.ang_vel = Vec3A::ZERO;

@@ -312,8 +312,9 @@ impl Joint {
         let spin = |s: Option<usize>| s.map_or(Vec3A::ZERO, |i| bones[i].ang_vel);
         let (wa, wb) = (inv_inertia(a), inv_inertia(b));
         let k = wa + wb;
+        // Both sides static (or a NaN): nothing to hold.
         let det = k.determinant();
-        if !(det.abs() > 1e-30) {
+        if det.is_nan() || det.abs() <= 1e-30 {
             return;
         }
         let mut impulse = -(k.inverse() * (spin(a) - spin(b)));

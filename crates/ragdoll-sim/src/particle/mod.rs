@@ -191,6 +191,7 @@ impl ParticleWorld {
             dcom: Vec3A::ZERO,
             rot: desc.pose.rotation,
             prev_rot: desc.pose.rotation,
+            dturn: Quat::IDENTITY,
             shape_in_bone: Pose::IDENTITY,
             shape: BodyCollider::new(desc)
                 .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),

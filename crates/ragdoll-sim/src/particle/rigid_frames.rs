@@ -35,7 +35,7 @@ use super::{ParticleWorld, islands, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
-use glam::{Vec3, Vec3A};
+use glam::{Quat, Vec3, Vec3A};
 use parry3d::bounding_volume::Aabb;
 use parry3d::query::ContactManifold;
 use rayon::prelude::*;
@@ -381,6 +381,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // and shape-match each moving bone to its rigid frame, in closed form.
         for b in p.bones.iter_mut() {
             b.prev_rot = b.rot;
+            b.dturn = Quat::IDENTITY;
             b.dcom = Vec3A::ZERO;
             if !b.is_static() {
                 b.advance(h, s.gravity);
