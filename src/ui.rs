@@ -345,7 +345,56 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
             (font, Color32::from_rgba_unmultiplied(150, 20, 20, 230)),
         );
     }
+    lost_bodies(&painter, &vps, model);
     names(&painter, &vps, model);
+}
+
+/// A half whose dynamic bodies all left its view (the paper solver's human sliding
+/// away) says how to find them again.
+fn lost_bodies(painter: &Painter, vps: &[Viewport; 2], model: &mut UiModel) {
+    let (state, session) = (model.state, model.session);
+    let ppp = model.pixels_per_point;
+    for (side, (vp, snap)) in vps.iter().zip(&session.snapshots).enumerate() {
+        let moving = snap
+            .bodies
+            .iter()
+            .filter(|b| b.role != ragdoll_sim::snapshot::BodyRole::Fixed);
+        let mut any = false;
+        let mut seen = false;
+        for b in moving {
+            any = true;
+            seen |= vp
+                .project(&state.camera, b.pose.position)
+                .is_some_and(|p| vp.contains(p));
+        }
+        if vp.width < 1.0 || !any || seen {
+            continue;
+        }
+        let bounds = Rect::from_min_size(
+            Pos2::new(vp.x, vp.y) / ppp,
+            Vec2::new(vp.width, vp.height) / ppp,
+        );
+        let font = label_font(bounds.height());
+        let galley = text(
+            painter,
+            "the bodies left this view: F follows them (F again stops)".into(),
+            font,
+            bounds.width() - 30.0,
+            3,
+        );
+        let pos = Pos2::new(
+            bounds.min.x + 10.0,
+            bounds.center().y - galley.size().y * 0.5,
+        );
+        plate(
+            painter,
+            model.layout,
+            (&format!("lost {side}"), bounds, 3),
+            pos,
+            galley,
+            (font, Color32::from_black_alpha(180)),
+        );
+    }
 }
 
 /// Body names: with "names" on, every body's that does not overlap one already placed
