@@ -457,7 +457,8 @@ impl App {
                 picking::follow(&mut self.state.camera, centre, radius, dt as f32);
             }
         }
-        self.session.highlight(self.state.selected);
+        self.session
+            .highlight(self.state.selected, self.state.show.limits);
 
         let Some(w) = self.window.as_mut() else {
             return;
