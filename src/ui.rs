@@ -142,6 +142,12 @@ pub fn viewports(area: Rect, pixels_per_point: f32, layout: ViewLayout) -> [View
     }
 }
 
+/// Whether to say the time scale falls short: not while everything sleeps, when no
+/// frames are drawn and the last measurement is stale.
+fn falls_short(state: &AppState, session: &Session) -> bool {
+    state.falls_short() && !session.samples.iter().all(|s| s.all_asleep)
+}
+
 /// A galley of at most `max_rows` rows of `max_width`, cut with "…" beyond; one-row texts
 /// may break anywhere (to elide), longer ones only between words.
 fn text(painter: &Painter, s: String, font: f32, max_width: f32, max_rows: usize) -> Arc<Galley> {
@@ -274,7 +280,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
     let wide = area.width() - 30.0;
     let galley = text(&painter, clock, font, wide, 2);
     let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
-    let fill = if state.falls_short() {
+    let fill = if falls_short(state, session) {
         Color32::from_rgba_unmultiplied(120, 80, 0, 220)
     } else {
         plate_fill
@@ -287,7 +293,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
         galley,
         (font, fill),
     );
-    if state.falls_short() {
+    if falls_short(state, session) {
         let why = text(
             &painter,
             format!(
@@ -556,7 +562,7 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
             actions.push(Action::Slower);
         }
         let asked = format!("time ×{}", state.time_scale());
-        if state.falls_short() {
+        if falls_short(state, session) {
             ui.colored_label(
                 AMBER,
                 format!("{asked}, reached ×{:.2}", state.rate.reached_scale),
