@@ -262,13 +262,14 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
         if state.running { "running" } else { "stopped" },
         state.time_scale()
     );
-    if state.running && rate.reached_scale > 0.0 {
+    let asleep = session.samples.iter().all(|s| s.all_asleep);
+    if state.running && rate.reached_scale > 0.0 && !asleep {
         clock += &format!(" (reached ×{:.2})", rate.reached_scale);
     }
     if rate.frame_ms > 0.0 {
         clock += &format!(" · {:.0} fps, {:.1} ms", rate.fps(), rate.frame_ms);
     }
-    if session.samples.iter().all(|s| s.all_asleep) {
+    if asleep {
         clock += " · all asleep";
     }
     if state.follow {
