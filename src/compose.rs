@@ -114,7 +114,12 @@ impl Compositor {
             camera: &state.camera,
             ground: session.settings().ground,
             sides: &sides,
-            show: state.show,
+            // A selected body shows its own joints' limits (the session kept only those)
+            // even with the limits overlay off.
+            show: crate::render::ShowOptions {
+                limits: state.show.limits || state.selected.is_some(),
+                ..state.show
+            },
         };
 
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {

@@ -246,14 +246,22 @@ impl Session {
         }
     }
 
-    /// Shows `body` as selected (lighter, as a grabbed body) in both snapshots.
-    pub fn highlight(&mut self, body: Option<BodyId>) {
+    /// Shows `body` as selected (lighter, as a grabbed body) in both snapshots. Unless
+    /// every joint's limits are shown (`all_limits`), only the joints at the selected
+    /// body are kept for drawing: those whose anchor lies within its bounding radius.
+    pub fn highlight(&mut self, body: Option<BodyId>, all_limits: bool) {
         let Some(body) = body else { return };
         for snap in &mut self.snapshots {
+            let mut reach = None;
             for b in snap.bodies.iter_mut().filter(|b| b.body == body) {
                 if b.role != BodyRole::Fixed {
                     b.role = BodyRole::Grabbed;
                 }
+                reach = Some((b.pose.position, b.shape.local_half_extents().length() * 1.2));
+            }
+            if !all_limits {
+                snap.joints
+                    .retain(|j| reach.is_some_and(|(centre, r)| j.anchor.distance(centre) <= r));
             }
         }
     }

@@ -142,6 +142,12 @@ pub fn viewports(area: Rect, pixels_per_point: f32, layout: ViewLayout) -> [View
     }
 }
 
+/// Whether to say the time scale falls short: not while everything sleeps, when no
+/// frames are drawn and the last measurement is stale.
+fn falls_short(state: &AppState, session: &Session) -> bool {
+    state.falls_short() && !session.samples.iter().all(|s| s.all_asleep)
+}
+
 /// A galley of at most `max_rows` rows of `max_width`, cut with "…" beyond; one-row texts
 /// may break anywhere (to elide), longer ones only between words.
 fn text(painter: &Painter, s: String, font: f32, max_width: f32, max_rows: usize) -> Arc<Galley> {
@@ -256,13 +262,14 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
         if state.running { "running" } else { "stopped" },
         state.time_scale()
     );
-    if state.running && rate.reached_scale > 0.0 {
+    let asleep = session.samples.iter().all(|s| s.all_asleep);
+    if state.running && rate.reached_scale > 0.0 && !asleep {
         clock += &format!(" (reached ×{:.2})", rate.reached_scale);
     }
     if rate.frame_ms > 0.0 {
         clock += &format!(" · {:.0} fps, {:.1} ms", rate.fps(), rate.frame_ms);
     }
-    if session.samples.iter().all(|s| s.all_asleep) {
+    if asleep {
         clock += " · all asleep";
     }
     if state.follow {
@@ -274,7 +281,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
     let wide = area.width() - 30.0;
     let galley = text(&painter, clock, font, wide, 2);
     let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
-    let fill = if state.falls_short() {
+    let fill = if falls_short(state, session) {
         Color32::from_rgba_unmultiplied(120, 80, 0, 220)
     } else {
         plate_fill
@@ -287,7 +294,7 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
         galley,
         (font, fill),
     );
-    if state.falls_short() {
+    if falls_short(state, session) {
         let why = text(
             &painter,
             format!(
@@ -345,7 +352,56 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
             (font, Color32::from_rgba_unmultiplied(150, 20, 20, 230)),
         );
     }
+    lost_bodies(&painter, &vps, model);
     names(&painter, &vps, model);
+}
+
+/// A half whose dynamic bodies all left its view (the paper solver's human sliding
+/// away) says how to find them again.
+fn lost_bodies(painter: &Painter, vps: &[Viewport; 2], model: &mut UiModel) {
+    let (state, session) = (model.state, model.session);
+    let ppp = model.pixels_per_point;
+    for (side, (vp, snap)) in vps.iter().zip(&session.snapshots).enumerate() {
+        let moving = snap
+            .bodies
+            .iter()
+            .filter(|b| b.role != ragdoll_sim::snapshot::BodyRole::Fixed);
+        let mut any = false;
+        let mut seen = false;
+        for b in moving {
+            any = true;
+            seen |= vp
+                .project(&state.camera, b.pose.position)
+                .is_some_and(|p| vp.contains(p));
+        }
+        if vp.width < 1.0 || !any || seen {
+            continue;
+        }
+        let bounds = Rect::from_min_size(
+            Pos2::new(vp.x, vp.y) / ppp,
+            Vec2::new(vp.width, vp.height) / ppp,
+        );
+        let font = label_font(bounds.height());
+        let galley = text(
+            painter,
+            "the bodies left this view: F follows them (F again stops)".into(),
+            font,
+            bounds.width() - 30.0,
+            3,
+        );
+        let pos = Pos2::new(
+            bounds.min.x + 10.0,
+            bounds.center().y - galley.size().y * 0.5,
+        );
+        plate(
+            painter,
+            model.layout,
+            (&format!("lost {side}"), bounds, 3),
+            pos,
+            galley,
+            (font, Color32::from_black_alpha(180)),
+        );
+    }
 }
 
 /// Body names: with "names" on, every body's that does not overlap one already placed
@@ -507,7 +563,7 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
             actions.push(Action::Slower);
         }
         let asked = format!("time ×{}", state.time_scale());
-        if state.falls_short() {
+        if falls_short(state, session) {
             ui.colored_label(
                 AMBER,
                 format!("{asked}, reached ×{:.2}", state.rate.reached_scale),

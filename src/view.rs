@@ -70,6 +70,7 @@ pub fn run(args: ViewArgs) -> Result<(), AppError> {
         record_dir: None,
         recorded: 0,
         offscreen: None,
+        polled: Instant::now(),
     };
     app.watched = app.session.loaded.path.as_deref().and_then(modified);
     event_loop
@@ -118,6 +119,8 @@ struct App {
     recorded: u32,
     /// Where screenshots are rendered when the surface cannot be read back.
     offscreen: Option<crate::capture::Offscreen>,
+    /// When the scene file's modification time was last read.
+    polled: Instant,
 }
 
 /// Width / height of one half at the window's first size (1280×720 with the panel), for
@@ -457,7 +460,8 @@ impl App {
                 picking::follow(&mut self.state.camera, centre, radius, dt as f32);
             }
         }
-        self.session.highlight(self.state.selected);
+        self.session
+            .highlight(self.state.selected, self.state.show.limits);
 
         let Some(w) = self.window.as_mut() else {
             return;
@@ -742,7 +746,8 @@ impl ApplicationHandler for App {
     /// changed. Frames are asked for only while something changes ([`App::busy`]), so a
     /// paused or sleeping scene costs next to no CPU.
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        if !self.hidden {
+        if !self.hidden && self.polled.elapsed().as_secs_f64() >= WATCH_SECONDS {
+            self.polled = Instant::now();
             self.poll_file();
         }
         event_loop.set_control_flow(ControlFlow::WaitUntil(
