@@ -17,6 +17,7 @@
 
 mod batches;
 pub mod broadphase;
+mod error;
 mod lanes;
 pub mod method;
 pub mod metrics;
@@ -25,6 +26,7 @@ pub mod rigid;
 pub mod scene;
 pub mod snapshot;
 
+pub use error::Error;
 pub use glam;
 pub use method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 pub use scene::SceneDesc;
