@@ -25,9 +25,11 @@ pub mod particle;
 pub mod rigid;
 pub mod scene;
 pub mod snapshot;
+mod world;
 
 pub use error::Error;
 pub use glam;
 pub use method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 pub use scene::SceneDesc;
 pub use snapshot::RenderSnapshot;
+pub use world::{JointAngles, JointId, Solver, World};
