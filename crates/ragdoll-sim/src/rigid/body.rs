@@ -96,11 +96,6 @@ impl BodyStates {
         self.com.len()
     }
 
-    /// True when there is not even the static anchor.
-    pub fn is_empty(&self) -> bool {
-        self.com.is_empty()
-    }
-
     /// Appends one body.
     pub fn push(&mut self, com: Vec3, rot: Quat, v: Vec3, w: Vec3) {
         self.com.push(com);
@@ -180,61 +175,6 @@ impl BodyStates {
         let q = self.rot[i];
         let dq = Quat::from_xyzw(dtheta.x, dtheta.y, dtheta.z, 0.0) * q;
         self.rot[i] = (q + dq * 0.5).normalize();
-    }
-}
-
-/// One body's velocities and inverse mass and inertia, copied out of [`BodyStates`] for
-/// a run of impulses on it and written back after (Box2D v3's solver body): the same
-/// arithmetic as [`BodyStates::apply_impulse`] and [`BodyStates::point_velocity`],
-/// without a load and a store of the arrays per impulse.
-#[derive(Clone, Copy, Debug)]
-pub struct SolverBody {
-    /// Linear velocity (m/s).
-    pub v: Vec3A,
-    /// Angular velocity (rad/s).
-    pub w: Vec3A,
-    /// Inverse mass as the solver sees it (zero when static or asleep).
-    pub inv_mass: f32,
-    /// World inverse inertia as the solver sees it.
-    pub inv_inertia: Mat3A,
-}
-
-impl SolverBody {
-    /// Body `i` of `s`.
-    #[inline]
-    pub fn load(s: &BodyStates, i: usize) -> SolverBody {
-        SolverBody {
-            v: s.lin_vel[i],
-            w: s.ang_vel[i],
-            inv_mass: s.inv_mass[i],
-            inv_inertia: s.inv_inertia[i],
-        }
-    }
-
-    /// Writes the velocities back to body `i` of `s`.
-    #[inline]
-    pub fn store(&self, s: &mut BodyStates, i: usize) {
-        s.lin_vel[i] = self.v;
-        s.ang_vel[i] = self.w;
-    }
-
-    /// Velocity of the material point at world offset `r` from the centre of mass.
-    #[inline]
-    pub fn point_velocity(&self, r: Vec3A) -> Vec3A {
-        self.v + self.w.cross(r)
-    }
-
-    /// Applies the impulse `p` at offset `r`.
-    #[inline]
-    pub fn apply_impulse(&mut self, r: Vec3A, p: Vec3A) {
-        self.v += p * self.inv_mass;
-        self.w += self.inv_inertia * r.cross(p);
-    }
-
-    /// Applies the angular impulse `l`.
-    #[inline]
-    pub fn apply_angular_impulse(&mut self, l: Vec3A) {
-        self.w += self.inv_inertia * l;
     }
 }
 

@@ -261,11 +261,6 @@ impl JointSet {
             + self.spring.len()
     }
 
-    /// True without joints.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// Calls `f(a, b)` for the two bodies of every joint.
     pub fn for_each_pair(&self, mut f: impl FnMut(usize, usize)) {
         for_each_joint_ref!(self, j => { let fr = j.frame(); f(fr.a, fr.b) });
