@@ -22,27 +22,37 @@ pub enum Solver {
     /// Particle method, rigid-frames solver (position-based rigid bones).
     #[default]
     RigidFrames,
+    /// Particle method, XPBD on particles with their own state (sticks, joints and
+    /// contacts as constraints on particles).
+    Xpbd,
     /// Impulse-based multibody method.
     Multibody,
 }
 
 impl Solver {
     /// Every solver, in the order the app shows them.
-    pub const ALL: [Solver; 3] = [Solver::Paper, Solver::RigidFrames, Solver::Multibody];
+    pub const ALL: [Solver; 4] = [
+        Solver::Paper,
+        Solver::RigidFrames,
+        Solver::Xpbd,
+        Solver::Multibody,
+    ];
 
     /// Which of the two methods this solver belongs to.
     pub fn kind(self) -> MethodKind {
         match self {
-            Solver::Paper | Solver::RigidFrames => MethodKind::Particle,
+            Solver::Paper | Solver::RigidFrames | Solver::Xpbd => MethodKind::Particle,
             Solver::Multibody => MethodKind::Multibody,
         }
     }
 
-    /// Lowercase name as on the command line (`paper`, `rigid-frames`, `multibody`).
+    /// Lowercase name as on the command line (`paper`, `rigid-frames`, `xpbd`,
+    /// `multibody`).
     pub fn name(self) -> &'static str {
         match self {
             Solver::Paper => ParticleSolver::Paper.name(),
             Solver::RigidFrames => ParticleSolver::RigidFrames.name(),
+            Solver::Xpbd => ParticleSolver::Xpbd.name(),
             Solver::Multibody => MethodKind::Multibody.name(),
         }
     }
@@ -54,6 +64,7 @@ impl Solver {
             Solver::RigidFrames => {
                 Box::new(ParticleWorld::new(scene, ParticleSolver::RigidFrames)?)
             }
+            Solver::Xpbd => Box::new(ParticleWorld::new(scene, ParticleSolver::Xpbd)?),
             Solver::Multibody => Box::new(MultibodyWorld::new(scene)?),
         })
     }
