@@ -18,15 +18,16 @@ def fmt(v, f):
 
 for title, args, key in RUNS:
     print(f"\n**{title}**\n")
-    print("| scene | variant | energy gain | max penetration (m) | max joint gap (m) "
-          "| max limit violation (°) | max stretch | asleep at (s) | ms/step |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| scene | variant | energy gain | energy lost | max speed (m/s) | max penetration (m) "
+          "| max joint gap (m) | max limit violation (°) | max stretch | asleep at (s) | ms/step |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for scene, variant in SCENES:
         out = subprocess.run([BIN, "stats", "--scene", str(scene), "--variant", str(variant),
                               "--seconds", "10", *args], check=True, capture_output=True, text=True)
         d = json.loads(out.stdout)
         m = d["methods"][key]
         print(f"| {scene} {d['scene']} | {variant} | {fmt(m['energy_gain'], '{:.4f}')} "
+              f"| {fmt(m['energy_loss'], '{:.4f}')} | {fmt(m['max_body_speed_mps'], '{:.2f}')} "
               f"| {fmt(m['max_penetration_m'], '{:.4f}')} | {fmt(m['max_joint_gap_m'], '{:.4f}')} "
               f"| {fmt(m['max_limit_violation_deg'], '{:.2f}')} | {fmt(m['max_bone_stretch'], '{:.4f}')} "
               f"| {fmt(m['asleep_at_s'], '{:.2f}')} | {fmt(m['step_ms_mean'], '{:.3f}')} |"

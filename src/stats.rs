@@ -64,6 +64,8 @@ impl MethodReport {
             "particles": self.particles,
             "energy_scale_j": s.energy_scale_j,
             "energy_gain": s.energy_gain,
+            "energy_loss": s.energy_loss,
+            "max_body_speed_mps": s.max_body_speed_mps,
             "final_kinetic": s.final_kinetic,
             "max_penetration_m": s.max_penetration_m,
             "max_joint_gap_m": s.max_joint_gap_m,
@@ -185,6 +187,8 @@ pub fn measure(
     let mut particles = Vec::new();
     for (m, rec, _) in runs.iter_mut() {
         rec.record(m.time(), &m.sample());
+        m.body_states(&mut states);
+        rec.record_speeds(&states);
     }
     for _ in 0..frames {
         for (m, rec, ms) in runs.iter_mut() {
@@ -192,6 +196,8 @@ pub fn measure(
             m.step();
             *ms += t0.elapsed().as_secs_f64() * 1e3;
             rec.record(m.time(), &m.sample());
+            m.body_states(&mut states);
+            rec.record_speeds(&states);
             if let Some((w, path)) = trace_out.as_mut() {
                 writeln!(
                     w,

@@ -4,7 +4,7 @@
 //! that span time (energy gain against the running minimum, maxima, first sleep) and the
 //! energy scale, so both methods are measured by the same code.
 
-use crate::method::Sample;
+use crate::method::{BodyState, Sample};
 use crate::scene::{SceneDesc, SceneError, Settings, scene_mass_props};
 use glam::Vec3;
 
@@ -55,6 +55,14 @@ pub struct MethodStats {
     pub energy_scale_j: f64,
     /// Largest rise of E above its running minimum, over the energy scale.
     pub energy_gain: f64,
+    /// Largest fall of E below its value at the start, over the energy scale:
+    /// `max_t (E(0) − E(t)) / scale`. Meaningful where nothing dissipates (no air or
+    /// joint friction, no contact that slides or stops a fall); there it is energy the
+    /// solver took away, which `energy_gain` does not see.
+    pub energy_loss: f64,
+    /// Largest linear speed of any body's centre of mass over the run (m/s), from
+    /// [`MetricsRecorder::record_speeds`].
+    pub max_body_speed_mps: f32,
     /// Kinetic energy at the end, over the energy scale.
     pub final_kinetic: f64,
     /// Deepest penetration over the run (m).
@@ -108,6 +116,9 @@ impl EnergyRise {
 pub struct MetricsRecorder {
     scale: f64,
     gain: EnergyRise,
+    start_energy: Option<f64>,
+    loss: f64,
+    max_speed: f32,
     last_kinetic: f64,
     max_pen: f32,
     max_gap: f32,
@@ -124,6 +135,9 @@ impl MetricsRecorder {
         Ok(MetricsRecorder {
             scale: energy_scale_j(scene)?,
             gain: EnergyRise::default(),
+            start_energy: None,
+            loss: 0.0,
+            max_speed: 0.0,
             last_kinetic: 0.0,
             max_pen: 0.0,
             max_gap: 0.0,
@@ -150,6 +164,9 @@ impl MetricsRecorder {
         }
         // energy_gain = max_t (E(t) - min_{s<=t} E(s)) / scale
         self.gain.record(s.energy);
+        // energy_loss = max_t (E(0) - E(t)) / scale, E(0) the first sample's energy.
+        let start = *self.start_energy.get_or_insert(s.energy);
+        self.loss = self.loss.max(start - s.energy);
         self.last_kinetic = s.kinetic;
         self.max_pen = self.max_pen.max(s.max_penetration);
         self.max_gap = self.max_gap.max(s.max_joint_gap);
@@ -162,11 +179,26 @@ impl MetricsRecorder {
         }
     }
 
+    /// Records the bodies' states at the time of the last sample: the largest
+    /// centre-of-mass speed. A non-finite speed marks the run not finite.
+    pub fn record_speeds(&mut self, states: &[BodyState]) {
+        for b in states {
+            let v = b.linear_velocity.length();
+            if !v.is_finite() {
+                self.finite = false;
+                return;
+            }
+            self.max_speed = self.max_speed.max(v);
+        }
+    }
+
     /// The summary so far.
     pub fn stats(&self) -> MethodStats {
         MethodStats {
             energy_scale_j: self.scale,
             energy_gain: self.gain.rise() / self.scale,
+            energy_loss: self.loss / self.scale,
+            max_body_speed_mps: self.max_speed,
             final_kinetic: self.last_kinetic / self.scale,
             max_penetration_m: self.max_pen,
             max_joint_gap_m: self.max_gap,
@@ -201,6 +233,35 @@ mod tests {
         }
         // Largest rise: 3 -> 4 = 1.0 (1 -> 1.5 is only 0.5).
         assert!((r.stats().energy_gain - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loss_is_largest_fall_below_the_start() {
+        let scene = SceneDesc::default();
+        let mut r = MetricsRecorder::new(&scene).unwrap();
+        r.scale = 10.0;
+        for e in [5.0, 6.0, 3.0, 4.0, 4.5] {
+            r.record(0.0, &sample(e));
+        }
+        // Start 5, lowest 3: a fall of 2 (the rise to 6 is not a loss).
+        assert!((r.stats().energy_loss - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn largest_body_speed_is_kept() {
+        let scene = SceneDesc::default();
+        let mut r = MetricsRecorder::new(&scene).unwrap();
+        let at = |v: Vec3| BodyState {
+            com: Vec3::ZERO,
+            orientation: glam::Quat::IDENTITY,
+            linear_velocity: v,
+            angular_velocity: Vec3::ZERO,
+        };
+        r.record_speeds(&[at(Vec3::new(3.0, 4.0, 0.0)), at(Vec3::X)]);
+        r.record_speeds(&[at(Vec3::Y)]);
+        assert_eq!(r.stats().max_body_speed_mps, 5.0);
+        r.record_speeds(&[at(Vec3::splat(f32::NAN))]);
+        assert!(!r.stats().finite);
     }
 
     #[test]

@@ -65,9 +65,12 @@ fn run(name: &str, variant: u32) -> MethodStats {
                 if b.is_fixed() {
                     continue;
                 }
-                // "Touching the ground": the body's lowest possible point within 2 cm.
-                let reach = b.shape.local_half_extents().length();
-                let h = s.com.y;
+                // Height of the box's lowest corner: a box that tumbles over an edge
+                // raises its centre by up to (√2 − 1) of its half size while its lowest
+                // corner stays on the ground; a launched box lifts that corner.
+                let m = ragdoll_sim::glam::Mat3::from_quat(s.orientation);
+                let down = m.transpose() * ragdoll_sim::glam::Vec3::Y;
+                let h = s.com.y - down.abs().dot(b.shape.local_half_extents());
                 match &mut lowest[i] {
                     Some(low) => {
                         assert!(
@@ -77,7 +80,7 @@ fn run(name: &str, variant: u32) -> MethodStats {
                         );
                         *low = low.min(h);
                     }
-                    None if h - reach < 0.02 => lowest[i] = Some(h),
+                    None if h < 0.02 => lowest[i] = Some(h),
                     None => {}
                 }
             }

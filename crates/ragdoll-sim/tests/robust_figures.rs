@@ -97,3 +97,44 @@ fn figures_stay_finite_and_bounded_across_timesteps_and_iterations() {
     }
     println!("{}", report.join("\n"));
 }
+
+/// The multibody solver over combinations of timestep (1/1000–1/10 s), iterations
+/// (1–200) and substeps (1–50): every corner of the three ranges that costs little to
+/// run, the expensive corners (small timestep with many iterations and substeps) over
+/// fewer simulated seconds, and a middle point. Each figure stays finite with no body
+/// above 15 m/s. Ten of the 27 combinations of {1/1000, 1/60, 1/10} × {1, 40, 200} ×
+/// {1, 10, 50}, chosen so that every pair of values of two settings appears at least
+/// once (a pairwise covering set), keep the test within seconds.
+#[test]
+fn multibody_figures_stay_bounded_across_timestep_iteration_and_substep_combinations() {
+    // (timestep, iterations, substeps, simulated seconds)
+    const COMBINATIONS: [(f32, u32, u32, f32); 10] = [
+        (0.001, 1, 1, 1.5),
+        (0.001, 40, 10, 0.5),
+        (0.001, 200, 50, 0.2),
+        (1.0 / 60.0, 1, 10, 3.0),
+        (1.0 / 60.0, 40, 50, 1.0),
+        (1.0 / 60.0, 200, 1, 2.0),
+        (0.1, 1, 50, 10.0),
+        (0.1, 40, 1, 10.0),
+        (0.1, 200, 10, 5.0),
+        (0.1, 200, 50, 3.0),
+    ];
+    let mut report = Vec::new();
+    for name in FIGURES {
+        let base = scene(name);
+        for (dt, iterations, substeps, seconds) in COMBINATIONS {
+            let mut s = base.clone();
+            s.settings.timestep = dt;
+            s.settings.iterations = iterations;
+            s.settings.substeps = substeps;
+            s.settings.multibody_substeps = Some(substeps);
+            let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");
+            let mut w = MultibodyWorld::new(&s).unwrap();
+            let top = fastest(&mut w, seconds, &what);
+            report.push(format!("{what}: top speed {top:.1} m/s"));
+            assert!(top <= MAX_SPEED, "{what}: a body reached {top} m/s");
+        }
+    }
+    println!("{}", report.join("\n"));
+}

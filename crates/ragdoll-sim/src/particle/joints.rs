@@ -154,8 +154,7 @@ fn swing_limit(f: &RestFrames, a: Side, b: Side, s: &SwingDesc) -> SwingLimit {
             roll,
             shaft,
         } => {
-            let u = Quat::from_axis_angle(axis, roll) * perpendicular(axis);
-            let v = axis.cross(u);
+            let (u, v) = crate::scene::pyramid_sides(axis, roll);
             SwingLimit {
                 shaft_a: f.local_dir(a, shaft),
                 axis_b: f.local_dir(b, axis),

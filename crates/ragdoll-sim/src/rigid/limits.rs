@@ -99,12 +99,11 @@ impl Swing {
                 roll,
                 shaft,
             } => {
-                let (u, v) = axis.any_orthonormal_pair();
-                let r = Quat::from_axis_angle(axis, roll);
+                let (u, v) = crate::scene::pyramid_sides(axis, roll);
                 Swing::Pyramid {
                     axis_b: f.dir_in_b(s, axis),
-                    side1_b: f.dir_in_b(s, r * u),
-                    side2_b: f.dir_in_b(s, r * v),
+                    side1_b: f.dir_in_b(s, u),
+                    side2_b: f.dir_in_b(s, v),
                     shaft_a: f.dir_in_a(s, shaft),
                     half: [half_angle1, half_angle2],
                     rows: [AxisRow::new(kind); 4],

@@ -23,7 +23,7 @@
 //! solve every step, and the island would creep and never sleep.
 
 use super::body::BodyStates;
-use super::contact_solver::ContactConstraints;
+use super::contact_solver::{ContactConstraints, PushOutBudget};
 use super::joint_set::JointSet;
 use crate::scene::SleepSettings;
 use glam::Mat3A;
@@ -54,6 +54,7 @@ pub fn project_positions(
     contacts: &ContactConstraints,
     awake: &[bool],
     sleep: &SleepSettings,
+    push: &PushOutBudget,
 ) {
     // Resting bodies: static for the pass (zero inverse mass), restored after it.
     let mut held: Vec<(usize, f32, Mat3A)> = Vec::new();
@@ -69,7 +70,7 @@ pub fn project_positions(
     }
     for _ in 0..POSITION_ITERATIONS {
         joints.project(s, awake);
-        contacts.project(s);
+        contacts.project(s, push);
     }
     for (i, m, inv) in held {
         s.inv_mass[i] = m;

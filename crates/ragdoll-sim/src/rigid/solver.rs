@@ -20,7 +20,7 @@
 
 use super::body::{BodyInfo, BodyStates, Motions};
 use super::contact::{ContactPair, Contacts};
-use super::contact_solver::ContactConstraints;
+use super::contact_solver::{ContactConstraints, PushOutBudget};
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
 use super::joint_set::JointSet;
@@ -179,7 +179,12 @@ pub fn solve(
     joints.end_substeps();
     contacts.end_substeps();
     contacts.restitution(s, p.restitution_threshold);
-    project::project_positions(s, joints, &contacts, awake, p.sleep);
+    let push = PushOutBudget {
+        max_speed: p.ctx.max_push_out,
+        bias_rate: p.ctx.contact.bias_rate,
+        dt: p.ctx.h * p.substeps as f32,
+    };
+    project::project_positions(s, joints, &contacts, awake, p.sleep, &push);
     contacts.store_impulses(pairs);
 }
 

@@ -11,12 +11,14 @@ pub mod collider;
 pub mod desc;
 pub mod mass;
 pub mod md5mesh;
+mod pyramid;
 mod transform;
 mod validate;
 
 pub use collider::{BodyCollider, Collider};
 pub use desc::*;
 pub use mass::{MassProps, collider, mass_props, scene_mass_props};
+pub use pyramid::pyramid_sides;
 pub use validate::validate;
 
 use thiserror::Error;
