@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the results tables: `ragdoll-lab stats` over scenes 1-9 and their variants,
 10 simulated seconds each, for the particle method's rigid-frames solver (the default),
-its paper solver and the multibody method. The metrics are defined in docs/metrics.md.
+its paper solver, its XPBD solver and the multibody method. The metrics are defined in docs/metrics.md.
 
 The tables replace what stands between the marker lines
 `<!-- results:begin -->` and `<!-- results:end -->` in docs/results.md and README.md
@@ -23,6 +23,7 @@ SCENES = [(1, 1), (2, 1), (2, 2), (3, 1), (3, 2), (3, 3), (4, 1), (4, 2),
 RUNS = [("particle, rigid frames (default)",
          ["--method", "particle", "--particle-solver", "rigid-frames"], "particle"),
         ("particle, paper", ["--method", "particle", "--particle-solver", "paper"], "particle"),
+        ("particle, xpbd", ["--method", "particle", "--particle-solver", "xpbd"], "particle"),
         ("multibody", ["--method", "multibody"], "multibody")]
 HEADER = ("| scene | variant | energy gain | energy lost | max speed (m/s) | max penetration (m) "
           "| max joint gap (m) | max limit violation (°) | max stretch | asleep at (s) | ms/step |\n"
