@@ -30,8 +30,8 @@ use crate::method::Grab;
 /// the contacts and the shape matching. A contact moves particles by barycentric
 /// weights, which deforms the tetrahedron; the projection then moves the bone rigidly
 /// by only part of the correction, so the passes converge geometrically. Measured on
-/// the humans (scenes 8 and 9, 10 s) with 16: penetration 6–9 mm, limits within 1°,
-/// energy within 0.2 %.
+/// the humans (scenes 8 and 9, 10 s) with 16: penetration 11.7 and 5.8 mm, limits
+/// within 0.6°, energy within 0.1 %, stretch below 1e-5.
 pub(crate) const PASSES: u32 = 16;
 
 /// Collision detections per frame: each covers the substeps until the next.
