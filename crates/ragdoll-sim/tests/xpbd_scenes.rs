@@ -110,10 +110,9 @@ fn check_scene(n: usize, variants: Option<&[u32]>) -> Vec<String> {
 #[test]
 fn meets_the_thresholds_on_the_scenes_it_holds() {
     let mut failures = Vec::new();
-    for n in [1, 2, 4, 5, 6, 7] {
+    for n in [1, 2, 3, 4, 5, 6, 7, 9] {
         failures.extend(check_scene(n, None));
     }
-    // The hinge chain at 5 and 20 iterations; at 2 (8 substeps) a stick stretches 1.6 %.
-    failures.extend(check_scene(3, Some(&[1, 3])));
+    // The human, scene 8, is left out: it penetrates 11.7 mm here (bar 10 mm).
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -127,8 +127,60 @@ pub(crate) fn pull(
     dl
 }
 
-/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for a unit `n`, 0 if it takes no
-/// correction.
+/// Closes `delta` (from `a`'s point towards `b`'s) with compliance `alpha_tilde`,
+/// moving each side's particles rigidly: the point is `c + R r` of the frame the
+/// particles imply, whose gradient on particle `k` is `¼ n + m_k (I⁻¹ (r × n)) × r_k`
+/// (as for the angles, module doc), so its generalised inverse mass is the rigid
+/// body's, `1/m + (r × n)ᵀ I⁻¹ (r × n)`, and the XPBD update translates the particles
+/// by `n Δλ / m` and turns them by `I⁻¹ (r × n) Δλ`. A barycentric correction would
+/// deform the tetrahedron and leave the shape matching to take part of it back each
+/// pass; this one is taken whole.
+fn pull_rigid(
+    p: &mut XParticles,
+    bones: &mut [Bone],
+    a: &Anchor,
+    b: &Anchor,
+    delta: Vec3,
+    alpha_tilde: f32,
+) {
+    let c = delta.length();
+    if c < 1e-9 {
+        return;
+    }
+    let n = delta / c;
+    let lever = |p: &XParticles, bones: &[Bone], e: &Anchor| -> Option<(usize, f32, Vec3)> {
+        match *e {
+            Anchor::Bone(i, _) if p.moves(i as usize) => {
+                let i = i as usize;
+                let x = p.bone(i);
+                let centre = (x[0] + x[1] + x[2] + x[3]) * 0.25;
+                let rn = (e.point(p) - centre).cross(n);
+                let (wr, turn) = inertia_lever(p, bones, Some(i), rn);
+                Some((i, 1.0 / bones[i].mass + wr, turn))
+            }
+            _ => None,
+        }
+    };
+    let la = lever(p, bones, a);
+    let lb = lever(p, bones, b);
+    let den = la.map_or(0.0, |l| l.1) + lb.map_or(0.0, |l| l.1) + alpha_tilde;
+    if den <= 0.0 {
+        return;
+    }
+    let dl = c / den;
+    for (side, sign) in [(la, 1.0f32), (lb, -1.0)] {
+        if let Some((i, _, turn)) = side {
+            let f = PER_BONE * i;
+            let shift = n * (sign * dl / bones[i].mass);
+            for k in f..f + PER_BONE {
+                p.x[k] += shift;
+            }
+            turn_bone(p, bones, i, turn * (sign * dl));
+        }
+    }
+}
+
+/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for `n`, 0 if it takes no correction.
 #[inline]
 fn inertia_lever(p: &XParticles, bones: &[Bone], s: Side, n: Vec3) -> (f32, Vec3) {
     match s {
@@ -298,10 +350,11 @@ fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side) -> Option<
     Some(n.normalize() * shaft.dot(t).clamp(-1.0, 1.0).acos())
 }
 
-/// The point part of joint `j` between its anchors `ends`, with `h` the substep.
+/// The point part of joint `j` between its anchors `ends`, with `h` the substep, moving
+/// each bone rigidly (`pull_rigid`).
 pub(crate) fn solve_point(
     p: &mut XParticles,
-    bones: &[Bone],
+    bones: &mut [Bone],
     j: &Joint,
     ends: &[Anchor; 2],
     h: f32,
@@ -331,15 +384,15 @@ pub(crate) fn solve_point(
                 (k > 0.0).then(|| (rest, 1.0 / (k * h * h)))
             };
             if let Some((l0, alpha)) = target {
-                pull(p, a, b, n * (len - l0), alpha);
+                pull_rigid(p, bones, a, b, n * (len - l0), alpha);
             }
         }
         JointType::Slider { axis_b } => {
             let axis = rot(bones, j.b) * axis_b;
-            pull(p, a, b, d - axis * axis.dot(d), 0.0);
+            pull_rigid(p, bones, a, b, d - axis * axis.dot(d), 0.0);
         }
         _ => {
-            pull(p, a, b, d, 0.0);
+            pull_rigid(p, bones, a, b, d, 0.0);
         }
     }
 }

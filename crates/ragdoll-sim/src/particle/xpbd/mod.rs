@@ -4,7 +4,9 @@
 //! Each particle has its own position and velocity (`particles`). A bone is four
 //! particles placed by exact particulation (`placement`, the paper's future work of
 //! section 5.4: they reproduce the bone's mass, centre of mass and inertia tensor), held
-//! by six sticks (`sticks`). Joints couple points that are fixed affine combinations of
+//! by six sticks (`sticks`), solved to convergence at the end of each substep by a
+//! shape-matching projection onto the best-fitting rigid pose (`shape_match`, Müller et
+//! al. 2005). Joints couple points that are fixed affine combinations of
 //! their bones' particles, and hinge axes and limits are angles of the frames the
 //! particles imply, corrected by turning the particles (`joints`). Contacts come from
 //! a broad phase and parry3d's narrow phase on those frames and push particles with
@@ -18,6 +20,7 @@ pub(crate) mod frame;
 pub(crate) mod joints;
 pub(crate) mod measure;
 pub(crate) mod particles;
+pub(crate) mod shape_match;
 pub(crate) mod sleeping;
 pub(crate) mod step;
 pub(crate) mod sticks;
