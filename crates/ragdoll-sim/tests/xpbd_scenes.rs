@@ -1,11 +1,10 @@
 //! The XPBD particle solver on the scene files (assets/scenes): the thresholds of
 //! scenes 1–9 (energy gain ≤ 2 %, penetration ≤ 1 cm, joint gap ≤ 5 mm, limit excess
 //! ≤ 3°, bone stretch ≤ 1 %, the spider and the human asleep with no kinetic energy
-//! left), asserted on the scenes where the solver meets them: 1 (collision), 2 (ball
-//! chain), 3 (hinge chain) at 5 and 20 iterations, 4 (box masses), 5 and 6 (limits)
-//! and 7 (spider). On the hinge chain at 2 iterations and the humans (8, 9) it does not
-//! yet: `ragdoll-lab stats --scene N --method particle --particle-solver xpbd` prints
-//! its figures there.
+//! left), asserted on every variant of the scenes where the solver meets them: 1–7 and
+//! 9 (the capsule human). On the human (8) it does not yet:
+//! `ragdoll-lab stats --scene 8 --method particle --particle-solver xpbd` prints its
+//! figures there.
 
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
