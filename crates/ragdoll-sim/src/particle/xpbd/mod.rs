@@ -12,11 +12,13 @@
 //! a broad phase and parry3d's narrow phase on those frames and push particles with
 //! barycentric weights (`contacts`). The bone frame is read from the particles by shape
 //! matching (`frame`) — for drawing, collision shapes, limits and metrics — and never
-//! moved as a rigid body. The loop is in `step`; islands sleep in `sleeping`; the
+//! moved as a rigid body. Joint friction is a capped angular impulse on the particles'
+//! velocities (`friction`). The loop is in `step`; islands sleep in `sleeping`; the
 //! metrics read the particles' own velocities (`measure`).
 
 pub(crate) mod contacts;
 pub(crate) mod frame;
+pub(crate) mod friction;
 pub(crate) mod joints;
 pub(crate) mod measure;
 pub(crate) mod particles;

@@ -11,8 +11,9 @@
 //!    particles projected onto their matched rigid pose (`shape_match`), the sticks
 //!    solved to convergence with momentum kept;
 //! 4. the grab, a soft point, and the projection again if it pulled;
-//! 5. velocities from the displacements, `v = (x − x_prev)/h`, and the scene's air
-//!    friction (linear on the bone's mean velocity, angular on the rest);
+//! 5. velocities from the displacements, `v = (x − x_prev)/h`, the scene's air
+//!    friction (linear on the bone's mean velocity, angular on the rest), and the
+//!    joints' friction, a capped angular impulse keeping linear momentum (`friction`);
 //! 6. the contacts' velocity pass: restitution, and no push-out kept as velocity.
 //!
 //! Then the frames are read once more (drawing, metrics, the next detection) and the
@@ -23,7 +24,7 @@ use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
-use super::{XpbdState, contacts, frame, shape_match, sleeping, sticks};
+use super::{XpbdState, contacts, frame, friction, shape_match, sleeping, sticks};
 use crate::method::Grab;
 
 /// Gauss–Seidel passes per substep over the joints' angles and limits, their points,
@@ -155,7 +156,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
     );
 }
 
-/// Step 5: `v = (x − x_prev)/h` (as below), then air friction.
+/// Step 5: `v = (x − x_prev)/h` (as below), then air friction, then joint friction.
 fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
     let p = &mut st.particles;
     let inv_h = 1.0 / h;
@@ -182,4 +183,5 @@ fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
             }
         }
     }
+    friction::solve(p, &w.joints, h);
 }
