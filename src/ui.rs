@@ -603,6 +603,7 @@ fn panel(ui: &mut egui::Ui, model: &mut UiModel) {
     ui.separator();
 
     numbers(ui, session);
+    step_phases(ui, session);
     let plot = plot(ui, session);
     model.layout.plot = Some(plot);
     if let Some(body) = state.selected {
@@ -777,6 +778,47 @@ fn numbers(ui: &mut egui::Ui, session: &Session) {
             row("asleep", "every body sleeps (drawn darker)", &|i| {
                 if s[i].all_asleep { "yes" } else { "no" }.to_string()
             });
+        });
+}
+
+/// The last step's wall time per phase of each method, collapsed by default. Each
+/// solver names the phases it really runs; where joints, contacts and integration
+/// interleave within a substep they are one phase ("substeps").
+fn step_phases(ui: &mut egui::Ui, session: &Session) {
+    egui::CollapsingHeader::new("Step phases (ms)")
+        .default_open(false)
+        .show(ui, |ui| {
+            let size = if ui.available_width() >= 250.0 {
+                12.5
+            } else {
+                10.0
+            };
+            let t = |s: String| egui::RichText::new(s).size(size);
+            for (i, (name, color)) in [("particle", BLUE), ("multibody", RED)]
+                .into_iter()
+                .enumerate()
+            {
+                let times = session.methods[i].phase_times();
+                egui::Grid::new(("step phases", i))
+                    .striped(true)
+                    .num_columns(2)
+                    .spacing([6.0, 1.0])
+                    .show(ui, |ui| {
+                        ui.label(t(name.into()).color(color));
+                        ui.label(t(format!("{:.3}", times.total * 1e3)))
+                            .on_hover_text("the whole step's wall time");
+                        ui.end_row();
+                        for (phase, seconds) in times.phases() {
+                            ui.label(t(format!("  {phase}")));
+                            ui.label(t(format!("{:.3}", seconds * 1e3)));
+                            ui.end_row();
+                        }
+                        if times.phases().next().is_none() {
+                            ui.label(t("  (not split)".into()));
+                            ui.end_row();
+                        }
+                    });
+            }
         });
 }
 

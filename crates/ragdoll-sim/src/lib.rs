@@ -68,6 +68,7 @@ pub mod particle;
 pub mod rigid;
 pub mod scene;
 pub mod snapshot;
+pub mod timings;
 mod world;
 
 pub use error::Error;
@@ -75,4 +76,5 @@ pub use glam;
 pub use method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
 pub use scene::SceneDesc;
 pub use snapshot::RenderSnapshot;
+pub use timings::PhaseTimes;
 pub use world::{JointAngles, JointId, Solver, World};

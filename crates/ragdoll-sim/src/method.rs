@@ -5,6 +5,7 @@
 
 use crate::scene::{BodyDesc, BodyId, Settings};
 use crate::snapshot::RenderSnapshot;
+use crate::timings::PhaseTimes;
 use glam::{Quat, Vec3};
 
 /// Which of the two methods.
@@ -118,4 +119,9 @@ pub trait Method: Send {
     fn set_grab(&mut self, grab: Option<Grab>);
     /// Adds a dynamic body (a projectile) with its initial velocity; wakes what it hits.
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId;
+    /// Wall time of the last step's phases, for display only (no result depends on it).
+    /// Empty for a method that does not time its phases.
+    fn phase_times(&self) -> PhaseTimes {
+        PhaseTimes::default()
+    }
 }

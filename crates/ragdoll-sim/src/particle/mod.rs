@@ -38,6 +38,7 @@ use crate::snapshot::{
     BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
     ParticleRole, RenderSnapshot, StickInstance, StickRole,
 };
+use crate::timings::{PhaseClock, PhaseTimes};
 use bone::{Bone, EDGES};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
@@ -103,6 +104,8 @@ pub struct ParticleWorld {
     xpbd: Option<xpbd::XpbdState>,
     grab: Option<Grab>,
     time: f64,
+    /// The last step's phase times, for display only (no step reads them).
+    phase_times: PhaseTimes,
 }
 
 impl ParticleWorld {
@@ -128,6 +131,7 @@ impl ParticleWorld {
             xpbd: None,
             grab: None,
             time: 0.0,
+            phase_times: PhaseTimes::default(),
         };
         let mut masses = Vec::with_capacity(scene.bodies.len());
         for b in &scene.bodies {
@@ -474,10 +478,14 @@ impl Method for ParticleWorld {
                 }
             }
             ParticleSolver::Xpbd => {
+                // Its phases are not split yet: the step's wall time only.
+                let clock = PhaseClock::start();
                 if let Some(mut st) = self.xpbd.take() {
                     xpbd::step::step(self, &mut st);
                     self.xpbd = Some(st);
                 }
+                self.phase_times = PhaseTimes::default();
+                clock.finish(&mut self.phase_times);
             }
         }
         self.time += self.settings.timestep as f64;
@@ -687,6 +695,10 @@ impl Method for ParticleWorld {
             }
         }
         self.grab = grab;
+    }
+
+    fn phase_times(&self) -> PhaseTimes {
+        self.phase_times
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {

@@ -31,6 +31,7 @@ use super::bone::{EDGES, gram_schmidt};
 use super::contacts::{broad_phase, ground_pair, shape_pair};
 use super::placement::{fill_far_apart, independent, paper_candidates};
 use crate::scene::{JointKind, SceneDesc, SwingLimit};
+use crate::timings::{PhaseClock, PhaseTimes};
 use glam::{Quat, Vec3};
 
 /// The paper's friction constant (appendix C, `m_friction(0.00025)`).
@@ -614,10 +615,15 @@ fn solve_limits(w: &mut ParticleWorld, st: &PaperState) {
 
 /// One step of the paper's method.
 pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
+    // Phases as the paper's relaxation runs them (Jakobsen's loop): Verlet integration,
+    // then each iteration's sticks, limits, grab and collisions, then the bone frames.
+    let mut times = PhaseTimes::default();
+    let mut clock = PhaseClock::start();
     let s = &w.settings;
     let (g, dt, n) = (s.gravity, s.timestep, s.iterations.max(1));
     w.particles.frame_start.clone_from(&w.particles.x);
     w.particles.verlet(g, dt);
+    clock.lap(&mut times, "integration");
     for _ in 0..n {
         for stick in &st.sticks {
             satisfy(
@@ -628,11 +634,18 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
                 stick.rest,
             );
         }
+        clock.lap(&mut times, "sticks");
         solve_limits(w, st);
+        clock.lap(&mut times, "limits");
         if let Some(grab) = w.grab {
             super::grab_paper(w, grab);
+            clock.lap(&mut times, "grab");
         }
         project_collisions(w, n);
+        clock.lap(&mut times, "collisions");
     }
     update_frames(w);
+    clock.lap(&mut times, "frames");
+    clock.finish(&mut times);
+    w.phase_times = times;
 }

@@ -35,6 +35,7 @@ use super::{ParticleWorld, islands, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::method::Grab;
 use crate::scene::{Ground, Settings};
+use crate::timings::{PhaseClock, PhaseTimes};
 use glam::{Quat, Vec3, Vec3A};
 use parry3d::bounding_volume::Aabb;
 use parry3d::query::ContactManifold;
@@ -464,11 +465,19 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 /// and contacts, static bones only read — cannot touch each other and their substeps
 /// run on all of rayon's threads (`islands`). A single thread steps the world in place.
 pub(crate) fn step(w: &mut ParticleWorld) {
+    // Phases as this solver runs them: detection (broad and narrow phase, a few times a
+    // frame), substeps (joints, contacts, friction and integration interleave in each),
+    // sleep.
+    let mut times = PhaseTimes::default();
+    let mut clock = PhaseClock::start();
     // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is set)
     // has nothing to detect or solve: its substeps would leave every bone where it is.
     if w.grab.is_none() && w.bones.iter().all(|b| b.is_static()) {
         record_frame_starts(w);
         sleeping::advance_at_rest(&mut w.bones, w.settings.timestep);
+        clock.lap(&mut times, "sleep");
+        clock.finish(&mut times);
+        w.phase_times = times;
         return;
     }
     let s = w.settings.clone();
@@ -488,6 +497,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let mut sub = 0;
     while sub < n_sub {
         let rest_of_frame = dt * (n_sub - sub) as f32 / n_sub as f32;
+        clock.skip();
         detect(w, &mut tree, rest_of_frame);
         if wake_touched(w) {
             // The woken figures' own contacts (with the ground, with each other) were
@@ -495,6 +505,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             tree.forget();
             detect(w, &mut tree, rest_of_frame);
         }
+        clock.lap(&mut times, "detection");
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
             Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept),
@@ -514,6 +525,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                 run_substeps(&mut part, count, h, &s);
             }
         }
+        clock.lap(&mut times, "substeps");
         sub += count;
     }
     let mut newly = Vec::new();
@@ -535,4 +547,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         b.lin_vel = Vec3A::ZERO;
         b.ang_vel = Vec3A::ZERO;
     }
+    clock.lap(&mut times, "sleep");
+    clock.finish(&mut times);
+    w.phase_times = times;
 }

@@ -28,6 +28,7 @@ use super::parallel;
 use super::project;
 use super::soft::{Softness, StepContext};
 use crate::scene::{Settings, SleepSettings};
+use crate::timings::{PhaseClock, PhaseTimes};
 use glam::Vec3;
 
 /// What every island's solve needs besides its bodies and constraints: the same for all
@@ -61,7 +62,12 @@ pub fn step(
     dynamic: &[bool],
     settings: &Settings,
     time: f32,
+    times: &mut PhaseTimes,
 ) {
+    // Phases as this solver runs them: collision (broad and narrow phase), islands (links
+    // and wakes), substeps (joints, contacts and integration interleave in each), sleep.
+    let mut clock = PhaseClock::start();
+    *times = PhaseTimes::default();
     let n = info.len();
     let dt = settings.timestep;
     let g = settings.gravity.length();
@@ -72,10 +78,13 @@ pub fn step(
     // island links, the solver's passes over every joint and pair and the sleep update
     // would cost a few ms a frame for nothing on a resting pile of 1000 humans.
     if !awake.contains(&true) {
+        clock.finish(times);
         return;
     }
     update_inertia(s, motion, awake);
+    clock.skip();
     contacts.update(s, info, awake, dt, g);
+    clock.lap(times, "collision");
 
     // Islands from joints and touching contacts between dynamic bodies; a link from an
     // awake body to a sleeping one wakes the sleeping island.
@@ -100,8 +109,11 @@ pub fn step(
     if islands.apply_wakes() {
         refresh_awake(s, info, islands, awake, dynamic);
         update_inertia(s, motion, awake);
+        clock.lap(times, "islands");
         contacts.update(s, info, awake, dt, g);
+        clock.lap(times, "collision");
     }
+    clock.lap(times, "islands");
 
     let substeps = settings.multibody_substep_count().max(1);
     let h = dt / substeps as f32;
@@ -138,10 +150,13 @@ pub fn step(
     } else {
         solve(s, motion, joints, &mut contacts.pairs, awake, &params);
     }
+    clock.lap(times, "substeps");
 
     if islands.update_sleep(s, dynamic, &settings.sleep, dt, time + dt) {
         refresh_awake(s, info, islands, awake, dynamic);
     }
+    clock.lap(times, "sleep");
+    clock.finish(times);
 }
 
 /// The velocity solve of one step over the bodies, joints and contact pairs given (the

@@ -13,6 +13,7 @@ use crate::scene::{
     validate,
 };
 use crate::snapshot::{BodyInstance, BodyRole, ContactInstance, RenderSnapshot};
+use crate::timings::PhaseTimes;
 use glam::{Quat, Vec3, Vec3A};
 use parry3d::math::Pose as PPose;
 use parry3d::query::{self, Ray};
@@ -34,6 +35,8 @@ pub struct MultibodyWorld {
     dynamic: Vec<bool>,
     time: f64,
     grab: Option<Grab>,
+    /// The last step's phase times, for display only.
+    phase_times: PhaseTimes,
 }
 
 impl MultibodyWorld {
@@ -144,6 +147,7 @@ impl MultibodyWorld {
             dynamic,
             time: 0.0,
             grab: None,
+            phase_times: PhaseTimes::default(),
         })
     }
 
@@ -260,6 +264,7 @@ impl Method for MultibodyWorld {
             &self.dynamic,
             &self.settings,
             self.time as f32,
+            &mut self.phase_times,
         );
         self.time += self.settings.timestep as f64;
     }
@@ -391,6 +396,10 @@ impl Method for MultibodyWorld {
 
     fn set_grab(&mut self, grab: Option<Grab>) {
         self.grab = grab;
+    }
+
+    fn phase_times(&self) -> PhaseTimes {
+        self.phase_times
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
