@@ -116,7 +116,7 @@ pub struct Session {
     pub step_ms: [f64; 2],
     /// The latest metrics sample.
     pub samples: [Sample; 2],
-    /// Every frame's sample per method (the last [`HISTORY`] of them).
+    /// Every frame's sample per method (the last `HISTORY` of them, a minute at 60 Hz).
     pub history: [Vec<HistoryPoint>; 2],
     /// Worst values per method since the start.
     pub worst: [Worst; 2],
