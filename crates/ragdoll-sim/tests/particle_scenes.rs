@@ -29,16 +29,9 @@ const SCENES: [&str; 10] = [
     "pile",
 ];
 
-fn scene(name: &str, variant: u32) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../assets/scenes")
-        .join(format!("{name}.af"));
-    let opts = AfOptions {
-        variant,
-        ..Default::default()
-    };
-    load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc
-}
+mod common;
+
+use common::shipped_variant as scene;
 
 /// What `ragdoll-lab stats --method particle --seconds T` measures, plus the largest
 /// rise of the state's own energy (see `ParticleWorld::state_energy`).

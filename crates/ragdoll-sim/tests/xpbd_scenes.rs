@@ -8,9 +8,7 @@
 
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
-use std::path::PathBuf;
 
 /// The scene table, in order (scene N is `SCENES[N - 1]`).
 const SCENES: [&str; 9] = [
@@ -25,16 +23,9 @@ const SCENES: [&str; 9] = [
     "capsule-human",
 ];
 
-fn scene(name: &str, variant: u32) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../assets/scenes")
-        .join(format!("{name}.af"));
-    let opts = AfOptions {
-        variant,
-        ..Default::default()
-    };
-    load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc
-}
+mod common;
+
+use common::shipped_variant as scene;
 
 /// What `ragdoll-lab stats --method particle --particle-solver xpbd --seconds T`
 /// measures.

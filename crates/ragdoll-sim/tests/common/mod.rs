@@ -145,10 +145,17 @@ pub fn energy(states: &[BodyState], sc: &SceneDesc, inertia: &[Mat3]) -> f64 {
 
 /// A scene shipped in assets/scenes, default variant.
 pub fn shipped_scene(name: &str) -> SceneDesc {
+    shipped_variant(name, 1)
+}
+
+/// A scene shipped in assets/scenes, in one of its variants (`AfOptions::variant`).
+pub fn shipped_variant(name: &str, variant: u32) -> SceneDesc {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../assets/scenes")
         .join(format!("{name}.af"));
-    load(&path, &AfOptions::default())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .desc
+    let opts = AfOptions {
+        variant,
+        ..Default::default()
+    };
+    load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc
 }
