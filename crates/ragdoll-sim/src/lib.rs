@@ -73,7 +73,7 @@ mod world;
 
 pub use error::Error;
 pub use glam;
-pub use method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+pub use method::{BodyPoseSet, BodyState, BodyVelocity, Grab, Method, MethodKind, RayHit, Sample};
 pub use scene::SceneDesc;
 pub use snapshot::RenderSnapshot;
 pub use timings::PhaseTimes;

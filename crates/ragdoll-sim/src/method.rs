@@ -3,7 +3,7 @@
 //! A method is built from a [`SceneDesc`](crate::scene::SceneDesc) only and is driven
 //! through this trait; the app never reaches into a method's internals.
 
-use crate::scene::{BodyDesc, BodyId, Settings};
+use crate::scene::{BodyDesc, BodyId, Pose, Settings};
 use crate::snapshot::RenderSnapshot;
 use crate::timings::PhaseTimes;
 use glam::{Quat, Vec3};
@@ -59,6 +59,26 @@ pub struct Sample {
     pub max_bone_stretch: Option<f32>,
     /// Every dynamic body is asleep.
     pub all_asleep: bool,
+}
+
+/// Linear and angular velocity of a body (world axes).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyVelocity {
+    /// Velocity of the centre of mass (m/s).
+    pub linear: Vec3,
+    /// Angular velocity (rad/s).
+    pub angular: Vec3,
+}
+
+/// A body put somewhere by [`Method::set_body_poses`] (Jolt's `Ragdoll::SetPose`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyPoseSet {
+    /// The body moved.
+    pub body: BodyId,
+    /// Its new shape-frame pose (the frame of [`BodyDesc::pose`]).
+    pub pose: Pose,
+    /// Its new velocities; `None` keeps the ones it has (world axes).
+    pub velocity: Option<BodyVelocity>,
 }
 
 /// A ray hit on a body, for grabbing.
@@ -125,6 +145,13 @@ pub trait Method: Send {
     /// shares it among its particles so that both hold for them). Wakes the body's
     /// island first. Does nothing to a fixed body or an id not of this world.
     fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3);
+    /// Puts bodies at new poses, with new velocities or their own, at once (a teleport:
+    /// no collision is swept on the way). The bodies and their figures wake; a particle
+    /// bone's particles are placed rigidly in its new frame. Joints between a moved
+    /// body and one left where it was pull them together again in the next steps, and
+    /// an overlap the new poses make is pushed out at the scene's push-out speed. Fixed
+    /// bodies and ids not of this world are left alone.
+    fn set_body_poses(&mut self, poses: &[BodyPoseSet]);
     /// Wall time of the last step's phases, for display only (no result depends on it).
     /// Empty for a method that does not time its phases.
     fn phase_times(&self) -> PhaseTimes {

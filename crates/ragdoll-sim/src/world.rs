@@ -6,7 +6,7 @@
 //! dense array indexed by [`BodyId`], so every read between steps is a lookup.
 
 use crate::error::Error;
-use crate::method::{BodyState, Method, MethodKind};
+use crate::method::{BodyPoseSet, BodyState, Method, MethodKind};
 use crate::particle::{ParticleSolver, ParticleWorld};
 use crate::rigid::MultibodyWorld;
 use crate::scene::af::{self, AfOptions};
@@ -227,6 +227,24 @@ impl World {
     pub fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
         self.method.apply_impulse(body, impulse, point);
         self.method.body_states(&mut self.states);
+    }
+
+    /// Puts bodies at new shape-frame poses, with new velocities or their own, at once
+    /// (Jolt's `Ragdoll::SetPose`; [`Method::set_body_poses`]): a teleport, waking the
+    /// bodies' figures. Read back at once by [`World::body_pose`].
+    pub fn set_pose(&mut self, poses: &[BodyPoseSet]) {
+        self.method.set_body_poses(poses);
+        self.method.body_states(&mut self.states);
+    }
+
+    /// Puts one body at a new shape-frame pose, keeping its velocities
+    /// ([`World::set_pose`]).
+    pub fn set_body_pose(&mut self, body: BodyId, pose: Pose) {
+        self.set_pose(&[BodyPoseSet {
+            body,
+            pose,
+            velocity: None,
+        }]);
     }
 
     /// Simulated time so far (s).

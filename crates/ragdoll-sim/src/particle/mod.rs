@@ -27,10 +27,11 @@ mod paper;
 mod particles;
 mod placement;
 mod rigid_frames;
+mod set_pose;
 mod sleeping;
 mod xpbd;
 
-use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
     BodyCollider, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider,
     mass_props, validate,
@@ -704,6 +705,10 @@ impl Method for ParticleWorld {
 
     fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
         ParticleWorld::apply_impulse(self, body, impulse, point);
+    }
+
+    fn set_body_poses(&mut self, poses: &[BodyPoseSet]) {
+        ParticleWorld::set_body_poses(self, poses);
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {

@@ -1,5 +1,5 @@
-//! An impulse from outside (a hit, a shot, an explosion) on one body, and the wake it
-//! brings.
+//! What acts on bodies from outside: an impulse (a hit, a shot, an explosion), a new
+//! pose (a teleport), and the wake they bring.
 //!
 //! Newton for a rigid body: an impulse `J` at the world point `p` changes the velocity
 //! of the centre of mass `c` by `J/m` and the angular velocity by
@@ -11,6 +11,8 @@
 use super::body::{BodyInfo, BodyStates, Motions};
 use super::island::Islands;
 use super::solver;
+use crate::method::BodyVelocity;
+use crate::scene::Pose;
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 
 /// What waking and pushing a body touch of the world.
@@ -72,5 +74,33 @@ impl Bodies<'_> {
         let inv_inertia = Mat3A::from(self.world_inv_inertia(i));
         self.states.lin_vel[i] += Vec3A::from(impulse * self.info[i].inv_mass());
         self.states.ang_vel[i] += inv_inertia * Vec3A::from(arm.cross(impulse));
+    }
+}
+
+impl Bodies<'_> {
+    /// Puts body `i`'s shape frame at `pose` (its centre of mass at `pose · c_local`),
+    /// moving with `velocity` or with its own; wakes it with its figure. Nothing for a
+    /// fixed body or an index past the bodies. The contact cache matches the new
+    /// manifolds by feature at the next detection, as after any step.
+    pub(crate) fn set_pose(&mut self, i: usize, pose: Pose, velocity: Option<BodyVelocity>) {
+        if i >= self.info.len() || self.info[i].fixed {
+            return;
+        }
+        if !pose.position.is_finite() || !pose.rotation.is_finite() {
+            return;
+        }
+        self.wake(i);
+        let rotation = pose.rotation.normalize();
+        self.states.rot[i] = rotation;
+        self.states.com[i] = pose.position + rotation * self.info[i].local_com;
+        if let Some(v) = velocity {
+            self.states.lin_vel[i] = Vec3A::from(v.linear);
+            self.states.ang_vel[i] = Vec3A::from(v.angular);
+        }
+        // The world inverse inertia follows the new orientation (the solver refreshes
+        // it each substep of an awake body; this keeps it right until then).
+        if self.awake[i] {
+            self.states.inv_inertia[i] = Mat3A::from(self.world_inv_inertia(i));
+        }
     }
 }

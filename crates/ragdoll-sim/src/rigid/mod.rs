@@ -10,7 +10,8 @@
 //! - `contact`: collision detection (with [`crate::broadphase`]) and the contact
 //!   cache; `contact_solver`: the contact rows of one step, over dense arrays;
 //!   `contact_wide`: the same rows four pairs at a time (graph colouring, SIMD).
-//! - `impulse`: an impulse from outside and the wake it brings.
+//! - `impulse`: what acts on bodies from outside (an impulse, a new pose) and the
+//!   wake it brings.
 //! - `island`: islands and sleeping; `solver`: the step; `project`: the position
 //!   projection after it; `parallel`: islands solved on all cores.
 //! - `world`: [`MultibodyWorld`], the `Method`, the one public item.

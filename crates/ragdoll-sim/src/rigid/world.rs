@@ -7,7 +7,7 @@ use super::impulse::Bodies;
 use super::island::Islands;
 use super::joint_set::JointSet;
 use super::solver;
-use crate::method::{BodyState, Grab, Method, MethodKind, RayHit, Sample};
+use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
 use crate::scene::{
     BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, collider, mass_props,
@@ -420,6 +420,13 @@ impl Method for MultibodyWorld {
 
     fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
         self.bodies().apply_impulse(body.index(), impulse, point);
+    }
+
+    fn set_body_poses(&mut self, poses: &[BodyPoseSet]) {
+        let mut bodies = self.bodies();
+        for p in poses {
+            bodies.set_pose(p.body.index(), p.pose, p.velocity);
+        }
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
