@@ -152,6 +152,18 @@ pub trait Method: Send {
     /// an overlap the new poses make is pushed out at the scene's push-out speed. Fixed
     /// bodies and ids not of this world are left alone.
     fn set_body_poses(&mut self, poses: &[BodyPoseSet]);
+    /// Makes `body` kinematic — moved by the game, infinite mass to the solver, pushing
+    /// what it meets (Jolt's `MotionType::Kinematic`) — keeping its velocities, or
+    /// dynamic again, moving on with them. Wakes its figure. A fixed body stays fixed.
+    fn set_kinematic(&mut self, body: BodyId, kinematic: bool);
+    /// Whether `body` is kinematic.
+    fn is_kinematic(&self, body: BodyId) -> bool;
+    /// Sets a kinematic body's velocities so that it reaches the shape-frame pose
+    /// `target` after `dt` seconds (Jolt's `MoveKinematic`): `v = (c* − c)/dt`,
+    /// `ω = θ/dt` with `θ` the turn to the target's orientation. A step of `dt` ends
+    /// with the body on the target; it keeps moving at that velocity until told
+    /// otherwise. Nothing for a body that is not kinematic.
+    fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32);
     /// Wall time of the last step's phases, for display only (no result depends on it).
     /// Empty for a method that does not time its phases.
     fn phase_times(&self) -> PhaseTimes {

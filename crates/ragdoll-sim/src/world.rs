@@ -247,6 +247,29 @@ impl World {
         }]);
     }
 
+    /// Makes `body` kinematic — moved by the game along a path (an animated
+    /// character's bone), infinite mass to the solver, pushing what it meets — or
+    /// dynamic again ([`Method::set_kinematic`]; what each solver does: the `rigid` and
+    /// `particle` modules' `kinematic` docs, `docs/architecture.md`).
+    pub fn set_kinematic(&mut self, body: BodyId, kinematic: bool) {
+        self.method.set_kinematic(body, kinematic);
+        self.method.body_states(&mut self.states);
+    }
+
+    /// Whether `body` is kinematic.
+    pub fn is_kinematic(&self, body: BodyId) -> bool {
+        self.method.is_kinematic(body)
+    }
+
+    /// Moves a kinematic body so that it reaches the shape-frame pose `target` after
+    /// `dt` seconds (Jolt's `MoveKinematic`; [`Method::move_kinematic`]): call it before
+    /// each [`World::step`] with `dt` the timestep and the body is on `target` when the
+    /// step ends. Nothing for a body that is not kinematic.
+    pub fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
+        self.method.move_kinematic(body, target, dt);
+        self.method.body_states(&mut self.states);
+    }
+
     /// Simulated time so far (s).
     pub fn time(&self) -> f64 {
         self.method.time()

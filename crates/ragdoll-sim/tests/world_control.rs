@@ -278,6 +278,135 @@ fn a_sleeping_figure_set_in_the_air_falls(solver: Solver) {
     );
 }
 
+/// The angle between two orientations, `2 |(a⁻¹ b).xyz|` for the shorter way round:
+/// accurate near zero, where `Quat::angle_between`'s `acos` resolves only 1e-3 rad in f32.
+fn turn_between(a: Quat, b: Quat) -> f32 {
+    let d = a.inverse() * b;
+    2.0 * d.xyz().length().asin().min(std::f32::consts::FRAC_PI_2)
+}
+
+/// A box on the ground and a kinematic paddle.
+fn paddle_scene(ground: bool) -> SceneDesc {
+    let paddle = BodyDesc::new(
+        "paddle",
+        Shape::Box {
+            half_extents: Vec3::new(0.05, 0.3, 0.4),
+        },
+        Pose::from_position(Vec3::new(-1.0, 0.35, 0.0)),
+        MassSpec::Mass(5.0),
+    );
+    let cube = BodyDesc::new(
+        "cube",
+        Shape::Box {
+            half_extents: Vec3::splat(0.1),
+        },
+        Pose::from_position(Vec3::new(0.0, 0.1, 0.0)),
+        MassSpec::Mass(1.0),
+    );
+    let mut sc = scene(vec![paddle, cube], vec![], Vec3::new(0.0, -9.81, 0.0));
+    if ground {
+        sc.settings.ground = Some(Ground::default());
+    }
+    sc
+}
+
+/// A kinematic body moved along a path (a circle, turning as it goes) with
+/// `move_kinematic` before each step is on the path after each step, to rounding, in
+/// gravity, whatever the solver.
+fn a_kinematic_body_follows_its_path_exactly(solver: Solver) {
+    let mut world =
+        World::from_scene(paddle_scene(false), solver).unwrap_or_else(|e| panic!("{e}"));
+    let paddle = world.body("paddle").expect("the paddle");
+    world.set_kinematic(paddle, true);
+    assert!(world.is_kinematic(paddle));
+    let dt = world.scene().settings.timestep;
+    let path = |t: f32| Pose {
+        position: Vec3::new(
+            -1.0 + 0.5 * (2.0 * t).sin(),
+            1.5 + 0.5 * (1.0 - (2.0 * t).cos()),
+            0.3 * t,
+        ),
+        rotation: Quat::from_rotation_y(1.5 * t) * Quat::from_rotation_z(0.7 * t),
+    };
+    let mut worst = (0.0f32, 0.0f32);
+    for k in 1..=120 {
+        let target = path(k as f32 * dt);
+        world.move_kinematic(paddle, target, dt);
+        world.step();
+        let pose = world.body_pose(paddle);
+        worst.0 = worst.0.max(pose.position.distance(target.position));
+        worst.1 = worst.1.max(turn_between(pose.rotation, target.rotation));
+    }
+    eprintln!("{solver:?}: off the path by {} m, {} rad", worst.0, worst.1);
+    assert!(
+        worst.0 < 1e-5 && worst.1 < 1e-5,
+        "{solver:?}: off by {worst:?}"
+    );
+}
+
+/// A kinematic paddle moved at 1 m/s along the ground for 1.5 s meets a resting
+/// cube after 0.85 s: the paddle keeps its path exactly (infinite mass) and the cube
+/// ends in front of it (less a centimetre of contact give), pushed about 0.6 m.
+fn a_kinematic_body_pushes_a_dynamic_box(solver: Solver) {
+    let mut world = World::from_scene(paddle_scene(true), solver).unwrap_or_else(|e| panic!("{e}"));
+    let paddle = world.body("paddle").expect("the paddle");
+    let cube = world.body("cube").expect("the cube");
+    world.set_kinematic(paddle, true);
+    // Let the cube settle (and sleep, on the solvers that sleep: the paddle wakes it).
+    world.advance(1.5);
+    let dt = world.scene().settings.timestep;
+    let start = world.body_pose(paddle).position;
+    for k in 1..=90 {
+        let target = Pose::from_position(start + Vec3::X * (k as f32 * dt));
+        world.move_kinematic(paddle, target, dt);
+        world.step();
+        let at = world.body_pose(paddle).position;
+        assert!(
+            at.distance(target.position) < 1e-5,
+            "{solver:?}: paddle at {at}, path {}",
+            target.position
+        );
+    }
+    let paddle_x = world.body_pose(paddle).position.x;
+    let cube_x = world.body_pose(cube).position.x;
+    let front = paddle_x + 0.05 + 0.1;
+    eprintln!("{solver:?}: paddle at {paddle_x:.4} m, cube at {cube_x:.4} m (front {front:.4} m)");
+    assert!(
+        cube_x > front - 0.01,
+        "{solver:?}: cube at {cube_x}, paddle front at {front}"
+    );
+    assert!(cube_x > 0.55, "{solver:?}: the cube moved to {cube_x} only");
+}
+
+/// A body made kinematic, moved at a steady velocity, then let go without gravity
+/// flies on with that velocity (its momentum is what the game gave it).
+fn a_body_let_go_moves_on_with_its_kinematic_velocity(solver: Solver) {
+    let mut sc = paddle_scene(false);
+    sc.settings.gravity = Vec3::ZERO;
+    let mut world = World::from_scene(sc, solver).unwrap_or_else(|e| panic!("{e}"));
+    let paddle = world.body("paddle").expect("the paddle");
+    world.set_kinematic(paddle, true);
+    let dt = world.scene().settings.timestep;
+    let v = Vec3::new(0.0, 0.5, 1.0);
+    for _ in 0..30 {
+        let pose = world.body_pose(paddle);
+        world.move_kinematic(paddle, Pose::from_position(pose.position + v * dt), dt);
+        world.step();
+    }
+    world.set_kinematic(paddle, false);
+    assert!(!world.is_kinematic(paddle));
+    let before = world.body_pose(paddle).position;
+    world.advance(0.5);
+    let moved = world.body_pose(paddle).position - before;
+    let t = 0.5;
+    eprintln!("{solver:?}: moved {moved} in {t} s, v t = {}", v * t);
+    assert!(
+        moved.distance(v * t) < 1e-3,
+        "{solver:?}: moved {moved}, v t = {}",
+        v * t
+    );
+}
+
 /// One `#[test]` per listed property for `$solver`; `property = "why"` marks it ignored
 /// with the figure it measured (the closed-form suite's convention).
 macro_rules! suite {
@@ -298,11 +427,17 @@ macro_rules! suite {
 // particle, and its four particles do not reproduce the body's inertia: its impulse is
 // checked on its particles' own momenta (the crate's unit tests), not here.
 suite!(paper, Paper;
+    a_kinematic_body_follows_its_path_exactly,
+    a_kinematic_body_pushes_a_dynamic_box,
+    a_body_let_go_moves_on_with_its_kinematic_velocity,
     set_pose_reads_back,
     a_sleeping_figure_set_in_the_air_falls,
 );
 
 suite!(rigid_frames, RigidFrames;
+    a_kinematic_body_follows_its_path_exactly,
+    a_kinematic_body_pushes_a_dynamic_box,
+    a_body_let_go_moves_on_with_its_kinematic_velocity,
     set_pose_reads_back,
     a_sleeping_figure_set_in_the_air_falls,
     an_impulse_changes_momentum_by_j_and_angular_momentum_by_r_cross_j,
@@ -311,6 +446,9 @@ suite!(rigid_frames, RigidFrames;
 );
 
 suite!(xpbd, Xpbd;
+    a_kinematic_body_follows_its_path_exactly,
+    a_kinematic_body_pushes_a_dynamic_box,
+    a_body_let_go_moves_on_with_its_kinematic_velocity,
     set_pose_reads_back,
     a_sleeping_figure_set_in_the_air_falls,
     an_impulse_changes_momentum_by_j_and_angular_momentum_by_r_cross_j,
@@ -319,6 +457,9 @@ suite!(xpbd, Xpbd;
 );
 
 suite!(multibody, Multibody;
+    a_kinematic_body_follows_its_path_exactly,
+    a_kinematic_body_pushes_a_dynamic_box,
+    a_body_let_go_moves_on_with_its_kinematic_velocity,
     set_pose_reads_back,
     a_sleeping_figure_set_in_the_air_falls,
     an_impulse_changes_momentum_by_j_and_angular_momentum_by_r_cross_j,

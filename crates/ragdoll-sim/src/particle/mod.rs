@@ -21,6 +21,7 @@ mod impulse;
 mod islands;
 mod joint_lanes;
 mod joints;
+pub(crate) mod kinematic;
 mod limits;
 mod measure;
 mod paper;
@@ -104,6 +105,8 @@ pub struct ParticleWorld {
     paper: Option<paper::PaperState>,
     /// The XPBD solver's particles and constraints.
     xpbd: Option<xpbd::XpbdState>,
+    /// Per bone, its motion while it is kinematic (empty until one is).
+    kinematic: Vec<Option<kinematic::KinematicBone>>,
     grab: Option<Grab>,
     time: f64,
     /// The last step's phase times, for display only (no step reads them).
@@ -131,6 +134,7 @@ impl ParticleWorld {
             manifolds: Vec::new(),
             paper: None,
             xpbd: None,
+            kinematic: Vec::new(),
             grab: None,
             time: 0.0,
             phase_times: PhaseTimes::default(),
@@ -471,6 +475,7 @@ impl Method for ParticleWorld {
     }
 
     fn step(&mut self) {
+        self.advance_kinematic();
         match self.solver {
             ParticleSolver::RigidFrames => rigid_frames::step(self),
             ParticleSolver::Paper => {
@@ -490,6 +495,7 @@ impl Method for ParticleWorld {
                 clock.finish(&mut self.phase_times);
             }
         }
+        self.finish_kinematic();
         self.time += self.settings.timestep as f64;
     }
 
@@ -709,6 +715,18 @@ impl Method for ParticleWorld {
 
     fn set_body_poses(&mut self, poses: &[BodyPoseSet]) {
         ParticleWorld::set_body_poses(self, poses);
+    }
+
+    fn set_kinematic(&mut self, body: BodyId, kinematic: bool) {
+        ParticleWorld::set_kinematic(self, body, kinematic);
+    }
+
+    fn is_kinematic(&self, body: BodyId) -> bool {
+        ParticleWorld::is_kinematic(self, body)
+    }
+
+    fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
+        ParticleWorld::move_kinematic(self, body, target, dt);
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {

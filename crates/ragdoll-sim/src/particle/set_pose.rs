@@ -49,13 +49,22 @@ impl ParticleWorld {
                 position: set.pose.position,
                 rotation: set.pose.rotation.normalize(),
             };
-            self.set_bone_pose(i, pose, velocity, set.velocity.is_some());
+            self.place_bone(i, pose, velocity, set.velocity.is_some());
+            self.bones[i].pushing_out = true;
+            self.bones[i].wake();
         }
     }
 
     /// Puts bone `i`'s shape frame at `pose` moving with `velocity` (of its centre of
-    /// mass); `new_velocity` false keeps a rigid-frames bone's own velocities bit for bit.
-    fn set_bone_pose(&mut self, i: usize, pose: Pose, velocity: BodyVelocity, new_velocity: bool) {
+    /// mass), its particles following (module doc); `new_velocity` false keeps a
+    /// rigid-frames bone's own velocities bit for bit. Neither wakes it nor marks it.
+    pub(crate) fn place_bone(
+        &mut self,
+        i: usize,
+        pose: Pose,
+        velocity: BodyVelocity,
+        new_velocity: bool,
+    ) {
         let s = &self.bones[i].shape_in_bone;
         let bone_in_shape = Pose {
             position: -(s.rotation.inverse() * s.position),
@@ -75,8 +84,6 @@ impl ParticleWorld {
         b.rot = frame.rotation;
         b.prev_rot = frame.rotation;
         b.dturn = Quat::IDENTITY;
-        b.pushing_out = true;
-        b.wake();
         if let Some(st) = self.xpbd.as_mut() {
             let f = PER_BONE * i;
             for k in 0..PER_BONE {

@@ -14,21 +14,26 @@ use super::solver;
 use crate::method::BodyVelocity;
 use crate::scene::Pose;
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
+use parry3d::shape::SharedShape;
 
 /// What waking and pushing a body touch of the world.
 pub(crate) struct Bodies<'a> {
     /// The hot state.
     pub states: &'a mut BodyStates,
-    /// The cold data (mass, figure, fixed).
-    pub info: &'a [BodyInfo],
+    /// The cold data (mass, figure, fixed: a kinematic body is fixed to the solver).
+    pub info: &'a mut [BodyInfo],
     /// Inertia tensors.
     pub motion: Motions<'a>,
     /// Sleep state.
     pub islands: &'a mut Islands,
     /// Per body (and the anchor): moved by the solver this step.
     pub awake: &'a mut [bool],
-    /// Per body: not fixed.
-    pub dynamic: &'a [bool],
+    /// Per body: neither fixed nor kinematic.
+    pub dynamic: &'a mut [bool],
+    /// Per body: kinematic (`kinematic`).
+    pub kinematic: &'a mut [bool],
+    /// The convex hulls' colliders (`BodyInfo::collider`).
+    pub hulls: &'a [SharedShape],
 }
 
 impl Bodies<'_> {

@@ -12,6 +12,7 @@
 //!   `contact_wide`: the same rows four pairs at a time (graph colouring, SIMD).
 //! - `impulse`: what acts on bodies from outside (an impulse, a new pose) and the
 //!   wake it brings.
+//! - `kinematic`: bodies moved by the game along a path, infinite mass to the solver.
 //! - `island`: islands and sleeping; `solver`: the step; `project`: the position
 //!   projection after it; `parallel`: islands solved on all cores.
 //! - `world`: [`MultibodyWorld`], the `Method`, the one public item.
@@ -32,6 +33,7 @@ mod island;
 mod joint;
 mod joint_set;
 mod joint_wide;
+mod kinematic;
 mod limits;
 mod parallel;
 mod project;

@@ -34,6 +34,8 @@ pub struct MultibodyWorld {
     islands: Islands,
     awake: Vec<bool>,
     dynamic: Vec<bool>,
+    /// Per body: kinematic (moved by the game, fixed to the solver; `kinematic`).
+    kinematic: Vec<bool>,
     time: f64,
     grab: Option<Grab>,
     /// The last step's phase times, for display only.
@@ -146,6 +148,7 @@ impl MultibodyWorld {
             islands,
             awake,
             dynamic,
+            kinematic: vec![false; n],
             time: 0.0,
             grab: None,
             phase_times: PhaseTimes::default(),
@@ -212,14 +215,16 @@ impl MultibodyWorld {
     fn bodies(&mut self) -> Bodies<'_> {
         Bodies {
             states: &mut self.states,
-            info: &self.info,
+            info: &mut self.info,
             motion: Motions {
                 bodies: &self.motion,
                 full: &self.full_inertia,
             },
             islands: &mut self.islands,
             awake: &mut self.awake,
-            dynamic: &self.dynamic,
+            dynamic: &mut self.dynamic,
+            kinematic: &mut self.kinematic,
+            hulls: &self.contacts.hulls,
         }
     }
 
@@ -266,6 +271,8 @@ impl Method for MultibodyWorld {
                 self.states.lin_vel[i] += Vec3A::from(dv * 0.5);
             }
         }
+        let dt = self.settings.timestep;
+        self.bodies().wake_kinematic_sweeps(dt);
         solver::step(
             &mut self.states,
             &self.info,
@@ -282,6 +289,7 @@ impl Method for MultibodyWorld {
             self.time as f32,
             &mut self.phase_times,
         );
+        self.bodies().advance_kinematic(dt);
         self.time += self.settings.timestep as f64;
     }
 
@@ -422,6 +430,18 @@ impl Method for MultibodyWorld {
         self.bodies().apply_impulse(body.index(), impulse, point);
     }
 
+    fn set_kinematic(&mut self, body: BodyId, kinematic: bool) {
+        self.bodies().set_kinematic(body.index(), kinematic);
+    }
+
+    fn is_kinematic(&self, body: BodyId) -> bool {
+        self.kinematic.get(body.index()).copied().unwrap_or(false)
+    }
+
+    fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
+        self.bodies().move_kinematic(body.index(), target, dt);
+    }
+
     fn set_body_poses(&mut self, poses: &[BodyPoseSet]) {
         let mut bodies = self.bodies();
         for p in poses {
@@ -457,6 +477,7 @@ impl Method for MultibodyWorld {
         s.inv_mass.insert(i, 0.0);
         s.inv_inertia.insert(i, glam::Mat3A::ZERO);
         self.dynamic.push(!desc.is_fixed());
+        self.kinematic.push(false);
         self.awake.insert(i, false);
         self.islands.push(&self.states, i);
         // Joints and contact pairs that named the anchor by index follow it.
