@@ -10,8 +10,8 @@ use crate::scene::SceneError;
 use crate::scene::af::AfError;
 use thiserror::Error;
 
-/// Anything that stops a world from being built: a file that cannot be read or parsed,
-/// or a scene description that cannot be simulated.
+/// Anything that stops a world from being built — a file that cannot be read or
+/// parsed, a scene description that cannot be simulated — or data that does not fit it.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum Error {
     /// A file could not be read or has a mistake, with its `FILE:LINE:COL` position.
@@ -20,4 +20,10 @@ pub enum Error {
     /// A scene description (read or built in code) that a method cannot simulate.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// Data handed to a built world that does not fit it (one pose per body, say).
+    #[error("{what}")]
+    Mismatch {
+        /// What does not fit, and how.
+        what: String,
+    },
 }

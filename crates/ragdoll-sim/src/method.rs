@@ -3,6 +3,7 @@
 //! A method is built from a [`SceneDesc`](crate::scene::SceneDesc) only and is driven
 //! through this trait; the app never reaches into a method's internals.
 
+use crate::motor::JointMotor;
 use crate::scene::{BodyDesc, BodyId, Pose, Settings};
 use crate::snapshot::RenderSnapshot;
 use crate::timings::PhaseTimes;
@@ -164,6 +165,10 @@ pub trait Method: Send {
     /// with the body on the target; it keeps moving at that velocity until told
     /// otherwise. Nothing for a body that is not kinematic.
     fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32);
+    /// Replaces the joint motors in force by `motors` (empty: all off), waking the
+    /// figures they act on. Each drives its joint's relative orientation toward its
+    /// target with a bounded torque until replaced ([`crate::motor`]).
+    fn set_joint_motors(&mut self, motors: &[JointMotor]);
     /// Wall time of the last step's phases, for display only (no result depends on it).
     /// Empty for a method that does not time its phases.
     fn phase_times(&self) -> PhaseTimes {

@@ -7,6 +7,7 @@
 
 use crate::error::Error;
 use crate::method::{BodyPoseSet, BodyState, Method, MethodKind};
+use crate::motor::{JointMotor, MotorDrive};
 use crate::particle::{ParticleSolver, ParticleWorld};
 use crate::rigid::MultibodyWorld;
 use crate::scene::af::{self, AfOptions};
@@ -268,6 +269,79 @@ impl World {
     pub fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
         self.method.move_kinematic(body, target, dt);
         self.method.body_states(&mut self.states);
+    }
+
+    /// Drives the figure toward `poses` (each body's shape-frame pose, indexed by
+    /// [`BodyId`]: an animation frame, a ragdoll pose) with a motor on every joint
+    /// that turns (not sliders or springs), as Jolt's `DriveToPoseUsingMotors`: each
+    /// motor targets the relative orientation `q₂⁻¹ q₁` of its joint's two bodies in
+    /// `poses`, so only the figure's shape is driven, not where it is. Replaces the
+    /// motors in force; they act every step until replaced or stopped. What each
+    /// solver does: [`crate::motor`]. Fails with [`Error::Mismatch`] unless there is one
+    /// pose per body.
+    pub fn drive_to_pose(&mut self, poses: &[Pose], drive: MotorDrive) -> Result<(), Error> {
+        if poses.len() != self.scene.bodies.len() {
+            return Err(Error::Mismatch {
+                what: format!(
+                    "drive_to_pose: {} poses for the {} bodies of scene \"{}\"",
+                    poses.len(),
+                    self.scene.bodies.len(),
+                    self.scene.name
+                ),
+            });
+        }
+        let motors: Vec<JointMotor> = self
+            .scene
+            .constraints
+            .iter()
+            .filter(|c| !matches!(c.kind, JointKind::Slider { .. } | JointKind::Spring { .. }))
+            .map(|c| {
+                let q1 = poses[c.body1.index()].rotation;
+                let (body2, q2) = match c.body2 {
+                    BodyRef::Body(b) => (Some(b), poses[b.index()].rotation),
+                    BodyRef::World => (None, Quat::IDENTITY),
+                };
+                JointMotor {
+                    body1: c.body1,
+                    body2,
+                    target: (q2.inverse() * q1).normalize(),
+                    drive,
+                }
+            })
+            .collect();
+        self.method.set_joint_motors(&motors);
+        Ok(())
+    }
+
+    /// Drives each listed joint toward the relative rotation `Δ` of its
+    /// [`JointAngles::rotation`] (body1 relative to body2 since the rest pose, rest-pose
+    /// world axes; for a hinge `Quat::from_axis_angle(axis, angle)` with the axis of
+    /// [`World::joint_angles`]): the motor's target is `q₂,rest⁻¹ Δ q₁,rest`. Replaces the
+    /// motors in force ([`World::drive_to_pose`]).
+    pub fn drive_joints(&mut self, targets: &[(JointId, Quat)], drive: MotorDrive) {
+        let motors: Vec<JointMotor> = targets
+            .iter()
+            .filter_map(|&(joint, delta)| {
+                let c = self.scene.constraints.get(joint.index())?;
+                let q1r = self.scene.body(c.body1).pose.rotation;
+                let (body2, q2r) = match c.body2 {
+                    BodyRef::Body(b) => (Some(b), self.scene.body(b).pose.rotation),
+                    BodyRef::World => (None, Quat::IDENTITY),
+                };
+                Some(JointMotor {
+                    body1: c.body1,
+                    body2,
+                    target: (q2r.inverse() * delta * q1r).normalize(),
+                    drive,
+                })
+            })
+            .collect();
+        self.method.set_joint_motors(&motors);
+    }
+
+    /// Turns every joint motor off.
+    pub fn stop_motors(&mut self) {
+        self.method.set_joint_motors(&[]);
     }
 
     /// Simulated time so far (s).

@@ -34,6 +34,40 @@ use super::{ParticleSolver, ParticleWorld};
 use crate::scene::BodyId;
 use glam::{DMat3, DVec3, Mat3, Vec3, Vec3A};
 
+/// The mass, centre of mass and inertia about it (world axes) of particles of masses
+/// `m` at `x`; `None` when they have no mass.
+pub(crate) fn particle_inertia<const N: usize>(
+    x: &[Vec3; N],
+    m: &[f32; N],
+) -> Option<(f64, DVec3, DMat3)> {
+    // In f64: the inertia of four points can be ill-conditioned (a thin bone), and its
+    // inverse should not add more error than the f32 state can hold.
+    let total: f64 = m.iter().map(|&m| m as f64).sum();
+    if total <= 0.0 {
+        return None;
+    }
+    let c = (0..N).map(|k| x[k].as_dvec3() * m[k] as f64).sum::<DVec3>() / total;
+    let mut inertia = DMat3::ZERO;
+    for k in 0..N {
+        let r = x[k].as_dvec3() - c;
+        inertia += (DMat3::from_diagonal(DVec3::splat(r.length_squared()))
+            - DMat3::from_cols(r * r.x, r * r.y, r * r.z))
+            * m[k] as f64;
+    }
+    Some((total, c, inertia))
+}
+
+/// `I⁻¹`, or zero when the particles are collinear (`det I` against its scale
+/// `(trace/3)³`): they then take no turn.
+pub(crate) fn inverse_inertia(inertia: &DMat3) -> DMat3 {
+    let scale = (inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z) / 3.0;
+    if inertia.determinant() > 1e-9 * scale.powi(3) {
+        inertia.inverse()
+    } else {
+        DMat3::ZERO
+    }
+}
+
 /// The velocity change of each particle of masses `m` at `x` (module doc). Particles of
 /// mass 0 get none. With fewer than three non-collinear particles of mass the inertia
 /// is singular and only the linear part is given.
@@ -43,34 +77,35 @@ pub(crate) fn rigid_velocity_change<const N: usize>(
     impulse: Vec3,
     point: Vec3,
 ) -> [Vec3; N] {
-    // In f64: the inertia of four points can be ill-conditioned (a thin bone), and its
-    // inverse should not add more error than the f32 state can hold.
-    let total: f64 = m.iter().map(|&m| m as f64).sum();
-    if total <= 0.0 {
+    let Some((total, c, inertia)) = particle_inertia(x, m) else {
         return [Vec3::ZERO; N];
-    }
-    let c = (0..N).map(|k| x[k].as_dvec3() * m[k] as f64).sum::<DVec3>() / total;
-    let mut inertia = DMat3::ZERO;
-    for k in 0..N {
-        let r = x[k].as_dvec3() - c;
-        let m = m[k] as f64;
-        inertia += (DMat3::from_diagonal(DVec3::splat(r.length_squared()))
-            - DMat3::from_cols(r * r.x, r * r.y, r * r.z))
-            * m;
-    }
+    };
     let j = impulse.as_dvec3();
     let dv = j / total;
-    let torque = (point.as_dvec3() - c).cross(j);
-    // Singular when the particles are collinear: det I against its scale (trace/3)³.
-    let scale = (inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z) / 3.0;
-    let dw = if inertia.determinant() > 1e-9 * scale.powi(3) {
-        inertia.inverse() * torque
-    } else {
-        DVec3::ZERO
-    };
+    let dw = inverse_inertia(&inertia) * (point.as_dvec3() - c).cross(j);
     std::array::from_fn(|k| {
         if m[k] > 0.0 {
             (dv + dw.cross(x[k].as_dvec3() - c)).as_vec3()
+        } else {
+            Vec3::ZERO
+        }
+    })
+}
+
+/// The velocity change of each particle for the angular impulse `l` (a couple): the
+/// turn `Δω = I⁻¹ l` about the particles' centre of mass, `Δv_k = Δω × (x_k − c)`.
+pub(crate) fn angular_velocity_change<const N: usize>(
+    x: &[Vec3; N],
+    m: &[f32; N],
+    l: Vec3,
+) -> [Vec3; N] {
+    let Some((_, c, inertia)) = particle_inertia(x, m) else {
+        return [Vec3::ZERO; N];
+    };
+    let dw = inverse_inertia(&inertia) * l.as_dvec3();
+    std::array::from_fn(|k| {
+        if m[k] > 0.0 {
+            dw.cross(x[k].as_dvec3() - c).as_vec3()
         } else {
             Vec3::ZERO
         }

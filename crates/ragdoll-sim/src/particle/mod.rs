@@ -24,6 +24,7 @@ mod joints;
 pub(crate) mod kinematic;
 mod limits;
 mod measure;
+mod motors;
 mod paper;
 mod particles;
 mod placement;
@@ -107,6 +108,8 @@ pub struct ParticleWorld {
     xpbd: Option<xpbd::XpbdState>,
     /// Per bone, its motion while it is kinematic (empty until one is).
     kinematic: Vec<Option<kinematic::KinematicBone>>,
+    /// The joint motors in force (`motors`).
+    motors: Vec<crate::motor::JointMotor>,
     grab: Option<Grab>,
     time: f64,
     /// The last step's phase times, for display only (no step reads them).
@@ -135,6 +138,7 @@ impl ParticleWorld {
             paper: None,
             xpbd: None,
             kinematic: Vec::new(),
+            motors: Vec::new(),
             grab: None,
             time: 0.0,
             phase_times: PhaseTimes::default(),
@@ -476,6 +480,7 @@ impl Method for ParticleWorld {
 
     fn step(&mut self) {
         self.advance_kinematic();
+        self.apply_motors();
         match self.solver {
             ParticleSolver::RigidFrames => rigid_frames::step(self),
             ParticleSolver::Paper => {
@@ -727,6 +732,10 @@ impl Method for ParticleWorld {
 
     fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
         ParticleWorld::move_kinematic(self, body, target, dt);
+    }
+
+    fn set_joint_motors(&mut self, motors: &[crate::motor::JointMotor]) {
+        ParticleWorld::set_joint_motors(self, motors);
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {

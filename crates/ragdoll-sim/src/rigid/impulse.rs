@@ -1,5 +1,5 @@
 //! What acts on bodies from outside: an impulse (a hit, a shot, an explosion), a new
-//! pose (a teleport), and the wake they bring.
+//! pose (a teleport), joint motors ([`crate::motor`]), and the wake they bring.
 //!
 //! Newton for a rigid body: an impulse `J` at the world point `p` changes the velocity
 //! of the centre of mass `c` by `J/m` and the angular velocity by
@@ -12,6 +12,7 @@ use super::body::{BodyInfo, BodyStates, Motions};
 use super::island::Islands;
 use super::solver;
 use crate::method::BodyVelocity;
+use crate::motor::{JointMotor, MotorBody, motor_impulse};
 use crate::scene::Pose;
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 use parry3d::shape::SharedShape;
@@ -106,6 +107,56 @@ impl Bodies<'_> {
         // it each substep of an awake body; this keeps it right until then).
         if self.awake[i] {
             self.states.inv_inertia[i] = Mat3A::from(self.world_inv_inertia(i));
+        }
+    }
+}
+
+impl Bodies<'_> {
+    /// Body `i` as a motor sees it: fixed, kinematic and sleeping bodies take no
+    /// impulse (zero inverse inertia) but turn the target with their orientation.
+    fn motor_body(&self, i: usize) -> MotorBody {
+        MotorBody {
+            rotation: self.states.rot[i],
+            angular_velocity: self.states.ang_vel[i].into(),
+            inv_inertia: if self.awake[i] {
+                self.world_inv_inertia(i)
+            } else {
+                Mat3::ZERO
+            },
+        }
+    }
+
+    /// Start of a step: every motor's angular impulse `±λ` on its two bodies
+    /// ([`crate::motor`]), one after the other in the motors' order, each reading the
+    /// velocities the ones before it left (Gauss–Seidel: two motors on one body do not
+    /// both correct the same error).
+    pub(crate) fn apply_motors(&mut self, motors: &[JointMotor], h: f32) {
+        let n = self.info.len();
+        for m in motors {
+            let i1 = m.body1.index();
+            let i2 = m.body2.map(|b| b.index());
+            if i1 >= n || i2.is_some_and(|i| i >= n) {
+                continue;
+            }
+            let b1 = self.motor_body(i1);
+            let b2 = i2.map_or(MotorBody::STILL, |i| self.motor_body(i));
+            let l = motor_impulse(m, &b1, &b2, h);
+            self.states.ang_vel[i1] += Vec3A::from(b1.inv_inertia * l);
+            if let Some(i2) = i2 {
+                self.states.ang_vel[i2] -= Vec3A::from(b2.inv_inertia * l);
+            }
+        }
+    }
+
+    /// Wakes the figures the motors act on.
+    pub(crate) fn wake_motored(&mut self, motors: &[JointMotor]) {
+        let n = self.info.len();
+        for m in motors {
+            for b in [Some(m.body1), m.body2].into_iter().flatten() {
+                if b.index() < n && self.dynamic[b.index()] {
+                    self.wake(b.index());
+                }
+            }
         }
     }
 }

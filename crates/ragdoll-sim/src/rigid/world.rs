@@ -9,6 +9,7 @@ use super::joint_set::JointSet;
 use super::solver;
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
+use crate::motor::JointMotor;
 use crate::scene::{
     BodyDesc, BodyId, BodyRef, Pose, SceneDesc, SceneError, Settings, collider, mass_props,
     validate,
@@ -36,6 +37,8 @@ pub struct MultibodyWorld {
     dynamic: Vec<bool>,
     /// Per body: kinematic (moved by the game, fixed to the solver; `kinematic`).
     kinematic: Vec<bool>,
+    /// The joint motors in force ([`crate::motor`]).
+    motors: Vec<JointMotor>,
     time: f64,
     grab: Option<Grab>,
     /// The last step's phase times, for display only.
@@ -149,6 +152,7 @@ impl MultibodyWorld {
             awake,
             dynamic,
             kinematic: vec![false; n],
+            motors: Vec::new(),
             time: 0.0,
             grab: None,
             phase_times: PhaseTimes::default(),
@@ -273,6 +277,11 @@ impl Method for MultibodyWorld {
         }
         let dt = self.settings.timestep;
         self.bodies().wake_kinematic_sweeps(dt);
+        if !self.motors.is_empty() {
+            let motors = std::mem::take(&mut self.motors);
+            self.bodies().apply_motors(&motors, dt);
+            self.motors = motors;
+        }
         solver::step(
             &mut self.states,
             &self.info,
@@ -440,6 +449,12 @@ impl Method for MultibodyWorld {
 
     fn move_kinematic(&mut self, body: BodyId, target: Pose, dt: f32) {
         self.bodies().move_kinematic(body.index(), target, dt);
+    }
+
+    fn set_joint_motors(&mut self, motors: &[JointMotor]) {
+        self.motors.clear();
+        self.motors.extend_from_slice(motors);
+        self.bodies().wake_motored(motors);
     }
 
     fn set_body_poses(&mut self, poses: &[BodyPoseSet]) {
