@@ -60,7 +60,7 @@ fn accepts_the_doom_figure_and_lists_what_it_ignores() {
         "{stdout}"
     );
     assert!(
-        stdout.contains("`containedJoints`") && stdout.contains("custom(\""),
+        stdout.contains("`frictionDirection`") && stdout.contains("custom(\""),
         "{stdout}"
     );
 }
