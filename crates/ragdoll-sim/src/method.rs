@@ -119,6 +119,12 @@ pub trait Method: Send {
     fn set_grab(&mut self, grab: Option<Grab>);
     /// Adds a dynamic body (a projectile) with its initial velocity; wakes what it hits.
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId;
+    /// Applies the impulse `impulse` (N·s, world axes) at the world point `point` to
+    /// `body`, at once: the body's momentum changes by `impulse` and its angular
+    /// momentum about its centre of mass `c` by `(point − c) × impulse` (a particle bone
+    /// shares it among its particles so that both hold for them). Wakes the body's
+    /// island first. Does nothing to a fixed body or an id not of this world.
+    fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3);
     /// Wall time of the last step's phases, for display only (no result depends on it).
     /// Empty for a method that does not time its phases.
     fn phase_times(&self) -> PhaseTimes {

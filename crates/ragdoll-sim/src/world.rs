@@ -219,6 +219,16 @@ impl World {
         steps
     }
 
+    /// Applies the impulse `impulse` (N·s, world axes) at the world point `point` to
+    /// `body`, at once, waking its island: its momentum changes by `impulse` and its
+    /// angular momentum about its centre of mass `c` by `(point − c) × impulse`
+    /// ([`Method::apply_impulse`]). The body states read back at once show it. Does
+    /// nothing to a fixed body.
+    pub fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
+        self.method.apply_impulse(body, impulse, point);
+        self.method.body_states(&mut self.states);
+    }
+
     /// Simulated time so far (s).
     pub fn time(&self) -> f64 {
         self.method.time()

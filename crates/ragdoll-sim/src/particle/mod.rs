@@ -17,6 +17,7 @@ mod bone;
 mod bone_lanes;
 mod contacts;
 mod friction;
+mod impulse;
 mod islands;
 mod joint_lanes;
 mod joints;
@@ -699,6 +700,10 @@ impl Method for ParticleWorld {
 
     fn phase_times(&self) -> PhaseTimes {
         self.phase_times
+    }
+
+    fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
+        ParticleWorld::apply_impulse(self, body, impulse, point);
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {

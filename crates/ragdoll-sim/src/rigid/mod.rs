@@ -10,6 +10,7 @@
 //! - `contact`: collision detection (with [`crate::broadphase`]) and the contact
 //!   cache; `contact_solver`: the contact rows of one step, over dense arrays;
 //!   `contact_wide`: the same rows four pairs at a time (graph colouring, SIMD).
+//! - `impulse`: an impulse from outside and the wake it brings.
 //! - `island`: islands and sleeping; `solver`: the step; `project`: the position
 //!   projection after it; `parallel`: islands solved on all cores.
 //! - `world`: [`MultibodyWorld`], the `Method`, the one public item.
@@ -24,6 +25,7 @@ mod contact_solver;
 mod contact_wide;
 mod fixed;
 mod hinge;
+mod impulse;
 mod integrate;
 mod island;
 mod joint;

@@ -3,6 +3,7 @@
 
 use super::body::{BodyInfo, BodyMotion, BodyNames, BodyStates, FullInertia, Motions};
 use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
+use super::impulse::Bodies;
 use super::island::Islands;
 use super::joint_set::JointSet;
 use super::solver;
@@ -207,6 +208,21 @@ impl MultibodyWorld {
         which.map(|(a, b)| (deepest, name(a), name(b)))
     }
 
+    /// The bodies and their sleep state, for what acts on them from outside.
+    fn bodies(&mut self) -> Bodies<'_> {
+        Bodies {
+            states: &mut self.states,
+            info: &self.info,
+            motion: Motions {
+                bodies: &self.motion,
+                full: &self.full_inertia,
+            },
+            islands: &mut self.islands,
+            awake: &mut self.awake,
+            dynamic: &self.dynamic,
+        }
+    }
+
     /// Current pose of body `i`'s shape frame.
     fn pose(&self, i: usize) -> Pose {
         let q = self.states.rot[i];
@@ -400,6 +416,10 @@ impl Method for MultibodyWorld {
 
     fn phase_times(&self) -> PhaseTimes {
         self.phase_times
+    }
+
+    fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
+        self.bodies().apply_impulse(body.index(), impulse, point);
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
