@@ -9,11 +9,11 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
+use ragdoll_sim::scene::BodyDesc;
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::md5mesh::Md5Mesh;
 use ragdoll_sim::scene::rig::Rig;
 use ragdoll_sim::scene::skin::SkinnedMesh;
-use ragdoll_sim::scene::BodyDesc;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 

@@ -117,34 +117,57 @@ impl SkinnedMesh {
         }));
     }
 
-    /// The first place the segment `from` → `to` meets a triangle of the mesh skinned
-    /// at `positions` (from [`Self::positions`] with `joints`), from either side, and
-    /// the body it pushes. `None` for a miss, a zero-length segment, or a mesh without
-    /// triangles.
-    pub fn cast_segment(
-        &self,
-        joints: &[Pose],
-        positions: &[Vec3],
-        from: Vec3,
-        to: Vec3,
-    ) -> Option<MeshHit> {
-        if from == to || self.triangles.is_empty() {
+    /// The mesh skinned on `joints` (from `Rig::joint_poses`), ready for casts.
+    pub fn posed<'a>(&'a self, joints: &'a [Pose]) -> PosedMesh<'a> {
+        let mut positions = Vec::new();
+        self.positions(joints, &mut positions);
+        // A BVH over the posed triangles, built per pose: the mesh moves every step.
+        let mesh = if self.triangles.is_empty() {
+            None
+        } else {
+            TriMesh::new(positions.clone(), self.triangles.clone()).ok()
+        };
+        PosedMesh {
+            skin: self,
+            joints,
+            positions,
+            mesh,
+        }
+    }
+}
+
+/// A [`SkinnedMesh`] in one pose of its joints.
+pub struct PosedMesh<'a> {
+    skin: &'a SkinnedMesh,
+    joints: &'a [Pose],
+    positions: Vec<Vec3>,
+    mesh: Option<TriMesh>,
+}
+
+impl PosedMesh<'_> {
+    /// The skinned vertex positions (world, m).
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// The first place the segment `from` → `to` meets a triangle, from either side,
+    /// and the body the hit pushes. `None` for a miss, a zero-length segment, or a mesh
+    /// without triangles.
+    pub fn cast_segment(&self, from: Vec3, to: Vec3) -> Option<MeshHit> {
+        let mesh = self.mesh.as_ref()?;
+        if from == to {
             return None;
         }
-        // A BVH over the posed triangles; built per cast, as the mesh moves every step
-        // and casts are rare (one per shot in flight).
-        let mesh = TriMesh::new(positions.to_vec(), self.triangles.clone()).ok()?;
         let ray = Ray::new(from, to - from);
         let hit = mesh.cast_local_ray_and_get_normal(&ray, 1.0, false)?;
-        let triangle = hit.subshape;
         let point = ray.point_at(hit.time_of_impact);
-        let joint = nearest_joint(joints, point)?;
+        let joint = nearest_joint(self.joints, point)?;
         Some(MeshHit {
             point,
             fraction: hit.time_of_impact,
-            triangle,
+            triangle: hit.subshape,
             joint,
-            body: self.joint_body.get(joint).copied().flatten(),
+            body: self.skin.joint_body.get(joint).copied().flatten(),
         })
     }
 }
@@ -240,19 +263,22 @@ mod tests {
         let skin = SkinnedMesh::new(&mesh, &rig, &bodies);
         let poses: Vec<Pose> = bodies.iter().map(|b| b.pose).collect();
         let joints = rig.joint_poses(&poses);
-        let mut p = Vec::new();
-        skin.positions(&joints, &mut p);
-        assert_eq!(p[2], Vec3::new(1.0, 0.0, 1.0));
+        let posed = skin.posed(&joints);
+        assert_eq!(posed.positions()[2], Vec3::new(1.0, 0.0, 1.0));
         let from = Vec3::new(3.0, 0.0, 0.0);
-        let hit = skin
-            .cast_segment(&joints, &p, from, Vec3::new(-1.0, 0.0, 0.0))
+        let hit = posed
+            .cast_segment(from, Vec3::new(-1.0, 0.0, 0.0))
             .expect("crosses x = 1");
         assert!((hit.point - Vec3::X).length() < 1e-5, "{hit:?}");
         assert!((hit.fraction - 0.5).abs() < 1e-5);
         assert_eq!((hit.joint, hit.body), (1, Some(BodyId(1))));
         // Stopping short of the plane, or passing beside the triangle, misses.
-        assert!(skin.cast_segment(&joints, &p, from, Vec3::new(1.1, 0.0, 0.0)).is_none());
+        assert!(posed.cast_segment(from, Vec3::new(1.1, 0.0, 0.0)).is_none());
         let beside = Vec3::new(0.0, 3.0, 0.0);
-        assert!(skin.cast_segment(&joints, &p, from + beside, -Vec3::X + beside).is_none());
+        assert!(
+            posed
+                .cast_segment(from + beside, -Vec3::X + beside)
+                .is_none()
+        );
     }
 }
