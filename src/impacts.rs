@@ -1,10 +1,14 @@
 //! Shots that hit the skinned mesh (Doom 3's `containedJoints`): a box shot with B is
 //! also a projectile against the visual mesh of a figure that has one.
 //!
-//! Before every step, on each side separately, each shot's path over the step — from
-//! its centre of mass along its velocity for one timestep, c → c + v·Δt (gravity bends
-//! it by g·Δt²/2, a fraction of a millimetre, which is left out) — is cast against that
-//! side's mesh skinned on its bodies' current poses (the pose that is drawn). At the
+//! Before every step, on each side separately, each shot's path over the step is cast
+//! against that side's mesh skinned on its bodies' current poses (the pose that is
+//! drawn). The path is the one its leading face sweeps along its centre line: from
+//! c + v̂ s to c + v̂ s + v Δt, with c the box's centre, v its velocity and s its extent
+//! ahead of the centre, s = a Σᵢ |v̂ · eᵢ| for half edge a and the box's axes eᵢ (so a
+//! box meets the mesh when its front does, not when its centre does, and before its
+//! front reaches a collision shape just inside the mesh). Gravity bends the path by
+//! g Δt²/2, a fraction of a millimetre, which is left out. At the
 //! first triangle crossed, the joint nearest to the hit point is found and the body
 //! containing it ([`ragdoll_sim::scene::BodyDesc::contained_joints`]) receives the
 //! shot's momentum J = m v as an impulse at the hit point; the shot receives −J at its
@@ -40,12 +44,13 @@ pub struct MeshImpact {
     pub impulse: Vec3,
 }
 
-/// A shot in flight: its body on each side, its mass, and whether it may still hit
-/// each side's mesh.
+/// A shot in flight: its body on each side, its mass and half edge, and whether it may
+/// still hit each side's mesh.
 #[derive(Clone, Copy, Debug)]
 struct Shot {
     body: [BodyId; 2],
     mass: f32,
+    half_edge: f32,
     live: [bool; 2],
 }
 
@@ -59,11 +64,13 @@ pub(crate) struct MeshTargets {
 }
 
 impl MeshTargets {
-    /// Records a shot added to both methods (`body` on each side) of mass `mass` (kg).
-    pub(crate) fn add_shot(&mut self, body: [BodyId; 2], mass: f32) {
+    /// Records a box shot added to both methods (`body` on each side) of mass `mass`
+    /// (kg) and half edge `half_edge` (m).
+    pub(crate) fn add_shot(&mut self, body: [BodyId; 2], mass: f32, half_edge: f32) {
         self.shots.push(Shot {
             body,
             mass,
+            half_edge,
             live: [true; 2],
         });
     }
@@ -110,8 +117,14 @@ impl MeshTargets {
                     shot.live[side] = false;
                     continue;
                 };
-                let to = st.com + st.linear_velocity * dt;
-                let Some(hit) = posed.cast_segment(st.com, to) else {
+                let ahead = st.linear_velocity.normalize_or_zero();
+                let reach = [Vec3::X, Vec3::Y, Vec3::Z]
+                    .iter()
+                    .map(|e| ahead.dot(st.orientation * *e).abs())
+                    .sum::<f32>()
+                    * shot.half_edge;
+                let from = st.com + ahead * reach;
+                let Some(hit) = posed.cast_segment(from, from + st.linear_velocity * dt) else {
                     continue;
                 };
                 shot.live[side] = false;

@@ -307,7 +307,7 @@ impl Session {
             self.methods[1].add_body(&body),
         ];
         if self.loaded.skin.is_some() {
-            self.targets.add_shot(ids, shot.mass());
+            self.targets.add_shot(ids, shot.mass(), shot.edge * 0.5);
         }
     }
 
