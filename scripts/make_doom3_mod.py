@@ -340,6 +340,9 @@ AF = """/*
 	own files do; Doom 3 compares them without regard to case.
 	The left knee's limit starts 4 degrees outside its rest pose (like id's zombie
 	knees); the shins end on the ground, at the sole joints.
+	containedJoints name each body's joints for hits on the mesh; the sole joints
+	come last in the skeleton, outside the run `*Lloleg` takes, so the shins name
+	them as well.
 */
 
 articulatedFigure lab_human {
@@ -433,7 +436,7 @@ body "lloleg" {
 	mod orientation
 	model bone( joint( "Lloleg" ), joint( "Lsole" ), 4.5 )
 	density 0.02
-	containedJoints "*Lloleg"
+	containedJoints "*Lloleg Lsole"
 }
 
 body "rupleg" {
@@ -449,7 +452,7 @@ body "rloleg" {
 	mod orientation
 	model bone( joint( "Rloleg" ), joint( "Rsole" ), 4.5 )
 	density 0.02
-	containedJoints "*Rloleg"
+	containedJoints "*Rloleg Rsole"
 }
 
 universalJoint "waist_chest" {

@@ -128,6 +128,15 @@ pub fn summary(file: &str, scene: &AfScene) -> String {
         })
         .sum();
     let _ = writeln!(out, "total mass: {total:.2} kg (dynamic bodies)");
+    if let Some(rig) = &scene.rig {
+        // Which body a shot at the mesh pushes, per joint (`containedJoints`).
+        let contained: usize = d.bodies.iter().map(|b| b.contained_joints.len()).sum();
+        let _ = writeln!(
+            out,
+            "skeleton: {} joints, {contained} contained by a body (containedJoints)",
+            rig.joints.len()
+        );
+    }
     if scene.ignored.is_empty() {
         let _ = writeln!(out, "ignored: nothing");
     } else {

@@ -9,6 +9,7 @@ pub mod check;
 pub mod cli;
 pub mod compose;
 pub mod error;
+pub mod impacts;
 pub mod input;
 pub mod inspect;
 pub mod methods;

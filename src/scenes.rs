@@ -172,10 +172,11 @@ fn with_skin(
 ) -> Result<LoadedScene, AppError> {
     if let (Some(rig), Some(path)) = (&scene.rig, mesh) {
         let mesh = md5mesh::load(path).map_err(|e| AppError::Scene(e.to_string()))?;
-        out.skin = Some(Arc::new(SkinModel {
-            rig: rig.clone(),
+        out.skin = Some(Arc::new(SkinModel::new(
+            rig.clone(),
             mesh,
-        }));
+            &scene.desc.bodies,
+        )));
     }
     Ok(out)
 }

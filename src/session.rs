@@ -3,6 +3,7 @@
 
 use crate::app_state::SettingsOverride;
 use crate::cli::ParticleSolverArg;
+use crate::impacts::{MeshImpact, MeshTargets};
 use crate::scenes::LoadedScene;
 use crate::{AppError, methods};
 use glam::{Quat, Vec3};
@@ -122,8 +123,15 @@ pub struct Session {
     pub worst: [Worst; 2],
     /// Each side's skeleton as its bodies drive it (empty without a skinned mesh).
     pub joint_poses: [Vec<Pose>; 2],
+    /// Whether shots hit the skinned mesh (the window ties it to its mesh toggle): a
+    /// shot crossing the mesh pushes the body containing the nearest joint (see
+    /// [`crate::impacts`]). Without a mesh it has no effect.
+    pub mesh_shots: bool,
+    /// Every hit of a shot on the mesh since the scene started, in order.
+    pub mesh_impacts: Vec<MeshImpact>,
     grab: Option<GrabDrag>,
     shots: u32,
+    targets: MeshTargets,
 }
 
 impl Session {
@@ -171,8 +179,11 @@ impl Session {
             history: [Vec::new(), Vec::new()],
             worst: [Worst::default(); 2],
             joint_poses: [Vec::new(), Vec::new()],
+            mesh_shots: true,
+            mesh_impacts: Vec::new(),
             grab: None,
             shots: 0,
+            targets: MeshTargets::default(),
         };
         session.record();
         session.worst = session.samples.map(|s| Worst::start(&s));
@@ -197,8 +208,15 @@ impl Session {
         self.methods[0].time()
     }
 
-    /// One timestep of both methods, timing each.
+    /// One timestep of both methods, timing each; first, shots that cross the skinned
+    /// mesh this step push the bodies containing the joints they hit.
     pub fn step(&mut self) {
+        if let Some(skin) = self.loaded.skin.as_ref().filter(|_| self.mesh_shots) {
+            let dt = self.methods[0].settings().timestep;
+            let n = self.loaded.desc.bodies.len();
+            let hits = self.targets.before_step(skin, &mut self.methods, n, dt);
+            self.mesh_impacts.extend(hits);
+        }
         for (i, m) in self.methods.iter_mut().enumerate() {
             let start = Instant::now();
             m.step();
@@ -268,7 +286,8 @@ impl Session {
 
     /// Shoots a box of `shot`'s size and speed from `origin` along unit `dir` (the
     /// cursor's ray) into both scenes. It starts 0.3 m and one edge along the ray, clear
-    /// of the eye, so it is seen leaving the camera.
+    /// of the eye, so it is seen leaving the camera. With a skinned mesh it also hits
+    /// the mesh (see [`crate::impacts`]).
     pub fn shoot(&mut self, origin: Vec3, dir: Vec3, shot: &ShotSettings) {
         self.shots += 1;
         let mut body = BodyDesc::new(
@@ -283,8 +302,12 @@ impl Session {
             MassSpec::Mass(shot.mass()),
         );
         body.linear_velocity = dir * shot.speed;
-        for m in &mut self.methods {
-            m.add_body(&body);
+        let ids = [
+            self.methods[0].add_body(&body),
+            self.methods[1].add_body(&body),
+        ];
+        if self.loaded.skin.is_some() {
+            self.targets.add_shot(ids, shot.mass(), shot.edge * 0.5);
         }
     }
 

@@ -432,6 +432,7 @@ impl App {
         };
         self.last = now;
         let timestep = self.session.settings().timestep as f64;
+        self.session.mesh_shots = self.state.show.mesh;
         for _ in 0..self.state.steps_due(dt, timestep) {
             self.session.step();
         }

@@ -60,7 +60,7 @@ fn accepts_the_doom_figure_and_lists_what_it_ignores() {
         "{stdout}"
     );
     assert!(
-        stdout.contains("`containedJoints`") && stdout.contains("custom(\""),
+        stdout.contains("`frictionDirection`") && stdout.contains("custom(\""),
         "{stdout}"
     );
 }
@@ -163,4 +163,21 @@ fn broken_files_give_one_positioned_error_and_exit_1() {
     let missing = check(&[&dir.join("does-not-exist.af")]);
     assert_eq!(missing.status.code(), Some(1));
     assert!(text(&missing.stderr).contains("does-not-exist.af:1:1: error: cannot read the file"));
+}
+
+#[test]
+fn the_mod_entity_has_every_joint_contained_by_a_body() {
+    let base = root().join("assets/doom3");
+    let out = check(&[
+        Path::new("--doom3"),
+        &base,
+        Path::new("--entity"),
+        Path::new("monster_lab_human"),
+    ]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        stdout.contains("skeleton: 20 joints, 20 contained by a body (containedJoints)"),
+        "{stdout}"
+    );
 }

@@ -1,16 +1,19 @@
 //! The skinned md5 mesh of a Doom 3 figure, drawn on each side with the joints that
 //! side's bodies give it (see `ragdoll_sim::scene::rig`), tinted like that side's
 //! bodies. Skinning runs in the vertex shader (`shaders/skin.wgsl`): joint matrices in
-//! a uniform buffer per side, up to four weights per vertex as vertex attributes.
+//! a uniform buffer per side, up to four weights per vertex as vertex attributes, taken
+//! from the same [`SkinnedMesh`] records the CPU skins and casts shots against (so a
+//! vertex keeps its four largest biases on both).
 //!
-//! A vertex with more than four weights keeps its four largest biases (Doom 3's own
-//! meshes rarely have more); a mesh with more joints than [`MAX_JOINTS`] is not drawn.
+//! A mesh with more joints than [`MAX_JOINTS`] is not drawn.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::Mat4;
+use ragdoll_sim::scene::BodyDesc;
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::md5mesh::Md5Mesh;
 use ragdoll_sim::scene::rig::Rig;
+use ragdoll_sim::scene::skin::SkinnedMesh;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
@@ -25,9 +28,19 @@ pub struct SkinModel {
     pub rig: Rig,
     /// The mesh (file units and axes).
     pub mesh: Md5Mesh,
+    /// The mesh's weights in our units, its triangles, and the body containing each
+    /// joint: what the GPU draws and shots are cast against.
+    pub skinned: SkinnedMesh,
 }
 
 impl SkinModel {
+    /// The model of `mesh` driven by `rig`, its joints contained by `bodies` (the
+    /// scene's bodies, whose `contained_joints` say which).
+    pub fn new(rig: Rig, mesh: Md5Mesh, bodies: &[BodyDesc]) -> SkinModel {
+        let skinned = SkinnedMesh::new(&mesh, &rig, bodies);
+        SkinModel { rig, mesh, skinned }
+    }
+
     /// Every joint's world pose for one side's body poses (shape frames, scene order).
     pub fn joint_poses(&self, bodies: &[Pose]) -> Vec<Pose> {
         self.rig.joint_poses(bodies)
@@ -180,27 +193,21 @@ impl SkinRenderer {
     }
 
     fn upload(&self, device: &wgpu::Device, model: &SkinModel, key: usize) -> GpuSkin {
-        let (axes, scale) = (model.rig.file_axes, model.rig.file_scale);
-        let mut vertices = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        for sub in &model.mesh.meshes {
-            let base = vertices.len() as u32;
-            for v in &sub.vertices {
-                let first = v.first_weight as usize;
-                let mut ws: Vec<_> = sub.weights[first..first + v.weight_count as usize].to_vec();
-                ws.sort_by(|a, b| b.bias.total_cmp(&a.bias));
+        let vertices: Vec<SkinVertex> = model
+            .skinned
+            .vertices
+            .iter()
+            .map(|v| {
                 let mut out = SkinVertex::zeroed();
-                for (k, w) in ws.iter().take(4).enumerate() {
-                    let o: Vec3 = axes * w.offset * scale;
-                    out.weights[k] = [o.x, o.y, o.z, w.bias];
-                    out.joints[k] = w.joint;
+                for k in 0..v.joints.len() {
+                    let o = v.offsets[k];
+                    out.weights[k] = [o.x, o.y, o.z, v.biases[k]];
+                    out.joints[k] = v.joints[k];
                 }
-                vertices.push(out);
-            }
-            for t in &sub.triangles {
-                indices.extend(t.iter().map(|i| base + i));
-            }
-        }
+                out
+            })
+            .collect();
+        let indices: Vec<u32> = model.skinned.triangles.iter().flatten().copied().collect();
         let vertices_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("skin vertices"),
             contents: bytemuck::cast_slice(&vertices),

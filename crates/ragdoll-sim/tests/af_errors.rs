@@ -381,13 +381,22 @@ fn the_doom_figure_uses_everything_and_reports_ignored_keys() {
         "contents",
         "clipMask",
         "mod",
-        "containedJoints",
         "frictionDirection",
         "contactMotorDirection",
     ] {
         assert!(s.ignored.iter().any(|i| i.key == key), "{key}");
     }
     assert!(s.ignored.iter().any(|i| i.key.starts_with("custom(")));
+    // containedJoints are resolved against the mesh, not ignored: each of its 18 joints
+    // belongs to one body.
+    assert!(!s.ignored.iter().any(|i| i.key == "containedJoints"));
+    let mut owned: Vec<u32> = d
+        .bodies
+        .iter()
+        .flat_map(|b| b.contained_joints.clone())
+        .collect();
+    owned.sort_unstable();
+    assert_eq!(owned, (0..18).collect::<Vec<u32>>());
     // Hinge `limit centre, width, shaft` = 45, 90, 0: body1 may turn 0..90 degrees.
     let find = |n: &str| &d.constraints.iter().find(|c| c.name == n).unwrap().kind;
     let ragdoll_sim::scene::JointKind::Hinge { limit: Some(l), .. } = find("l_elbow") else {

@@ -237,6 +237,11 @@ pub struct BodyDesc {
     pub particles: Option<[Vec3; 4]>,
     /// Skeleton joint this body drives (Doom 3 `joint`), kept for reference.
     pub skeleton_joint: Option<String>,
+    /// The skeleton joints whose parts of the visual mesh this body contains (Doom 3
+    /// `containedJoints`), as sorted indices into the skeleton the figure was built on;
+    /// a joint belongs to one body at most. A hit on the skinned mesh pushes the body
+    /// containing the joint nearest to it. Empty for a figure without a skeleton.
+    pub contained_joints: Vec<u32>,
 }
 
 impl BodyDesc {
@@ -256,6 +261,7 @@ impl BodyDesc {
             angular_velocity: Vec3::ZERO,
             particles: None,
             skeleton_joint: None,
+            contained_joints: Vec::new(),
         }
     }
 

@@ -7,6 +7,8 @@
 //! - [`md5anim`]: `.md5anim` animations and their frames' joint poses.
 //! - [`decl`]: Doom 3 `.def` declarations: entities, models, where figures are.
 //! - [`rig`]: skeleton joints from body poses (how a figure's bodies move its mesh).
+//! - [`skin`]: the skinned mesh on the CPU, segment casts against it, the body a hit
+//!   pushes.
 //! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform.
 
 pub mod af;
@@ -18,6 +20,7 @@ pub mod md5anim;
 pub mod md5mesh;
 mod pyramid;
 pub mod rig;
+pub mod skin;
 mod transform;
 mod validate;
 

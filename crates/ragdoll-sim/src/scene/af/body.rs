@@ -64,7 +64,8 @@ pub(super) fn read_body(ctx: &mut Ctx, b: &Block, name: &str, d: &Defaults) -> R
             "angularfriction" => body.friction.angular = ctx.nonneg(e)?,
             "contactfriction" => body.friction.contact = ctx.nonneg(e)?,
             "contents" | "clipmask" => ctx.ignore(e, "Doom 3's collision groups: every body collides with the ground and other figures, and with its own figure per selfCollision"),
-            "containedjoints" => ctx.ignore(e, "maps projectile hits on the skinned mesh to bodies; there is no skinned mesh"),
+            // Resolved against the skeleton once every body is read (`contained`).
+            "containedjoints" => {}
             "frictiondirection" => ctx.ignore(e, "anisotropic contact friction is not simulated; friction is isotropic"),
             "contactmotordirection" => ctx.ignore(e, "contact motors (conveyor-like contacts) are not simulated"),
             "fixed" => body.motion = if ctx.flag(e)? { Motion::Fixed } else { Motion::Dynamic },

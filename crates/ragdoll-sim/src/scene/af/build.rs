@@ -166,6 +166,7 @@ pub(super) fn build(
         constraints.push(read_constraint(&mut ctx, b, kind, cname, &ids, &defaults)?);
     }
     desc.constraints = constraints;
+    super::contained::resolve(&mut ctx, &merged, &mut desc)?;
     if desc.bodies.is_empty() {
         return Err(err(
             Pos { line: 1, col: 1 },

@@ -15,6 +15,7 @@
 //! - `build`: the pipeline — variants, settings and our scene blocks, validation, masses.
 //! - `body`, `models`: a body block; Doom 3 collision models as our shapes.
 //! - `constraint`: the six constraint types and their limits.
+//! - `contained`: `containedJoints`, the mesh parts each body contains.
 //! - `place`: the `transform` block and the `replicate` grid.
 //!
 //! Axis mapping: a Z-up file (Doom 3's default) maps `(x, y, z)` to `(x, z, -y)`, a
@@ -24,6 +25,7 @@
 mod body;
 mod build;
 mod constraint;
+mod contained;
 mod ctx;
 pub(crate) mod lexer;
 mod models;
