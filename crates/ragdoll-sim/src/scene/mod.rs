@@ -7,7 +7,9 @@
 //! - [`md5anim`]: `.md5anim` animations and their frames' joint poses.
 //! - [`decl`]: Doom 3 `.def` declarations: entities, models, where figures are.
 //! - [`rig`]: skeleton joints from body poses (how a figure's bodies move its mesh).
-//! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform.
+//! - [`takeover`]: a figure placed on an animation with the animation's velocities.
+//! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform,
+//!   and putting its bodies in a new pose with the joints re-expressed (`repose`).
 
 pub mod af;
 pub mod collider;
@@ -18,6 +20,7 @@ pub mod md5anim;
 pub mod md5mesh;
 mod pyramid;
 pub mod rig;
+pub mod takeover;
 mod transform;
 mod validate;
 
