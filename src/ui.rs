@@ -1023,6 +1023,7 @@ pub const KEYS: &str = "Space start · T one step · Shift+T ten steps · S stop
 1 reset (variant 1, your settings kept) · 2/3 variants · Tab/Shift+Tab next/previous scene\n\
 left drag orbit · middle drag pan · wheel zoom · right click menu\n\
 click a body: inspect it · Ctrl+left drag grab a body · B shoot a box through the cursor\n\
+K the ragdoll takes over from the animation playing (--anim)\n\
 Home camera back · F follow the selected figure (or all) · M both / one method\n\
 P screenshot · Shift+P record frames · R reload file (also when it changes on disk)\n\
 drop an .af file on the window to open it · [ / ] slower / faster · F1 or H panel";
