@@ -278,6 +278,10 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
     if state.recording {
         clock += " · ● recording (Shift+P)";
     }
+    if let Some((a, t)) = &session.playing {
+        let rate = a.takeover.anim().frame_rate as f32;
+        clock += &format!(" · animation frame {:.1} (K: ragdoll takes over)", t * rate);
+    }
     let wide = area.width() - 30.0;
     let galley = text(&painter, clock, font, wide, 2);
     let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
