@@ -97,7 +97,7 @@ fn twist_angle(q: Quat, axis: Vec3) -> f32 {
     }
 }
 
-/// `a` rotated by `t` (applied after `a`): `t · a`.
+/// The rigid motion T taking pose `from` to pose `to`: T · from = to.
 fn motion(from: &Pose, to: &Pose) -> Pose {
     let r = to.rotation * from.rotation.inverse();
     Pose {
@@ -107,7 +107,7 @@ fn motion(from: &Pose, to: &Pose) -> Pose {
 }
 
 impl SceneDesc {
-    /// Puts every body at `poses[i]` (scene order) as a new rest pose and re-expresses
+    /// Puts body i at `poses[i]` (scene order) as its new rest pose and re-expresses
     /// every joint so that it means what it meant at the old rest, in each body's own
     /// frame, as a Doom 3 constraint keeps its body-local frames when `idAF::SetupPose`
     /// moves the bodies onto an animation.
@@ -123,11 +123,16 @@ impl SceneDesc {
     /// new axis (its base is fixed in body2). Left as at the new pose: a universal
     /// joint's per-axis ranges and a fixed joint's relative pose.
     pub fn repose(&mut self, poses: &[Pose]) {
-        let old: Vec<Pose> = self.bodies.iter().map(|b| b.pose).collect();
-        let moved: Vec<Pose> = old
+        // A body past the end of `poses` stays where it is.
+        let moved: Vec<Pose> = self
+            .bodies
             .iter()
-            .zip(poses)
-            .map(|(from, to)| motion(from, to))
+            .enumerate()
+            .map(|(i, b)| {
+                poses
+                    .get(i)
+                    .map_or(Pose::IDENTITY, |to| motion(&b.pose, to))
+            })
             .collect();
         for (b, p) in self.bodies.iter_mut().zip(poses) {
             b.pose = *p;
