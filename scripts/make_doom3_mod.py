@@ -289,9 +289,10 @@ def write_md5anim(path, frames_local, frame_rate, animated):
     write(path, lines)
 
 
-def posed(turns, body_drop=0.0):
+def posed(turns, body_drop=0.0, forward=0.0):
     """Parent-relative joints of the bind pose with `turns` (joint -> (axis, degrees) in
-    the parent's frame, applied after the bind rotation) and the Body joint lowered."""
+    the parent's frame, applied after the bind rotation), the Body joint lowered and the
+    origin joint moved `forward` along +X (root motion: Doom 3 moves the entity by it)."""
     loc = []
     for i, (name, _, _, _) in enumerate(JOINTS):
         t, q = BIND_LOCAL[i]
@@ -300,6 +301,8 @@ def posed(turns, body_drop=0.0):
             q = qmul(qaxis(axis, deg), q)
         if name == "Body":
             t = (t[0], t[1], t[2] - body_drop)
+        if name == "origin":
+            t = (t[0] + forward, t[1], t[2])
         loc.append((t, q))
     return loc
 
@@ -310,9 +313,17 @@ def af_pose():
     return [posed({"Luparm": ((1, 0, 0), -12), "Ruparm": ((1, 0, 0), 12)})]
 
 
+# The walk: one cycle (two steps) a second, 24 frames at 24 fps. Each step is as long as
+# the legs' swing reaches: 2 · 37 in · sin 25°, so the root moves 4 · 37 sin 25° a cycle
+# (62.5 in, 1.59 m/s), forward along +X, the way the figure faces.
+WALK_FRAMES = 24
+WALK_RATE = 24
+WALK_STRIDE = 4 * 37 * math.sin(math.radians(25))
+
+
 def walk():
     frames = []
-    n = 8
+    n = WALK_FRAMES
     for k in range(n + 1):
         ph = 2 * math.pi * (k % n) / n
         s = math.sin(ph)
@@ -326,7 +337,7 @@ def walk():
             "Luparm": ((0, 1, 0), 20 * s),
             "Ruparm": ((0, 1, 0), -20 * s),
         }
-        frames.append(posed(turns, body_drop=1.0 - abs(math.cos(ph))))
+        frames.append(posed(turns, body_drop=1.0 - abs(math.cos(ph)), forward=WALK_STRIDE * k / n))
     return frames
 
 
@@ -594,8 +605,8 @@ def main():
     write_md5anim(
         os.path.join(md5, "walk.md5anim"),
         walk(),
-        24,
-        {"Body": 4, "Lupleg": rot, "Rupleg": rot, "Lloleg": rot, "Rloleg": rot, "Luparm": rot, "Ruparm": rot},
+        WALK_RATE,
+        {"origin": 1, "Body": 4, "Lupleg": rot, "Rupleg": rot, "Lloleg": rot, "Rloleg": rot, "Luparm": rot, "Ruparm": rot},
     )
     write(os.path.join(ROOT, "af", "lab_human.af"), AF)
     write(os.path.join(ROOT, "def", "lab_human.def"), DEF)

@@ -109,6 +109,9 @@ pub enum Action {
     GrabMove(Vec2),
     /// Left button released while grabbing.
     GrabEnd,
+    /// K: the ragdoll takes over from the animation playing (`--anim`), on both sides,
+    /// with the animation's velocities, and runs.
+    TakeOver,
 }
 
 /// Which methods the view shows: both side by side (the comparison), or one over the
@@ -198,6 +201,8 @@ pub struct AppState {
     pub follow: bool,
     /// Write the next frame to a PNG.
     pub pending_screenshot: bool,
+    /// K was pressed: the ragdoll takes over from the animation.
+    pub pending_takeover: bool,
     /// Every frame goes to a PNG.
     pub recording: bool,
     /// Which methods the view shows.
@@ -340,6 +345,7 @@ impl AppState {
             hovered: None,
             follow: false,
             pending_screenshot: false,
+            pending_takeover: false,
             recording: false,
             layout: ViewLayout::Both,
             pending_open: None,
@@ -434,6 +440,10 @@ impl AppState {
             Action::Hover(_) => {}
             Action::Follow => self.follow = !self.follow,
             Action::Screenshot => self.pending_screenshot = true,
+            Action::TakeOver => {
+                self.pending_takeover = true;
+                self.running = true;
+            }
             Action::Record => self.recording = !self.recording,
             Action::CycleLayout => self.layout = self.layout.next(),
             Action::OpenFile(path) => {

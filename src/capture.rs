@@ -351,7 +351,8 @@ pub fn run(args: CaptureArgs) -> Result<(), AppError> {
         (None, None) => return Err(AppError::Usage("give --out FILE or --out-dir DIR".into())),
     };
 
-    let loaded = scenes::load(&args.scene)?;
+    // With --anim, the ragdoll takes over from its --at frame.
+    let loaded = scenes::load(&args.scene)?.taken_over();
     let scene_index = args
         .scene
         .scene

@@ -56,6 +56,16 @@ pub struct SceneArgs {
     /// `articulatedFigure`), built on its model's mesh in the `af_pose` frame.
     #[arg(long, requires = "doom3", conflicts_with_all = ["scene", "af"])]
     pub entity: Option<String>,
+    /// Start from an animation: one of the --entity model's anims by name (`walk`), or
+    /// with --af and --mesh an .md5anim file. The figure is placed on its frame --at
+    /// with the animation's velocities (`stats`, `capture`); `view` plays it on the
+    /// skinned model until K hands over to the ragdoll.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub anim: Option<String>,
+    /// The --anim frame (0-based) the ragdoll takes over at, or `view` starts playing
+    /// from. Default 0.
+    #[arg(long, value_name = "FRAME", requires = "anim")]
+    pub at: Option<u32>,
 }
 
 /// The particle method's solver.

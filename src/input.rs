@@ -65,6 +65,7 @@ impl InputMapper {
                 "3" => Some(Action::Variant(3)),
                 "b" => Some(Action::ShootBox(Some(self.cursor))),
                 "f" => Some(Action::Follow),
+                "k" => Some(Action::TakeOver),
                 "p" if self.modifiers.shift_key() => Some(Action::Record),
                 "p" => Some(Action::Screenshot),
                 "m" => Some(Action::CycleLayout),

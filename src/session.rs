@@ -4,7 +4,7 @@
 use crate::app_state::SettingsOverride;
 use crate::cli::ParticleSolverArg;
 use crate::impacts::{MeshImpact, MeshTargets};
-use crate::scenes::LoadedScene;
+use crate::scenes::{LoadedScene, SceneAnimation};
 use crate::{AppError, methods};
 use glam::{Quat, Vec3};
 use ragdoll_sim::scene::{BodyDesc, BodyId, MassSpec, Pose, Settings, Shape};
@@ -129,6 +129,11 @@ pub struct Session {
     pub mesh_shots: bool,
     /// Every hit of a shot on the mesh since the scene started, in order.
     pub mesh_impacts: Vec<MeshImpact>,
+    /// The animation playing in place of the simulation until the ragdoll takes over
+    /// (`--anim`; K), with its time (s).
+    pub playing: Option<(SceneAnimation, f32)>,
+    /// The user's settings over the scene's, kept for the methods the take-over builds.
+    overrides: SettingsOverride,
     grab: Option<GrabDrag>,
     shots: u32,
     targets: MeshTargets,
@@ -160,7 +165,36 @@ impl Session {
                 methods::build_multibody(&desc)?,
             ]
         };
-        Ok(Session::with_methods(loaded, solver, methods))
+        let playing = loaded.animation.clone().map(|a| {
+            let start = a.start;
+            (a, start)
+        });
+        let mut session = Session::with_methods(loaded, solver, methods);
+        session.overrides = *overrides;
+        session.playing = playing;
+        session.refresh();
+        Ok(session)
+    }
+
+    /// The ragdoll takes over from the animation playing (K): both methods rebuilt from
+    /// the figure where the animation puts it now, with the animation's velocities
+    /// ([`LoadedScene::taken_over_at`]). Returns whether an animation was playing.
+    pub fn take_over(&mut self) -> Result<bool, AppError> {
+        let Some((_, time)) = self.playing.take() else {
+            return Ok(false);
+        };
+        let mut desc = self.loaded.taken_over_at(time).desc;
+        desc.settings = self.overrides.apply(&desc.settings);
+        self.methods = [
+            methods::build_particle(&desc, self.solver)?,
+            methods::build_multibody(&desc)?,
+        ];
+        self.history = [Vec::new(), Vec::new()];
+        self.grab = None;
+        self.record();
+        self.worst = self.samples.map(|s| Worst::start(&s));
+        self.refresh();
+        Ok(true)
     }
 
     /// A session around methods built elsewhere (particle first).
@@ -181,6 +215,8 @@ impl Session {
             joint_poses: [Vec::new(), Vec::new()],
             mesh_shots: true,
             mesh_impacts: Vec::new(),
+            playing: None,
+            overrides: SettingsOverride::default(),
             grab: None,
             shots: 0,
             targets: MeshTargets::default(),
@@ -208,9 +244,21 @@ impl Session {
         self.methods[0].time()
     }
 
-    /// One timestep of both methods, timing each; first, shots that cross the skinned
-    /// mesh this step push the bodies containing the joints they hit.
+    /// One timestep of both methods, timing each. While an animation plays, the
+    /// animation advances by one timestep instead, looping over its length. Otherwise,
+    /// first, shots that cross the skinned mesh this step push the bodies containing the
+    /// joints they hit.
     pub fn step(&mut self) {
+        if let Some((a, time)) = &mut self.playing {
+            let length = a.takeover.anim().duration();
+            *time += self.methods[0].settings().timestep;
+            if length > 0.0 && *time > length {
+                *time = time.rem_euclid(length);
+            } else if length <= 0.0 {
+                *time = 0.0;
+            }
+            return;
+        }
         if let Some(skin) = self.loaded.skin.as_ref().filter(|_| self.mesh_shots) {
             let dt = self.methods[0].settings().timestep;
             let n = self.loaded.desc.bodies.len();
@@ -247,10 +295,32 @@ impl Session {
         }
     }
 
-    /// Refreshes both snapshots.
+    /// Refreshes both snapshots. While an animation plays, both show the figure's
+    /// bodies where the animation puts them and the mesh on the animation's skeleton.
     pub fn refresh(&mut self) {
         for (m, snap) in self.methods.iter().zip(&mut self.snapshots) {
             m.snapshot(snap);
+        }
+        if let Some((a, time)) = &self.playing {
+            let bodies = a.takeover.body_poses(*time);
+            let joints = a.takeover.joint_poses(*time);
+            for (snap, skeleton) in self.snapshots.iter_mut().zip(&mut self.joint_poses) {
+                for b in snap.bodies.iter_mut() {
+                    if let Some(p) = bodies.get(b.body.0 as usize) {
+                        b.pose = *p;
+                    }
+                }
+                // The method's own parts (particles, sticks, contacts, joint markers)
+                // are at the rest pose: not drawn until it takes over.
+                snap.particles.clear();
+                snap.sticks.clear();
+                snap.contacts.clear();
+                snap.joints.clear();
+                if self.loaded.skin.is_some() {
+                    skeleton.clone_from(&joints);
+                }
+            }
+            return;
         }
         if let Some(skin) = &self.loaded.skin {
             let n = self.loaded.desc.bodies.len();

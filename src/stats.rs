@@ -254,7 +254,8 @@ pub fn run(args: StatsArgs) -> Result<(), AppError> {
             args.seconds
         )));
     }
-    let mut loaded = scenes::load(&args.scene)?;
+    // With --anim, the ragdoll takes over from its --at frame.
+    let mut loaded = scenes::load(&args.scene)?.taken_over();
     let s = &mut loaded.desc.settings;
     if let Some(dt) = args.timestep {
         s.timestep = dt;

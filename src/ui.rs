@@ -278,6 +278,10 @@ fn labels(ctx: &egui::Context, area: Rect, model: &mut UiModel) {
     if state.recording {
         clock += " · ● recording (Shift+P)";
     }
+    if let Some((a, t)) = &session.playing {
+        let rate = a.takeover.anim().frame_rate as f32;
+        clock += &format!(" · animation frame {:.1} (K: ragdoll takes over)", t * rate);
+    }
     let wide = area.width() - 30.0;
     let galley = text(&painter, clock, font, wide, 2);
     let pos = Pos2::new(area.min.x + 10.0, area.max.y - 10.0 - galley.size().y);
@@ -1023,6 +1027,7 @@ pub const KEYS: &str = "Space start · T one step · Shift+T ten steps · S stop
 1 reset (variant 1, your settings kept) · 2/3 variants · Tab/Shift+Tab next/previous scene\n\
 left drag orbit · middle drag pan · wheel zoom · right click menu\n\
 click a body: inspect it · Ctrl+left drag grab a body · B shoot a box through the cursor\n\
+K the ragdoll takes over from the animation playing (--anim)\n\
 Home camera back · F follow the selected figure (or all) · M both / one method\n\
 P screenshot · Shift+P record frames · R reload file (also when it changes on disk)\n\
 drop an .af file on the window to open it · [ / ] slower / faster · F1 or H panel";

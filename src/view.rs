@@ -290,7 +290,9 @@ impl App {
     /// dragged, or egui animates.
     fn busy(&self, egui_soon: bool) -> bool {
         let s = &self.state;
-        let moving = s.running && !self.session.samples.iter().all(|x| x.all_asleep);
+        let moving = s.running
+            && (self.session.playing.is_some()
+                || !self.session.samples.iter().all(|x| x.all_asleep));
         let notice = s.notice.as_ref().is_some_and(|(_, at)| {
             at.elapsed().as_secs_f32() < crate::app_state::NOTICE_SECONDS + 0.1
         });
@@ -301,6 +303,7 @@ impl App {
             || s.pending_camera_reset
             || !s.pending_shots.is_empty()
             || s.pending_screenshot
+            || s.pending_takeover
             || s.recording
             || s.follow && moving
             || notice
@@ -418,6 +421,18 @@ impl App {
                 .overrides
                 .apply(&self.session.loaded.desc.settings);
             self.session.set_settings(&settings);
+        }
+        if std::mem::take(&mut self.state.pending_takeover) {
+            match self.session.take_over() {
+                Ok(true) => self.state.notice = None,
+                Ok(false) => {
+                    self.state.notice = Some((
+                        "K: no animation is playing; open a figure with --anim NAME".into(),
+                        Instant::now(),
+                    ));
+                }
+                Err(e) => self.report(e),
+            }
         }
         if std::mem::take(&mut self.state.pending_camera_reset) {
             self.state.follow = false;

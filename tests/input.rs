@@ -198,3 +198,70 @@ fn our_new_keys_and_a_click_that_is_not_a_drag() {
     assert!(!state.follow, "another scene: nothing to follow");
     assert_eq!(state.selected, None);
 }
+
+#[test]
+fn k_hands_the_playing_animation_to_the_ragdoll() {
+    use ragdoll_lab::cli::{ParticleSolverArg, SceneArgs};
+    use ragdoll_lab::session::Session;
+
+    let (mut input, mut state) = setup();
+    press(&mut input, &mut state, ch("s"));
+    assert!(!state.running);
+    assert_eq!(input.key(&ch("K"), true), Some(Action::TakeOver));
+    press(&mut input, &mut state, ch("k"));
+    assert!(state.pending_takeover, "K asks for the take-over");
+    assert!(state.running, "and the ragdoll runs");
+
+    // The window's part: the figure walks until K, then falls on both sides.
+    let base = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/doom3");
+    let loaded = ragdoll_lab::scenes::load(&SceneArgs {
+        doom3: Some(base),
+        entity: Some("monster_lab_human".into()),
+        anim: Some("walk".into()),
+        ..Default::default()
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut session = Session::new(loaded, ParticleSolverArg::default()).unwrap();
+    assert!(session.playing.is_some(), "--anim plays the animation");
+    let rest: Vec<_> = session.snapshots[0].bodies.iter().map(|b| b.pose).collect();
+    // Half a second of the one-second walk cycle: the animation moved the bodies (the
+    // methods did not step) and the skinned mesh follows the animated skeleton.
+    for _ in 0..30 {
+        session.step();
+    }
+    session.refresh();
+    let time = session.playing.as_ref().map(|p| p.1).unwrap();
+    assert!((time - 0.5).abs() < 1e-3, "{time}");
+    assert_eq!(session.methods[0].time(), 0.0, "no physics while it plays");
+    let moved = session.snapshots[1].bodies[0].pose.position - rest[0].position;
+    assert!(
+        moved.x > 0.5,
+        "the walk carries the figure forward: {moved}"
+    );
+    assert_eq!(session.joint_poses[0].len(), 20, "the mesh's skeleton");
+    // Another half second loops back to the start of the cycle.
+    for _ in 0..36 {
+        session.step();
+    }
+    let time = session.playing.as_ref().map(|p| p.1).unwrap();
+    assert!((time - 0.1).abs() < 1e-3, "{time}");
+
+    assert!(session.take_over().unwrap(), "K while playing takes over");
+    assert!(session.playing.is_none());
+    assert!(
+        !session.take_over().unwrap(),
+        "a second K has nothing to take"
+    );
+    for m in &session.methods {
+        let mut states = Vec::new();
+        m.body_states(&mut states);
+        let vx = states.iter().map(|s| s.linear_velocity.x).sum::<f32>() / states.len() as f32;
+        assert!(
+            vx > 1.0,
+            "{}: the walk's velocity {vx} m/s",
+            m.kind().name()
+        );
+    }
+    session.step();
+    assert!(session.methods[0].time() > 0.0, "the ragdoll runs");
+}

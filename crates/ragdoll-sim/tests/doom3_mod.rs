@@ -82,8 +82,17 @@ fn the_mesh_and_animations_read_and_fit_each_other() {
     for (_, path) in &c.anims {
         let a = md5anim::load(path).unwrap_or_else(|e| panic!("{e}"));
         a.check_hierarchy(&mesh.skeleton).unwrap();
-        // A cycle: the last frame equals the first.
-        let (first, last) = (a.frame_poses(0), a.frame_poses(a.frame_count() - 1));
+        // A cycle: the last frame equals the first but for the root motion, which
+        // carries the walk forward (+X, the way the figure faces).
+        let (mut first, mut last) = (a.local_poses(0), a.local_poses(a.frame_count() - 1));
+        let travel = last[0].position - first[0].position;
+        assert!(
+            travel.x > 30.0 && travel.y.abs() + travel.z.abs() < 1e-4,
+            "{travel}"
+        );
+        first[0].position = glam::Vec3::ZERO;
+        last[0].position = glam::Vec3::ZERO;
+        let (first, last) = (a.compose(&first), a.compose(&last));
         for (f, l) in first.iter().zip(&last) {
             assert!((f.position - l.position).length() < 1e-4);
         }

@@ -130,6 +130,34 @@ impl Md5Anim {
             .collect()
     }
 
+    /// The animation's length (s): frames 0 … F−1 at `frameRate`, the last frame at
+    /// (F−1)/R.
+    pub fn duration(&self) -> f32 {
+        (self.frames.len().saturating_sub(1)) as f32 / self.frame_rate as f32
+    }
+
+    /// Parent-relative poses at `time` seconds within one pass of the animation, without
+    /// cycling: `time` is clamped to [0, (F−1)/R], translations are lerped and rotations
+    /// slerped between the two frames around it. Unlike [`Md5Anim::local_poses_at`], the
+    /// last frame is reached (with its root motion) rather than wrapped to the first.
+    pub fn local_poses_within(&self, time: f32) -> Vec<Pose> {
+        let n = self.frames.len();
+        if n < 2 {
+            return self.local_poses(0);
+        }
+        let ft = (time.max(0.0) * self.frame_rate as f32).min((n - 1) as f32);
+        let f1 = (ft.floor() as usize).min(n - 2);
+        let t = ft - f1 as f32;
+        let (a, b) = (self.local_poses(f1), self.local_poses(f1 + 1));
+        a.iter()
+            .zip(&b)
+            .map(|(a, b)| Pose {
+                position: a.position.lerp(b.position, t),
+                rotation: a.rotation.slerp(b.rotation, t),
+            })
+            .collect()
+    }
+
     /// Composes parent-relative poses into model space (parents come first).
     pub fn compose(&self, locals: &[Pose]) -> Vec<Pose> {
         let mut out: Vec<Pose> = Vec::with_capacity(locals.len());

@@ -9,7 +9,9 @@
 //! - [`rig`]: skeleton joints from body poses (how a figure's bodies move its mesh).
 //! - [`skin`]: the skinned mesh on the CPU, segment casts against it, the body a hit
 //!   pushes.
-//! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform.
+//! - [`takeover`]: a figure placed on an animation with the animation's velocities.
+//! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform,
+//!   and putting its bodies in a new pose with the joints re-expressed (`repose`).
 
 pub mod af;
 pub mod collider;
@@ -21,6 +23,7 @@ pub mod md5mesh;
 mod pyramid;
 pub mod rig;
 pub mod skin;
+pub mod takeover;
 mod transform;
 mod validate;
 

@@ -75,6 +75,8 @@ pub struct Rig {
     pub origin: Option<(usize, Pose)>,
     /// The joints' world poses at load.
     pub rest: Vec<Pose>,
+    /// The bodies' poses at load (scene order).
+    pub body_rest: Vec<Pose>,
     /// How a vector in a joint's frame in the skeleton file (a mesh weight's offset)
     /// becomes ours: rotated by `file_axes`, scaled by `file_scale`.
     pub file_axes: Quat,
@@ -134,8 +136,45 @@ impl Rig {
             joints: out,
             origin: origin_body.map(|b| (b, body_rest[b])),
             rest,
+            body_rest: body_rest.to_vec(),
             file_axes: Quat::IDENTITY,
             file_scale: 1.0,
+        }
+    }
+
+    /// Every body's pose for the joints' poses `joints` (indexed as at load): the other
+    /// way round, as Doom 3 places a figure on an animated skeleton (`idAF::SetupPose`),
+    /// whatever the body's `mod`:
+    ///
+    /// ```text
+    /// R_b = R_j R_rel        p_b = p_j + R_j o
+    /// ```
+    ///
+    /// with the o and R_rel the load kept. A body that drives no joint (a second body on
+    /// joint `origin`) moves rigidly with the root joint: B = J₀ J₀,loadⁱⁿᵛ B_load. With
+    /// the load skeleton this gives the load poses back.
+    pub fn body_poses(&self, joints: &[Pose]) -> Vec<Pose> {
+        let root = mul(&joints[0], &inverse(&self.rest[0]));
+        let mut out: Vec<Pose> = self.body_rest.iter().map(|b| mul(&root, b)).collect();
+        for (j, joint) in self.joints.iter().enumerate() {
+            if let Some(d) = joint.driver {
+                let jp = joints[j];
+                out[d.body] = Pose {
+                    position: jp.position + jp.rotation * d.offset,
+                    rotation: (jp.rotation * d.relative).normalize(),
+                };
+            }
+        }
+        out
+    }
+
+    /// A joint pose of the skeleton file (file units and axes) in ours: the position
+    /// rotated by `file_axes` and scaled by `file_scale`, the rotation conjugated by
+    /// `file_axes` (R' = A R Aᵀ).
+    pub fn from_file(&self, pose: &Pose) -> Pose {
+        Pose {
+            position: self.file_axes * pose.position * self.file_scale,
+            rotation: (self.file_axes * pose.rotation * self.file_axes.inverse()).normalize(),
         }
     }
 
@@ -245,6 +284,39 @@ mod tests {
             for (p, r) in poses.iter().zip(&rig.rest) {
                 assert!(close(p, r), "{mode:?}: {p:?} vs {r:?}");
             }
+        }
+    }
+
+    #[test]
+    fn bodies_placed_on_the_load_skeleton_are_at_their_load_poses() {
+        for mode in [JointMod::Orientation, JointMod::Position, JointMod::Both] {
+            let (rig, bodies) = chain(mode);
+            for (p, r) in rig.body_poses(&rig.rest).iter().zip(&bodies) {
+                assert!(close(p, r), "{mode:?}: {p:?} vs {r:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn bodies_placed_on_a_moved_skeleton_drive_it_back_to_itself() {
+        // A skeleton with every joint turned and moved: bodies placed on it with `both`
+        // give the same joints back through `joint_poses`.
+        let (rig, _) = chain(JointMod::Both);
+        let t = Pose {
+            position: Vec3::new(0.5, -0.2, 1.0),
+            rotation: Quat::from_rotation_y(0.8),
+        };
+        let mut moved: Vec<Pose> = rig.rest.iter().map(|r| mul(&t, r)).collect();
+        moved[2].rotation = Quat::from_rotation_x(0.4) * moved[2].rotation;
+        let bodies = rig.body_poses(&moved);
+        let back = rig.joint_poses(&bodies);
+        for j in 0..3 {
+            assert!(
+                close(&back[j], &moved[j]),
+                "{j}: {:?} vs {:?}",
+                back[j],
+                moved[j]
+            );
         }
     }
 
