@@ -307,7 +307,7 @@ def posed(turns, body_drop=0.0):
 def af_pose():
     # Arms a little away from the sides (about the forward axis): the pose the
     # figure is built from, different from the bind pose.
-    return [posed({"Luparm": ((1, 0, 0), -12), "Ruparm": ((1, 0, 0), 12)})]
+    return [posed({"Luparm": ((1, 0, 0), 12), "Ruparm": ((1, 0, 0), -12)})]
 
 
 def walk():
