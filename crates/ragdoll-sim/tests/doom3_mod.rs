@@ -116,17 +116,24 @@ fn the_figure_is_built_from_the_af_pose_frame() {
     assert!(lowest < 0.02, "{lowest}");
 }
 
-/// (method, metric, measured when written) over the threshold. The figure's limbs are
-/// light bone models on a heavy torso, as in id's figures; both solvers'
-/// physics engineers own these.
-const KNOWN_GAPS: [(&str, &str, f64); 7] = [
-    ("particle", "energy_gain", 2.22),
-    ("particle", "max_joint_gap_m", 0.144),
-    ("particle", "max_limit_violation_deg", 12.0),
-    ("multibody", "energy_gain", 0.0256),
-    ("multibody", "max_penetration_m", 0.0345),
-    ("multibody", "max_joint_gap_m", 0.0543),
-    ("multibody", "max_limit_violation_deg", 26.9),
+/// (method, metric, measured when written) over the threshold.
+///
+/// Traced step by step, what is left comes from two solver defects this figure meets and
+/// the closed-form suite names: the left knee starts 4° outside its limit with the foot
+/// on the ground, and both solvers turn that start into velocity (the first step sends
+/// the shin off at 2.3 m/s; `joint_starting_10_degrees_outside_its_limit_returns_gently`);
+/// the pop tips the figure over, and the multibody lands it with the hip pyramids and
+/// knees pushed 10–20° past their limits and bodies 8 cm deep (4 cm without
+/// self-collision). With the knee's range widened to hold the rest pose and a
+/// 0.5 m/s push to make it fall instead, the same figure measured particle 0.6 %,
+/// 2 mm, 13 mm, 1.2°; multibody 0.03 %, 7 mm, 6.7 mm, 3.9°.
+const KNOWN_GAPS: [(&str, &str, f64); 6] = [
+    ("particle", "energy_gain", 0.0339),
+    ("particle", "max_joint_gap_m", 0.0294),
+    ("multibody", "energy_gain", 0.0672),
+    ("multibody", "max_penetration_m", 0.0814),
+    ("multibody", "max_joint_gap_m", 0.0303),
+    ("multibody", "max_limit_violation_deg", 20.8),
 ];
 
 fn run(w: &mut dyn Method, sc: &SceneDesc) -> MethodStats {
