@@ -337,14 +337,16 @@ impl Doom3Base {
         let mut parents = Vec::new();
         let mut it = tokens.iter();
         while let Some(k) = it.next() {
-            let key = match word(&k.tok) {
-                Some(w) => w,
-                None if k.tok == Tok::Eof => break,
-                None => {
+            // idDeclEntityDef::Parse takes only a quoted string as a key (anything else:
+            // "Expected quoted string", and the declaration falls back to its default).
+            let key = match &k.tok {
+                Tok::Str(w) => w.clone(),
+                Tok::Eof => break,
+                other => {
                     return Err(AfError::at(
                         &fname,
                         k.pos,
-                        format!("expected a key, found {}", k.tok.describe()),
+                        format!("expected a quoted key, found {}", other.describe()),
                     ));
                 }
             };
@@ -422,9 +424,11 @@ impl Doom3Base {
         loop {
             let t = &tokens[i.min(tokens.len() - 1)];
             i += 1;
+            // idDeclModelDef::Parse compares the token's text, so a keyword may be
+            // quoted ("skin", as env.def writes it).
             let kw = match &t.tok {
                 Tok::Eof => break,
-                Tok::Ident(s) => s.as_str(),
+                Tok::Ident(s) | Tok::Str(s) => s.as_str(),
                 other => {
                     return Err(err(
                         t.pos,
