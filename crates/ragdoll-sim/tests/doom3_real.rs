@@ -201,7 +201,7 @@ fn real_figures_hold_the_scene_thresholds() {
             ("joint gap (m)", s.max_joint_gap_m as f64, gap),
             ("limit excess (°)", s.max_limit_violation_deg as f64, limit),
         ] {
-            if !(value <= max) {
+            if value.is_nan() || value > max {
                 failures.push(format!("{label} | {method}: {metric} {value:.4} > {max}"));
             }
         }
