@@ -266,3 +266,24 @@ fn model_keywords_may_be_quoted_and_entity_keys_must_be() {
     assert!(e.message.contains("expected a quoted key"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_missing_mesh_is_reported_at_its_model_declaration() {
+    let dir = std::env::temp_dir().join(format!("ragdoll-lab-def-missing-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("def")).unwrap();
+    std::fs::write(
+        dir.join("def/m.def"),
+        "// a model whose mesh the folder lacks\nmodel m {\n\tmesh\tmodels/none.md5mesh\n}\n",
+    )
+    .unwrap();
+    let base = Doom3Base::open(&dir).unwrap();
+    let e = base.model_files("m").unwrap_err();
+    assert!(e.file.ends_with("m.def"), "{e}");
+    assert_eq!(e.line, 2, "{e}");
+    assert!(
+        e.message
+            .contains("\"models/none.md5mesh\" is not in the base folder"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

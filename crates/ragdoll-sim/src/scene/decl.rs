@@ -528,16 +528,28 @@ impl Doom3Base {
 
     /// A model key's value as Doom 3 reads it: a model declaration, else a path.
     pub fn model_files(&self, model: &str) -> Result<ModelFiles, AfError> {
-        if self.find("model", model).is_some() {
+        if let Some(d) = self.find("model", model) {
             let m = self.model(model)?;
+            // A missing file is reported at the declaration that names it (or inherits
+            // it), not at the base folder.
+            let here = |e: AfError| AfError {
+                file: d.file.display().to_string(),
+                line: d.body_pos.line,
+                col: d.body_pos.col,
+                message: format!("{} {}", e.message, self.root.display()),
+            };
             let mesh = match &m.mesh {
-                Some(p) => Some(self.file(p, &format!("model \"{}\"'s mesh", m.name))?),
+                Some(p) => Some(
+                    self.file(p, &format!("model \"{}\"'s mesh", m.name))
+                        .map_err(here)?,
+                ),
                 None => None,
             };
             let pose = match m.anim("af_pose") {
-                Some(a) => {
-                    Some(self.file(&a.files[0], &format!("model \"{}\"'s anim af_pose", m.name))?)
-                }
+                Some(a) => Some(
+                    self.file(&a.files[0], &format!("model \"{}\"'s anim af_pose", m.name))
+                        .map_err(here)?,
+                ),
                 None => None,
             };
             Ok(ModelFiles {
