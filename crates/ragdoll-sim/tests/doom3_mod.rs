@@ -125,27 +125,45 @@ fn the_figure_is_built_from_the_af_pose_frame() {
     assert!(lowest < 0.02, "{lowest}");
 }
 
-/// (method, metric, measured when written) over the threshold. The figure's limbs are
-/// light bone models on a heavy torso, as in id's figures; both solvers'
-/// physics engineers own these.
-const KNOWN_GAPS: [(&str, &str, f64); 7] = [
-    ("particle", "energy_gain", 2.22),
-    ("particle", "max_joint_gap_m", 0.144),
-    ("particle", "max_limit_violation_deg", 12.0),
-    ("multibody", "energy_gain", 0.0256),
-    ("multibody", "max_penetration_m", 0.0345),
-    ("multibody", "max_joint_gap_m", 0.0543),
-    ("multibody", "max_limit_violation_deg", 26.9),
+/// (method, metric, measured when written) over the threshold.
+///
+/// Traced step by step, what is left comes from solver defects this figure meets and the
+/// closed-form suite names. The left knee starts 4° outside its limit with the foot on
+/// the ground, and both solvers turn that start into velocity
+/// (`joint_starting_10_degrees_outside_its_limit_returns_gently`): the first step sends
+/// the left shin off at 2.3 m/s (the particle method's energy gain is that step), and
+/// the figure folds onto that knee, which the
+/// multibody lets bend 2.8° past its limit and open 6.7 mm while the torso lands on it.
+/// The particle method opens 13–29 mm at the knees when the figure lands. With the
+/// knee's range widened to hold the rest pose and a 0.5 m/s push to make the figure fall
+/// instead, it measured particle 0.6 %, 2.0 mm, 13 mm, 1.2°; multibody 0.00 %, 2.2 mm,
+/// 2.1 mm, 0.75°.
+const KNOWN_GAPS: [(&str, &str, f64); 5] = [
+    ("particle", "energy_gain", 0.0552),
+    ("particle", "max_joint_gap_m", 0.0294),
+    ("multibody", "energy_gain", 0.0408),
+    ("multibody", "max_joint_gap_m", 0.0067),
+    ("multibody", "max_limit_violation_deg", 2.80),
 ];
 
+/// Runs 10 s from the load pose, which is recorded too (as `stats` does): energy the
+/// first step puts in counts. The limit excess is the largest after the start, the
+/// start's own excess being the file's (the test checks it separately).
 fn run(w: &mut dyn Method, sc: &SceneDesc) -> MethodStats {
     let mut rec = MetricsRecorder::new(sc).unwrap();
+    rec.record(w.time(), &w.sample());
+    let mut limit = 0.0f32;
     let steps = (10.0 / sc.settings.timestep).round() as usize;
     for _ in 0..steps {
         w.step();
-        rec.record(w.time(), &w.sample());
+        let s = w.sample();
+        limit = limit.max(s.max_limit_violation_deg);
+        rec.record(w.time(), &s);
     }
-    rec.stats()
+    MethodStats {
+        max_limit_violation_deg: limit,
+        ..rec.stats()
+    }
 }
 
 #[test]

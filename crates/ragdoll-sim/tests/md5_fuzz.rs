@@ -244,3 +244,46 @@ fn inheritance_loops_end_in_an_error() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = Path::new("");
 }
+
+#[test]
+fn model_keywords_may_be_quoted_and_entity_keys_must_be() {
+    let dir = std::env::temp_dir().join(format!("ragdoll-lab-def-quotes-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("def")).unwrap();
+    // A quoted model keyword, as id's env.def writes `"skin"`; an entity key that is a
+    // bare number, as id's monster_boss_cyberdemon.def has after `"knockback" "180" 0`.
+    std::fs::write(
+        dir.join("def/quotes.def"),
+        "model m {\n\t\"skin\"\t\"skins/x.skin\"\n\tmesh\tm.md5mesh\n}\n\
+         entityDef e {\n\t\"knockback\"\t\"180\" 0\n\t\"push\"\t\"5\"\n}\n",
+    )
+    .unwrap();
+    let base = Doom3Base::open(&dir).unwrap();
+    let m = base.model("m").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.skin.as_deref(), Some("skins/x.skin"));
+    assert_eq!(m.mesh.as_deref(), Some("m.md5mesh"));
+    let e = base.entity("e").unwrap_err();
+    assert_eq!((e.line, e.col), (6, 20), "{e}");
+    assert!(e.message.contains("expected a quoted key"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_missing_mesh_is_reported_at_its_model_declaration() {
+    let dir = std::env::temp_dir().join(format!("ragdoll-lab-def-missing-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("def")).unwrap();
+    std::fs::write(
+        dir.join("def/m.def"),
+        "// a model whose mesh the folder lacks\nmodel m {\n\tmesh\tmodels/none.md5mesh\n}\n",
+    )
+    .unwrap();
+    let base = Doom3Base::open(&dir).unwrap();
+    let e = base.model_files("m").unwrap_err();
+    assert!(e.file.ends_with("m.def"), "{e}");
+    assert_eq!(e.line, 2, "{e}");
+    assert!(
+        e.message
+            .contains("\"models/none.md5mesh\" is not in the base folder"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

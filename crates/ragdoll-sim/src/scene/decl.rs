@@ -337,14 +337,16 @@ impl Doom3Base {
         let mut parents = Vec::new();
         let mut it = tokens.iter();
         while let Some(k) = it.next() {
-            let key = match word(&k.tok) {
-                Some(w) => w,
-                None if k.tok == Tok::Eof => break,
-                None => {
+            // idDeclEntityDef::Parse takes only a quoted string as a key (anything else:
+            // "Expected quoted string", and the declaration falls back to its default).
+            let key = match &k.tok {
+                Tok::Str(w) => w.clone(),
+                Tok::Eof => break,
+                other => {
                     return Err(AfError::at(
                         &fname,
                         k.pos,
-                        format!("expected a key, found {}", k.tok.describe()),
+                        format!("expected a quoted key, found {}", other.describe()),
                     ));
                 }
             };
@@ -422,9 +424,11 @@ impl Doom3Base {
         loop {
             let t = &tokens[i.min(tokens.len() - 1)];
             i += 1;
+            // idDeclModelDef::Parse compares the token's text, so a keyword may be
+            // quoted ("skin", as env.def writes it).
             let kw = match &t.tok {
                 Tok::Eof => break,
-                Tok::Ident(s) => s.as_str(),
+                Tok::Ident(s) | Tok::Str(s) => s.as_str(),
                 other => {
                     return Err(err(
                         t.pos,
@@ -524,16 +528,28 @@ impl Doom3Base {
 
     /// A model key's value as Doom 3 reads it: a model declaration, else a path.
     pub fn model_files(&self, model: &str) -> Result<ModelFiles, AfError> {
-        if self.find("model", model).is_some() {
+        if let Some(d) = self.find("model", model) {
             let m = self.model(model)?;
+            // A missing file is reported at the declaration that names it (or inherits
+            // it), not at the base folder.
+            let here = |e: AfError| AfError {
+                file: d.file.display().to_string(),
+                line: d.body_pos.line,
+                col: d.body_pos.col,
+                message: format!("{} {}", e.message, self.root.display()),
+            };
             let mesh = match &m.mesh {
-                Some(p) => Some(self.file(p, &format!("model \"{}\"'s mesh", m.name))?),
+                Some(p) => Some(
+                    self.file(p, &format!("model \"{}\"'s mesh", m.name))
+                        .map_err(here)?,
+                ),
                 None => None,
             };
             let pose = match m.anim("af_pose") {
-                Some(a) => {
-                    Some(self.file(&a.files[0], &format!("model \"{}\"'s anim af_pose", m.name))?)
-                }
+                Some(a) => Some(
+                    self.file(&a.files[0], &format!("model \"{}\"'s anim af_pose", m.name))
+                        .map_err(here)?,
+                ),
                 None => None,
             };
             Ok(ModelFiles {

@@ -239,10 +239,17 @@ pub(super) fn read_model(
             }
             let d = b - a;
             let half = d.length() * 0.5;
-            let rot = d.try_normalize().map_or(Quat::IDENTITY, models::rotation_from_y);
             if f_l == "bone" && half <= 0.0 {
                 return Err(ctx.err(args[1].pos(), "a bone's start and end must differ"));
             }
+            let rot = if f_l == "bone" {
+                // Doom 3's bone axes, worked out in the file's axes and mapped to ours.
+                let m = models::bone_frame(ctx.conv.file_axes(d));
+                let m = ctx.conv.matrix() * m;
+                Quat::from_mat3(&m).normalize()
+            } else {
+                d.try_normalize().map_or(Quat::IDENTITY, models::rotation_from_y)
+            };
             let shape = if f_l == "bone" { models::bone(half, w) } else { Shape::Capsule { half_height: half, radius: w } };
             // The ends place these models; `origin` and `angles` do not apply.
             Ok((shape, Pose { position: (a + b) * 0.5, rotation: rot }))

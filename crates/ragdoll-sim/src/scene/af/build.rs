@@ -69,6 +69,21 @@ pub(super) fn build(
     }
 
     let mut settings = Settings::default();
+    let doom3_syntax = !merged.iter().any(|b| {
+        canonical(&b.kind) == Some("settings")
+            && b.entries
+                .iter()
+                .any(|e| e.key.eq_ignore_ascii_case("units"))
+    });
+    if doom3_syntax {
+        // A file in Doom 3's own units was written for Doom 3's solver and says nothing
+        // about ours: it starts from the multibody stiffness our own articulated
+        // figures need (see FIGURE_MULTIBODY), which its settings may still override.
+        let (substeps, hertz) = FIGURE_MULTIBODY;
+        settings.multibody_substeps = Some(substeps);
+        settings.contact_hertz = hertz;
+        settings.joint_hertz = hertz;
+    }
     let mut defaults = Defaults {
         friction: Friction::default(),
         self_collision: true,
@@ -477,6 +492,14 @@ fn read_units(merged: &[Block], fname: &str) -> R<(Conv, Option<(String, Pos)>)>
     Ok((conv, mesh_key))
 }
 
+/// The multibody solver's substeps and contact and joint stiffness (Hz) for a figure
+/// read in Doom 3's units: those of the shipped human. A figure landing on one limb
+/// needs stiff joints and contacts to keep its joint gaps under 2 mm and its
+/// penetrations under 1 cm, and the soft step honours a stiffness only up to a quarter of
+/// its substep rate (60 Hz × 16 / 4 = 240 Hz); at the defaults (4 substeps, 60 Hz) id's
+/// zombies open 6–7 mm joint gaps and overshoot their limits by 3–5° when they land.
+pub(super) const FIGURE_MULTIBODY: (u32, f32) = (16, 240.0);
+
 /// Most copies `replicate` or `--count` may ask for (160 000 bodies of the human).
 pub(super) const MAX_COPIES: u32 = 10_000;
 
@@ -723,4 +746,44 @@ pub(super) fn read_replicate(ctx: &mut Ctx, b: &Block) -> R<Grid> {
         }
     }
     Ok(g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{AfOptions, parse};
+    use super::FIGURE_MULTIBODY;
+    use std::path::Path;
+
+    fn settings(text: &str) -> crate::scene::Settings {
+        parse(text, Path::new("t.af"), &AfOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .desc
+            .settings
+    }
+
+    #[test]
+    fn a_file_in_doom_3_units_starts_from_the_figure_stiffness() {
+        let body = "body \"b\" { model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 10 ) }\n";
+        let (n, hz) = FIGURE_MULTIBODY;
+        let s = settings(body);
+        assert_eq!(
+            (s.multibody_substeps, s.contact_hertz, s.joint_hertz),
+            (Some(n), hz, hz)
+        );
+        // The file's own keys win.
+        let s = settings(&format!(
+            "settings {{ multibodySubsteps 4 jointHertz 60 }}\n{body}"
+        ));
+        assert_eq!(
+            (s.multibody_substeps, s.contact_hertz, s.joint_hertz),
+            (Some(4), hz, 60.0)
+        );
+        // A file that names its units is ours: the solver's defaults.
+        let s = settings(&format!("settings {{ units \"inch\" }}\n{body}"));
+        let d = crate::scene::Settings::default();
+        assert_eq!(
+            (s.multibody_substeps, s.contact_hertz, s.joint_hertz),
+            (d.multibody_substeps, d.contact_hertz, d.joint_hertz)
+        );
+    }
 }

@@ -31,6 +31,14 @@ impl Conv {
             v
         }
     }
+    /// The inverse of [`Conv::axes`]: our `(x, y, z)` → Z-up `(x, -z, y)`.
+    pub(super) fn file_axes(&self, v: Vec3) -> Vec3 {
+        if self.z_up {
+            Vec3::new(v.x, -v.z, v.y)
+        } else {
+            v
+        }
+    }
     pub(super) fn point(&self, v: Vec3) -> Vec3 {
         self.axes(v) * self.scale
     }

@@ -6,7 +6,7 @@
 //! axis (Doom 3's Z) after the axis mapping.
 
 use crate::scene::Shape;
-use glam::{Quat, Vec3};
+use glam::{Mat3, Quat, Vec3};
 use std::f32::consts::TAU;
 use std::sync::Arc;
 
@@ -84,19 +84,39 @@ pub fn cone(half: Vec3, sides: u32) -> Shape {
     }
 }
 
-/// Doom 3 `bone( start, end, width )`: an octahedron stretched between the two ends,
-/// `width` across at the middle, along local Y.
+/// Doom 3 `bone( start, end, width )` (`idTraceModel::SetupBone`): a triangular
+/// bipyramid, its tips at the two ends and a triangle across its middle with one corner
+/// `width / 2` to one side and two `width` apart `width / 4` to the other. In the shape
+/// frame of [`bone_frame`] (local Y along the bone; local X and Z are Doom's bone axes x
+/// and −y) the corners are (0, 0, w/2) and (±w/2, 0, −w/4). The triangle's centroid is
+/// on the axis, so the centre of mass is the middle; the volume is w²·L/8.
 pub fn bone(half_length: f32, width: f32) -> Shape {
     let w = width * 0.5;
     let pts = [
         Vec3::new(0.0, half_length, 0.0),
         Vec3::new(0.0, -half_length, 0.0),
-        Vec3::new(w, 0.0, 0.0),
-        Vec3::new(-w, 0.0, 0.0),
         Vec3::new(0.0, 0.0, w),
-        Vec3::new(0.0, 0.0, -w),
+        Vec3::new(w, 0.0, -0.5 * w),
+        Vec3::new(-w, 0.0, -0.5 * w),
     ];
     hull(&pts)
+}
+
+/// The shape frame of a bone running along `dir` (the file's axes, not normalised),
+/// as columns in the file's axes: Doom 3 (`idDeclAF_Body` with `idVec3::NormalVectors`)
+/// takes z = dir/|dir|, x = (−z_y, z_x, 0)/|…| (or (1, 0, 0) for a bone along the
+/// file's up axis), y = z × x; our frame is (x, z, −y), so that local Y runs along the
+/// bone and the frame stays right-handed.
+pub fn bone_frame(dir: Vec3) -> Mat3 {
+    let z = dir.normalize();
+    let d = z.x * z.x + z.y * z.y;
+    let x = if d > 1e-12 {
+        Vec3::new(-z.y, z.x, 0.0) / d.sqrt()
+    } else {
+        Vec3::X
+    };
+    let y = z.cross(x);
+    Mat3::from_cols(x, z, -y)
 }
 
 /// The rotation taking local +Y to the unit direction `d` (shortest arc).
@@ -148,6 +168,34 @@ mod tests {
         // Octahedron with half diagonals a, b, c: V = 4abc/3.
         let s = octahedron(Vec3::new(1.0, 2.0, 3.0));
         assert!((volume(&s).unwrap() - 8.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn bone_is_doom_3_s_triangular_bipyramid() {
+        // idTraceModel::SetupBone(length 2, width 1): volume = triangle area · L / 3 =
+        // (1 · 3/4 / 2) · 2 / 3 = 1/4 = w² L / 8; centroid on the axis.
+        let s = bone(1.0, 1.0);
+        assert!((volume(&s).unwrap() - 0.25).abs() < 1e-5);
+        let h = s.local_half_extents();
+        assert!(
+            (h - Vec3::new(0.5, 1.0, 0.5)).abs().max_element() < 1e-6,
+            "{h}"
+        );
+    }
+
+    #[test]
+    fn bone_frame_follows_doom_3_s_normal_vectors() {
+        // A bone along the file's +X: z = X, x = (0, 1, 0), y = z × x = Z; ours (x, z, −y).
+        let m = bone_frame(Vec3::new(3.0, 0.0, 0.0));
+        assert!((m.x_axis - Vec3::Y).length() < 1e-6);
+        assert!((m.y_axis - Vec3::X).length() < 1e-6);
+        assert!((m.z_axis + Vec3::Z).length() < 1e-6);
+        assert!((m.determinant() - 1.0).abs() < 1e-6);
+        // Along the up axis: x = (1, 0, 0).
+        let m = bone_frame(Vec3::new(0.0, 0.0, -2.0));
+        assert!((m.x_axis - Vec3::X).length() < 1e-6);
+        assert!((m.y_axis + Vec3::Z).length() < 1e-6);
+        assert!((m.determinant() - 1.0).abs() < 1e-6);
     }
 
     #[test]
