@@ -6,7 +6,7 @@
 //! particles, since the frame is — and corrects it with the point's generalised inverse
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
 
-use super::bone::{Bone, Side, angular, positional, side_rot, side_world};
+use super::bone::{Aim, Bone, Side, angular, point, positional, side_rot, side_world};
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
@@ -373,9 +373,9 @@ impl Joint {
     }
 
     /// One XPBD pass over the joint between body1 at `a` and body2 at `b` of `bones`:
-    /// axes, anchor, then limits; `h` is the substep. A batch of islands stepped on its
+    /// axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of islands stepped on its
     /// own thread holds its bones under its own indices.
-    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
+    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32, aim: Aim) {
         let inv_h2 = 1.0 / (h * h);
         match self.kind {
             JointType::Hinge { axis_a, axis_b } => {
@@ -445,7 +445,7 @@ impl Joint {
                 positional(bones, a, b, pa, pb, d - axis * axis.dot(d), 0.0);
             }
             _ => {
-                positional(bones, a, b, pa, pb, pb - pa, 0.0);
+                point(bones, (a, self.anchor_a), (b, self.anchor_b), pb - pa, aim);
             }
         }
         let alpha = self.limit_compliance * inv_h2;
