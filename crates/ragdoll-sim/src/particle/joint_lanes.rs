@@ -169,6 +169,7 @@ struct RangeLanes {
     axis_a: Vec3x4,
     /// `(q_b⁻¹ q_a)` at rest, inverted.
     rest_inv: Quatx4,
+    /// The range, widened by the joint's `slack` (built each frame, while it holds).
     min: f32x4,
     max: f32x4,
     /// `AngleLimit::inside`.
@@ -180,6 +181,7 @@ struct RangeLanes {
 struct ConeLanes {
     shaft_a: Vec3x4,
     axis_b: Vec3x4,
+    /// Widened by the joint's `slack`.
     half_angle: f32x4,
     cos_inside: f32x4,
 }
@@ -231,7 +233,7 @@ impl Constants {
             ConeLanes {
                 shaft_a: Vec3x4::from_fn(|k| swing(k).shaft_a),
                 axis_b: Vec3x4::from_fn(|k| swing(k).axis_b),
-                half_angle: f4(|k| cone(k).0),
+                half_angle: f4(|k| cone(k).0 + joint(k).slack),
                 cos_inside: f4(|k| cone(k).1),
             }
         });
@@ -240,8 +242,8 @@ impl Constants {
             RangeLanes {
                 axis_a: Vec3x4::from_fn(|k| l(k).axis_a),
                 rest_inv: Quatx4::from_fn(|k| l(k).rest_rel.inverse()),
-                min: f4(|k| l(k).min),
-                max: f4(|k| l(k).max),
+                min: f4(|k| l(k).min - joint(k).slack),
+                max: f4(|k| l(k).max + joint(k).slack),
                 lo: f4(|k| l(k).inside[0]),
                 hi: f4(|k| l(k).inside[1]),
             }
