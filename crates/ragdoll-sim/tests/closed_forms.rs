@@ -678,8 +678,8 @@ suite!(multibody:
 );
 
 suite!(rigid_frames:
-    pendulum_at_5_degrees_keeps_its_exact_period_and_energy = "rigid-frames: loses 8.6 % in 10 s (first-order damping of the position projection)",
-    pendulum_at_60_degrees_keeps_its_exact_period_and_energy = "rigid-frames: loses 11.7 % in 10 s (first-order damping of the position projection)",
+    pendulum_at_5_degrees_keeps_its_exact_period_and_energy,
+    pendulum_at_60_degrees_keeps_its_exact_period_and_energy,
     torque_free_rotation_about_a_general_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_major_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_minor_axis_keeps_l_and_energy,
@@ -693,12 +693,12 @@ suite!(rigid_frames:
     stack_of_5_boxes_stands,
     stack_of_10_boxes_stands = "rigid-frames: falls (top box 1.8 m down)",
     chain_of_mass_ratio_100_hangs_without_gaps,
-    chain_of_mass_ratio_100_swings_without_gaps = "rigid-frames: joint gap 2.9 mm",
+    chain_of_mass_ratio_100_swings_without_gaps,
     box_hitting_a_wall_at_50_m_s_stays_face_on = "rigid-frames: spin 3.5 rad/s",
     free_plate_hit_off_centre_keeps_momentum,
     box_starting_25_cm_in_the_ground_is_pushed_out_gently = "rigid-frames: rises at 3.05 m/s against the setting's 3 m/s (the velocity pass leaves a little of the push velocity)",
     boxes_starting_25_cm_inside_each_other_are_pushed_apart_gently,
-    joint_starting_10_degrees_outside_its_limit_returns_gently = "rigid-frames: gains 20 times the energy scale",
+    joint_starting_10_degrees_outside_its_limit_returns_gently,
     ball_limited_arms_come_to_rest_by_joint_friction,
     hinge_limited_arms_come_to_rest_by_joint_friction,
 );

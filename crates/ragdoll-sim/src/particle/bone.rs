@@ -16,7 +16,7 @@
 //! ([`Bone::advance`]).
 
 use crate::scene::{BodyCollider, Pose};
-use glam::{Mat3, Quat, Vec3, Vec3A};
+use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 
 /// The six edges of a tetrahedron, as pairs of corner indices.
 pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
@@ -516,6 +516,100 @@ pub(crate) fn positional_along(
     let lambda = c / corr.w;
     corr.apply(bones, lambda);
     lambda
+}
+
+/// Which frame a point correction ([`point`]) takes its arms from.
+///
+/// A projection at the substep's end — arms from the frame now, as position-based
+/// dynamics projects — turns part of every correction across the motion: gravity
+/// stretches a hanging joint along the arm the substep has already turned, and the
+/// correction along it takes some of the swing. A frictionless pendulum then loses
+/// energy at `ω₀² h` a second, 8.6 % in 10 s at 5° amplitude and 1/1200 s substeps.
+/// Aimed from the substep's start (the constraint force's direction at the start of
+/// the step, as SHAKE/RATTLE take it; Andersen 1983), what is left is of second order.
+/// A correction aimed from the start is not a projection, though, and on a chain the
+/// Gauss–Seidel passes leave part of each joint's correction undone, which then may
+/// add energy as well as take it (a freely swinging chain of five links gained 3.7 %
+/// of its energy scale with every pass aimed from the start). So the first pass aims
+/// from the start and the last projects from the end: the residual the first leaves
+/// is taken out by a projection, which can only take energy, and on a single joint the
+/// first pass has already closed the gap, so the projection has nothing left to turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Aim {
+    /// Arms from the frame at the substep's start, `R₀ p = R d⁻¹ p` (`Bone::dturn`).
+    Start,
+    /// Arms from the frame now, `R p`: a projection.
+    End,
+}
+
+impl Aim {
+    /// The aim of pass `pass` of `passes`: from the start, the last from the end.
+    pub fn of_pass(pass: u32, passes: u32) -> Aim {
+        if pass + 1 < passes {
+            Aim::Start
+        } else {
+            Aim::End
+        }
+    }
+}
+
+/// A shared point held exactly: moves point `local_a` of side `a` (its bone frame) and
+/// `local_b` of side `b` so that `pa − pb` changes by `delta`, in one 3×3 solve.
+///
+/// With the arms `r` that `aim` takes, the impulse `Δλ = K⁻¹ delta`, `K = Σ (1/M −
+/// [r]× I⁻¹ [r]×)` over the moving sides, moves each centre by `±Δλ / M` and turns each
+/// frame by `±I⁻¹ (r × Δλ)`. One solve closes the gap to first order in every
+/// direction at once; a correction along the gap alone (a scalar projection) leaves
+/// the directions it couples to for the next pass.
+pub(crate) fn point(
+    bones: &mut [Bone],
+    (a, local_a): (Side, Vec3),
+    (b, local_b): (Side, Vec3),
+    delta: Vec3A,
+    aim: Aim,
+) {
+    if delta.length_squared() < 1e-18 {
+        return;
+    }
+    let side = |s: Side, local: Vec3| {
+        let i = s.filter(|&i| !bones[i].is_static())?;
+        let bone = &bones[i];
+        let arm = match aim {
+            Aim::Start => bone.dturn.inverse() * Vec3A::from(local),
+            Aim::End => Vec3A::from(local),
+        };
+        let d = Mat3A::from_diagonal(Vec3::from(bone.inv_inertia_local));
+        let skew = skew(arm);
+        let k = Mat3A::from_diagonal(Vec3::splat(bone.inv_mass())) - skew * d * skew;
+        let r = Mat3A::from_quat(bone.rot);
+        Some((i, arm, r * k * r.transpose()))
+    };
+    let (sa, sb) = (side(a, local_a), side(b, local_b));
+    let k = sa.map_or(Mat3A::ZERO, |s| s.2) + sb.map_or(Mat3A::ZERO, |s| s.2);
+    let det = k.determinant();
+    if det.is_nan() || det.abs() <= 1e-30 {
+        return;
+    }
+    let impulse = k.inverse() * delta;
+    for (s, sign) in [(sa, 1.0f32), (sb, -1.0)] {
+        if let Some((i, arm, _)) = s {
+            let b = &mut bones[i];
+            let p = impulse * sign;
+            let turn = b.inv_inertia_local * arm.cross(b.rot.inverse() * p);
+            b.dcom += p * b.inv_mass();
+            b.rot = rotate_local(b.rot, turn);
+            b.dturn = rotate_local(b.dturn, turn);
+        }
+    }
+}
+
+/// The cross-product matrix, `skew(a) b = a × b`.
+fn skew(a: Vec3A) -> Mat3A {
+    Mat3A::from_cols(
+        Vec3A::new(0.0, a.z, -a.y),
+        Vec3A::new(-a.z, 0.0, a.x),
+        Vec3A::new(a.y, -a.x, 0.0),
+    )
 }
 
 /// XPBD angular constraint: rotates side `a` relative to `b` by the rotation vector

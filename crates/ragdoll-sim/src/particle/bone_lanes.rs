@@ -1,5 +1,5 @@
 //! Bones in SIMD lanes: four constraints' bones on one side, one to a lane, and the
-//! XPBD corrections of `bone.rs` (`Lever`, `Correction`, `positional`, `angular`) four
+//! XPBD corrections of `bone.rs` (`Lever`, `Correction`, `point`, `angular`) four
 //! at a time. The joint pass (`joint_lanes`) solves four figures' joints side by side
 //! with these.
 //!
@@ -7,7 +7,7 @@
 //! same bits whichever constraints share its instruction: the batches of islands, which
 //! group constraints differently, give the serial result on any number of threads.
 
-use super::bone::{Bone, Side};
+use super::bone::{Aim, Bone, Side};
 use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
 use glam::{Quat, Vec3};
 use wide::f32x4;
@@ -99,10 +99,6 @@ impl SideLanes {
         self.com + (self.dcom + self.rot.rotate(local))
     }
 
-    fn center(&self) -> Vec3x4 {
-        self.com + self.dcom
-    }
-
     /// The lever of a correction whose angular part is `axis` (`(p − c) × n`, or `n`
     /// for a pure turn): `I⁻¹ (R⁻¹ axis)` in the bone frame and the generalised inverse
     /// mass `linear + local · turn` (`bone::Lever::of`); zero for a bone that takes no
@@ -111,6 +107,46 @@ impl SideLanes {
         let local = self.rot.inverse_rotate(axis);
         let turn = self.inv_inertia.mul_elem(local);
         (turn, linear + local.dot(turn))
+    }
+
+    /// A point constraint's side (`point`): the point's arm in the bone frame, from
+    /// the frame at the substep's start (`d⁻¹ p`) or now (`p`), and its `K` in the world, `1/M − [r₀]× I⁻¹ [r₀]×`, as
+    /// `xx, yy, zz, xy, xz, yz`.
+    fn point_block(&self, local: Vec3x4, aim: Aim) -> (Vec3x4, [f32x4; 6]) {
+        let arm = match aim {
+            Aim::Start => self.dturn.inverse_rotate(local),
+            Aim::End => local,
+        };
+        let zero = f32x4::ZERO;
+        let col = |x, y, z| Vec3x4 { x, y, z };
+        let d = [self.inv_inertia.x, self.inv_inertia.y, self.inv_inertia.z];
+        let u = [
+            col(zero, -arm.z, arm.y),
+            col(arm.z, zero, -arm.x),
+            col(-arm.y, arm.x, zero),
+        ]
+        .map(|e| self.rot.rotate(e));
+        let m = self.inv_mass;
+        let mut k = [m, m, m, zero, zero, zero];
+        for (u, d) in u.iter().zip(d) {
+            k[0] += d * u.x * u.x;
+            k[1] += d * u.y * u.y;
+            k[2] += d * u.z * u.z;
+            k[3] += d * u.x * u.y;
+            k[4] += d * u.x * u.z;
+            k[5] += d * u.y * u.z;
+        }
+        (arm, k)
+    }
+
+    /// Applies a point constraint's impulse `p` (world) at the arm `arm` (`point_block`)
+    /// in the lanes of `mask`: the centre moves by `p / M`, the frame turns by
+    /// `I⁻¹ (arm × R⁻¹ p)` (bone frame).
+    fn apply_point(&mut self, mask: f32x4, arm: Vec3x4, p: Vec3x4) {
+        let turn = self
+            .inv_inertia
+            .mul_elem(arm.cross(self.rot.inverse_rotate(p)));
+        self.apply(mask, Some(p), turn);
     }
 
     /// Turns the lanes in `mask` by `turn` (bone frame) and moves them by `shift`
@@ -126,70 +162,67 @@ impl SideLanes {
     }
 }
 
-/// `bone::Correction` in lanes: a correction between two sides along a direction, its
-/// levers computed once.
+/// `bone::Correction::turning` in lanes: a turn between two sides about a direction,
+/// its levers computed once.
 #[derive(Clone, Copy)]
 pub(super) struct Correction {
     ta: Vec3x4,
     tb: Vec3x4,
-    /// The direction points move along (`None` for a pure turn).
-    n: Option<Vec3x4>,
-    /// Generalised inverse mass along it.
+    /// Generalised inverse inertia about it.
     pub w: f32x4,
 }
 
 impl Correction {
-    /// `Correction::along_scaled`: moving `pa` of `a` along `d` (squared length `d2`)
-    /// and `pb` of `b` against it.
-    pub fn along_scaled(
-        (a, pa): (&SideLanes, Vec3x4),
-        (b, pb): (&SideLanes, Vec3x4),
-        d: Vec3x4,
-        d2: f32x4,
-    ) -> Correction {
-        let (ta, wa) = a.lever((pa - a.center()).cross(d), a.inv_mass * d2);
-        let (tb, wb) = b.lever((pb - b.center()).cross(d), b.inv_mass * d2);
-        Correction {
-            ta,
-            tb,
-            n: Some(d),
-            w: wa + wb,
-        }
-    }
-
     /// `Correction::turning`: turning `a` about `n` and `b` against it.
     pub fn turning(a: &SideLanes, b: &SideLanes, n: Vec3x4) -> Correction {
         let (ta, wa) = a.lever(n, f32x4::ZERO);
         let (tb, wb) = b.lever(n, f32x4::ZERO);
-        Correction {
-            ta,
-            tb,
-            n: None,
-            w: wa + wb,
-        }
+        Correction { ta, tb, w: wa + wb }
     }
 
-    /// Applies the multiplier `λ` in the lanes of `mask`: `pa − pb` changes by `n λ w`.
+    /// Applies the multiplier `λ` in the lanes of `mask`: `a` turns by `n λ w`
+    /// relative to `b`.
     #[inline]
     pub fn apply(&self, a: &mut SideLanes, b: &mut SideLanes, lambda: f32x4, mask: f32x4) {
-        let shift = self.n.map(|n| n * lambda);
-        a.apply(mask, shift, self.ta * lambda);
-        b.apply(mask, shift.map(|s| -s), self.tb * -lambda);
+        a.apply(mask, None, self.ta * lambda);
+        b.apply(mask, None, self.tb * -lambda);
     }
 }
 
-/// `bone::positional` with `α̃ = 0` in lanes: moves `pa` of `a` and `pb` of `b` so that
-/// `pa − pb` changes by `delta`, in the lanes of `mask`.
-pub(super) fn positional(
-    (a, pa): (&mut SideLanes, Vec3x4),
-    (b, pb): (&mut SideLanes, Vec3x4),
+/// `bone::point` in lanes: moves point `local_a` of `a` and `local_b` of `b` (bone
+/// frames) so that `pa − pb` changes by `delta`, in one 3×3 solve against the arms
+/// `aim` takes, in the lanes of `mask`.
+pub(super) fn point(
+    (a, local_a): (&mut SideLanes, Vec3x4),
+    (b, local_b): (&mut SideLanes, Vec3x4),
     delta: Vec3x4,
+    aim: Aim,
     mask: f32x4,
 ) {
-    let c2 = delta.length_squared();
-    let corr = Correction::along_scaled((a, pa), (b, pb), delta, c2);
-    let mask = mask & c2.simd_ge(f32x4::splat(1e-18)) & corr.w.simd_gt(f32x4::ZERO);
-    corr.apply(a, b, c2 / corr.w, mask);
+    // `K = Σ (1/M + Σ_i I⁻¹_i u_i u_iᵀ)` with `u_i = R (e_i × r₀)`: `−[r₀]× I⁻¹ [r₀]×`
+    // in the world, `r₀` the arm in the bone frame at the substep's start.
+    let (arm_a, ka) = a.point_block(local_a, aim);
+    let (arm_b, kb) = b.point_block(local_b, aim);
+    let k: [f32x4; 6] = std::array::from_fn(|i| ka[i] + kb[i]);
+    let [xx, yy, zz, xy, xz, yz] = k;
+    // The adjugate of the symmetric `K`, and its determinant.
+    let (axx, ayy, azz) = (yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy);
+    let (axy, axz, ayz) = (xz * yz - xy * zz, xy * yz - xz * yy, xy * xz - xx * yz);
+    let det = xx * axx + xy * axy + xz * axz;
+    let mask = mask
+        & delta.length_squared().simd_ge(f32x4::splat(1e-18))
+        & det.abs().simd_gt(f32x4::splat(1e-30));
+    if !mask.any() {
+        return;
+    }
+    let inv = f32x4::ONE / det;
+    let impulse = Vec3x4 {
+        x: (axx * delta.x + axy * delta.y + axz * delta.z) * inv,
+        y: (axy * delta.x + ayy * delta.y + ayz * delta.z) * inv,
+        z: (axz * delta.x + ayz * delta.y + azz * delta.z) * inv,
+    };
+    a.apply_point(mask, arm_a, impulse);
+    b.apply_point(mask, arm_b, -impulse);
 }
 
 /// `bone::angular` in lanes: turns `a` relative to `b` by `dphi`, compliance `α̃`, in

@@ -17,8 +17,8 @@
 //! threads. The lanes compute what [`Joint::solve_between`] computes, in the same order,
 //! with their own (SIMD) rounding.
 
-use super::bone::{Bone, Side};
-use super::bone_lanes::{SideLanes, angular, mask, per_lane, positional};
+use super::bone::{Aim, Bone, Side};
+use super::bone_lanes::{SideLanes, angular, mask, per_lane, point};
 use super::joints::{HINGE_SERIES_BELOW, Joint, JointType, hinge_turn_ratio};
 use super::limits::{Swing, perpendicular};
 use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
@@ -137,15 +137,15 @@ impl Lockstep {
         }
     }
 
-    /// One pass over the joints, `h` the substep; `entries` are the ones it was built
-    /// from.
-    pub fn solve(&self, entries: &[Entry], bones: &mut [Bone], h: f32) {
+    /// One pass over the joints, `h` the substep, anchors aimed as `aim` says;
+    /// `entries` are the ones it was built from.
+    pub fn solve(&self, entries: &[Entry], bones: &mut [Bone], h: f32, aim: Aim) {
         debug_assert_eq!(entries.len(), self.entries, "a pass over other joints");
         for step in &self.steps {
             match step {
                 Step::Scalar(i) => {
                     let (j, a, b) = entries[*i as usize];
-                    j.solve_between(bones, a, b, h);
+                    j.solve_between(bones, a, b, h, aim);
                 }
                 Step::Lanes(lanes, c) => {
                     let c = &self.constants[*c as usize];
@@ -155,7 +155,7 @@ impl Lockstep {
                     let (a, b) = (sides(|e| e.1), sides(|e| e.2));
                     let mut sa = SideLanes::gather(bones, &a);
                     let mut sb = SideLanes::gather(bones, &b);
-                    c.solve(&mut sa, &mut sb, h);
+                    c.solve(&mut sa, &mut sb, h, aim);
                     sa.scatter(bones, &a);
                     sb.scatter(bones, &b);
                 }
@@ -169,6 +169,7 @@ struct RangeLanes {
     axis_a: Vec3x4,
     /// `(q_b⁻¹ q_a)` at rest, inverted.
     rest_inv: Quatx4,
+    /// The range, widened by the joint's `slack` (built each frame, while it holds).
     min: f32x4,
     max: f32x4,
     /// `AngleLimit::inside`.
@@ -180,6 +181,7 @@ struct RangeLanes {
 struct ConeLanes {
     shaft_a: Vec3x4,
     axis_b: Vec3x4,
+    /// Widened by the joint's `slack`.
     half_angle: f32x4,
     cos_inside: f32x4,
 }
@@ -231,7 +233,7 @@ impl Constants {
             ConeLanes {
                 shaft_a: Vec3x4::from_fn(|k| swing(k).shaft_a),
                 axis_b: Vec3x4::from_fn(|k| swing(k).axis_b),
-                half_angle: f4(|k| cone(k).0),
+                half_angle: f4(|k| cone(k).0 + joint(k).slack),
                 cos_inside: f4(|k| cone(k).1),
             }
         });
@@ -240,8 +242,8 @@ impl Constants {
             RangeLanes {
                 axis_a: Vec3x4::from_fn(|k| l(k).axis_a),
                 rest_inv: Quatx4::from_fn(|k| l(k).rest_rel.inverse()),
-                min: f4(|k| l(k).min),
-                max: f4(|k| l(k).max),
+                min: f4(|k| l(k).min - joint(k).slack),
+                max: f4(|k| l(k).max + joint(k).slack),
                 lo: f4(|k| l(k).inside[0]),
                 hi: f4(|k| l(k).inside[1]),
             }
@@ -259,7 +261,7 @@ impl Constants {
 
     /// [`Joint::solve_between`] for the lanes: the hinge's axes, the anchor, the swing,
     /// the range.
-    fn solve(&self, a: &mut SideLanes, b: &mut SideLanes, h: f32) {
+    fn solve(&self, a: &mut SideLanes, b: &mut SideLanes, h: f32, aim: Aim) {
         let active = self.active;
         if let Some((axis_a, axis_b)) = self.hinge {
             // `c asin(s) / s` about the misalignment `c`, `s = |c|`: `hinge_turn_ratio`,
@@ -280,7 +282,7 @@ impl Constants {
             angular(a, b, c * ratio, f32x4::ZERO, turn);
         }
         let (pa, pb) = (a.world(self.anchor_a), b.world(self.anchor_b));
-        positional((a, pa), (b, pb), pb - pa, active);
+        point((a, self.anchor_a), (b, self.anchor_b), pb - pa, aim, active);
         let alpha = self.limit_compliance * f32x4::splat(1.0 / (h * h));
         if let Some(cone) = &self.cone {
             self.solve_cone(cone, a, b, alpha);
@@ -392,10 +394,10 @@ mod tests {
                 .count();
             assert_eq!(lanes, w.joints.len() / 4, "four humans, one group");
             let mut ours = w.bones.clone();
-            lockstep.solve(&entries, &mut ours, h);
+            lockstep.solve(&entries, &mut ours, h, Aim::Start);
             let mut theirs = w.bones.clone();
             for &(j, a, b) in &entries {
-                j.solve_between(&mut theirs, a, b, h);
+                j.solve_between(&mut theirs, a, b, h, Aim::Start);
             }
             let moved = motion(&w.bones);
             // Within rounding, carried along each figure's chain of corrections: a
@@ -425,12 +427,12 @@ mod tests {
         let set = JointSet::All(&w.joints);
         let entries = set.entries();
         let mut together = w.bones.clone();
-        Lockstep::new(&entries, &w.bones).solve(&entries, &mut together, h);
+        Lockstep::new(&entries, &w.bones).solve(&entries, &mut together, h, Aim::Start);
         // Each figure alone: its joints only, a lockstep of one lane.
         let mut alone = w.bones.clone();
         let per_figure = entries.len() / 5;
         for figure in entries.chunks(per_figure) {
-            Lockstep::new(figure, &alone).solve(figure, &mut alone, h);
+            Lockstep::new(figure, &alone).solve(figure, &mut alone, h, Aim::Start);
         }
         assert!(motion(&together) == motion(&alone));
     }
@@ -472,9 +474,9 @@ mod tests {
             over += usize::from(c.length_squared() > 1.0);
             let entries = [(&w.joints[k], Some(a), Some(b))];
             let mut scalar = w.bones.clone();
-            w.joints[k].solve_between(&mut scalar, Some(a), Some(b), h);
+            w.joints[k].solve_between(&mut scalar, Some(a), Some(b), h, Aim::Start);
             let mut lanes = w.bones.clone();
-            Lockstep::new(&entries, &w.bones).solve(&entries, &mut lanes, h);
+            Lockstep::new(&entries, &w.bones).solve(&entries, &mut lanes, h, Aim::Start);
             for i in [a, b] {
                 assert!(
                     scalar[i].rot.is_finite() && lanes[i].rot.is_finite(),

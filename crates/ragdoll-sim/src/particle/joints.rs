@@ -6,7 +6,7 @@
 //! particles, since the frame is — and corrects it with the point's generalised inverse
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
 
-use super::bone::{Bone, Side, angular, positional, side_rot, side_world};
+use super::bone::{Aim, Bone, Side, angular, point, positional, side_rot, side_world};
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
@@ -78,6 +78,10 @@ pub(crate) struct Joint {
     pub has_anchor: bool,
     /// Largest joint friction torque (N·m, 0 for none): [`Joint::with_friction`].
     pub friction_torque: f32,
+    /// How far the limits are widened (rad): the excess of a pose that started outside
+    /// them, closed at a bounded speed by [`Joint::close_slack`]. Zero for every joint
+    /// that started inside its limits.
+    pub slack: f32,
 }
 
 /// A joint's two sides, packed: what the island search and sleeping ask of every
@@ -198,6 +202,7 @@ impl Joint {
             limit_compliance: 0.0,
             has_anchor: kind.anchor().is_some() || matches!(kind, JointKind::Fixed),
             friction_torque: 0.0,
+            slack: 0.0,
         };
         match kind {
             JointKind::BallAndSocket {
@@ -330,6 +335,21 @@ impl Joint {
         }
     }
 
+    /// Narrows the widened limits ([`Joint::slack`]) by what `dt` allows: body1's
+    /// centre turns about the anchor at no more than `push_out_speed`
+    /// (`Settings::max_push_out_speed`, the speed an old overlap of the contacts is
+    /// pushed out at), an angular speed of `push_out_speed / r` for the anchor's
+    /// distance `r` from it (at least 5 cm, as [`Joint::with_friction`]). Returns
+    /// whether the joint had slack.
+    pub fn close_slack(&mut self, push_out_speed: f32, dt: f32) -> bool {
+        if self.slack <= 0.0 {
+            return false;
+        }
+        let rate = push_out_speed / self.anchor_a.length().max(0.05);
+        self.slack = (self.slack - rate * dt).max(0.0);
+        true
+    }
+
     /// The anchor as seen from body1 and from body2 (world).
     pub fn anchors(&self, bones: &[Bone]) -> (Vec3, Vec3) {
         (
@@ -373,9 +393,9 @@ impl Joint {
     }
 
     /// One XPBD pass over the joint between body1 at `a` and body2 at `b` of `bones`:
-    /// axes, anchor, then limits; `h` is the substep. A batch of islands stepped on its
+    /// axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of islands stepped on its
     /// own thread holds its bones under its own indices.
-    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
+    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32, aim: Aim) {
         let inv_h2 = 1.0 / (h * h);
         match self.kind {
             JointType::Hinge { axis_a, axis_b } => {
@@ -445,15 +465,15 @@ impl Joint {
                 positional(bones, a, b, pa, pb, d - axis * axis.dot(d), 0.0);
             }
             _ => {
-                positional(bones, a, b, pa, pb, pb - pa, 0.0);
+                point(bones, (a, self.anchor_a), (b, self.anchor_b), pb - pa, aim);
             }
         }
         let alpha = self.limit_compliance * inv_h2;
         if let Some(s) = &self.swing {
-            s.solve(bones, a, b, alpha);
+            s.solve(bones, a, b, alpha, self.slack);
         }
         for l in &self.angle_limits {
-            l.solve(bones, a, b, alpha);
+            l.solve(bones, a, b, alpha, self.slack);
         }
     }
 }

@@ -202,13 +202,15 @@ impl AngleLimit {
     /// ([`AngleLimit::inside`]), and the `atan2` and the gradient are only evaluated for
     /// a limit near or past a bound (the same corrections, bit for bit: a limit the quick
     /// test passes by is one whose measured angle its clamp would leave as it is).
-    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32) {
+    /// `slack` widens the range on both sides (`Joint::slack`); the quick test, made
+    /// for the range itself, stays a sure one.
+    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
         let d = self.relative(bones, a, b);
         if self.surely_inside(d) {
             return;
         }
         let (phi, j) = self.angle_of(d, side_rot(bones, a));
-        let target = phi.clamp(self.min, self.max);
+        let target = phi.clamp(self.min - slack, self.max + slack);
         let j2 = j.length_squared();
         if target != phi && j2 > 1e-12 {
             // `angular` turns by an angle along a unit direction: `J/|J|` by `C/|J|`.
@@ -223,8 +225,9 @@ impl SwingLimit {
         (side_rot(bones, a) * self.shaft_a, qb * self.axis_b, qb)
     }
 
-    /// The direction the shaft must be rotated to, if it is outside the limit.
-    fn target(&self, bones: &[Bone], a: Side, b: Side) -> Option<(Vec3, f32)> {
+    /// The direction the shaft must be rotated to, if it is outside the limit widened
+    /// by `slack` (rad).
+    fn target(&self, bones: &[Bone], a: Side, b: Side, slack: f32) -> Option<(Vec3, f32)> {
         let (s, ax, qb) = self.dirs(bones, a, b);
         match self.kind {
             Swing::Cone { half_angle, .. } => {
@@ -236,6 +239,7 @@ impl SwingLimit {
                     return None;
                 }
                 let phi = c.clamp(-1.0, 1.0).acos();
+                let half_angle = half_angle + slack;
                 (phi > half_angle).then(|| {
                     let mut n = s.cross(ax);
                     if n.length_squared() < 1e-12 {
@@ -245,6 +249,7 @@ impl SwingLimit {
                 })
             }
             Swing::Pyramid { h1, h2, u, v } => {
+                let (h1, h2) = (h1 + slack, h2 + slack);
                 let (u, v) = (qb * u, qb * v);
                 let (x, y, z) = (s.dot(u), s.dot(v), s.dot(ax));
                 let (a1, a2) = (x.atan2(z), y.atan2(z));
@@ -279,9 +284,9 @@ impl SwingLimit {
         }
     }
 
-    /// Rotates the shaft back onto the cone or pyramid.
-    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32) {
-        if let Some((n, angle)) = self.target(bones, a, b) {
+    /// Rotates the shaft back onto the cone or pyramid widened by `slack`.
+    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
+        if let Some((n, angle)) = self.target(bones, a, b, slack) {
             angular(bones, a, b, Vec3A::from(n * angle), alpha_tilde);
         }
     }
@@ -379,7 +384,7 @@ mod tests {
                 // both sides (no bones: their frames are the identity).
                 let measured = shaft.dot(axis).clamp(-1.0, 1.0).acos() > h;
                 assert_eq!(
-                    limit.target(&[], None, None).is_some(),
+                    limit.target(&[], None, None, 0.0).is_some(),
                     measured,
                     "{deg} deg cone, shaft at {angle} rad"
                 );

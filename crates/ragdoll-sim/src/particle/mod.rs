@@ -181,6 +181,13 @@ impl ParticleWorld {
             }
         }
         w.links = w.joints.iter().map(Link::of).collect();
+        if solver == ParticleSolver::RigidFrames {
+            // A pose that starts outside a limit is brought in at a bounded speed and
+            // by position only (`rigid_frames::close_start_slack`), not in one substep.
+            for j in &mut w.joints {
+                j.slack = j.limit_violation(&w.bones);
+            }
+        }
         if solver == ParticleSolver::Xpbd {
             w.xpbd = Some(xpbd::XpbdState::new(&mut w.bones, &w.joints));
         }
