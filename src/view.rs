@@ -374,6 +374,10 @@ impl App {
                 if let Some(path) = self.state.pending_open.take() {
                     self.args.scene.af = Some(path);
                     self.args.scene.scene = None;
+                    // A dropped file is that file alone: not the entity, nor its anim.
+                    self.args.scene.entity = None;
+                    self.args.scene.anim = None;
+                    self.args.scene.at = None;
                 }
                 self.load(true).and_then(|l| {
                     Session::configured(l, self.state.particle_solver, &self.state.overrides)
@@ -421,6 +425,10 @@ impl App {
         if let Some(i) = self.state.scene {
             args.af = None;
             args.scene = Some(SCENES[i].to_string());
+            // A built-in scene is neither the Doom 3 entity nor its animation.
+            args.entity = None;
+            args.anim = None;
+            args.at = None;
             let on_disk = scenes::find_builtin(SCENES[i]).map(|b| b.asset_path());
             if from_disk && let Some(path) = on_disk.filter(|p| p.exists()) {
                 args.scene = None;
