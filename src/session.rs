@@ -180,15 +180,17 @@ impl Session {
     /// the figure where the animation puts it now, with the animation's velocities
     /// ([`LoadedScene::taken_over_at`]). Returns whether an animation was playing.
     pub fn take_over(&mut self) -> Result<bool, AppError> {
-        let Some((_, time)) = self.playing.take() else {
+        let Some((_, time)) = self.playing else {
             return Ok(false);
         };
         let mut desc = self.loaded.taken_over_at(time).desc;
         desc.settings = self.overrides.apply(&desc.settings);
+        // Both built before either replaces its side: a failure keeps the animation.
         self.methods = [
             methods::build_particle(&desc, self.solver)?,
             methods::build_multibody(&desc)?,
         ];
+        self.playing = None;
         self.history = [Vec::new(), Vec::new()];
         self.grab = None;
         self.record();

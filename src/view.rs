@@ -235,6 +235,8 @@ impl App {
         match action {
             Action::GrabStart(p) => {
                 self.state.apply(action);
+                // A grab takes the figure from the animation first: it pulls the ragdoll.
+                self.take_over();
                 for (side, vp) in viewports.iter().enumerate() {
                     if vp.contains(p) {
                         let (o, d) = self.state.camera.ray(vp.ndc(p), vp.aspect());
@@ -276,6 +278,23 @@ impl App {
             }
         }
         self.wake();
+    }
+
+    /// The ragdoll takes over from the animation playing, if one is: returns whether one
+    /// was. A failure is reported and the animation keeps playing.
+    fn take_over(&mut self) -> bool {
+        match self.session.take_over() {
+            Ok(taken) => {
+                if taken {
+                    self.state.notice = None;
+                }
+                taken
+            }
+            Err(e) => {
+                self.report(e);
+                false
+            }
+        }
     }
 
     /// Something changed: draw a frame (the loop otherwise waits for input).
@@ -355,6 +374,10 @@ impl App {
                 if let Some(path) = self.state.pending_open.take() {
                     self.args.scene.af = Some(path);
                     self.args.scene.scene = None;
+                    // A dropped file is that file alone: not the entity, nor its anim.
+                    self.args.scene.entity = None;
+                    self.args.scene.anim = None;
+                    self.args.scene.at = None;
                 }
                 self.load(true).and_then(|l| {
                     Session::configured(l, self.state.particle_solver, &self.state.overrides)
@@ -402,6 +425,10 @@ impl App {
         if let Some(i) = self.state.scene {
             args.af = None;
             args.scene = Some(SCENES[i].to_string());
+            // A built-in scene is neither the Doom 3 entity nor its animation.
+            args.entity = None;
+            args.anim = None;
+            args.at = None;
             let on_disk = scenes::find_builtin(SCENES[i]).map(|b| b.asset_path());
             if from_disk && let Some(path) = on_disk.filter(|p| p.exists()) {
                 args.scene = None;
@@ -422,17 +449,11 @@ impl App {
                 .apply(&self.session.loaded.desc.settings);
             self.session.set_settings(&settings);
         }
-        if std::mem::take(&mut self.state.pending_takeover) {
-            match self.session.take_over() {
-                Ok(true) => self.state.notice = None,
-                Ok(false) => {
-                    self.state.notice = Some((
-                        "K: no animation is playing; open a figure with --anim NAME".into(),
-                        Instant::now(),
-                    ));
-                }
-                Err(e) => self.report(e),
-            }
+        if std::mem::take(&mut self.state.pending_takeover) && !self.take_over() {
+            self.state.notice = Some((
+                "K: no animation is playing; open a figure with --anim NAME".into(),
+                Instant::now(),
+            ));
         }
         if std::mem::take(&mut self.state.pending_camera_reset) {
             self.state.follow = false;
@@ -460,6 +481,10 @@ impl App {
             }; 2],
             |w| w.compositor.viewports,
         );
+        // A box shot at the playing animation meets the ragdoll, as a Doom 3 death does.
+        if !self.state.pending_shots.is_empty() {
+            self.take_over();
+        }
         for at in std::mem::take(&mut self.state.pending_shots) {
             let camera = &self.state.camera;
             let ray = at

@@ -239,6 +239,15 @@ fn k_hands_the_playing_animation_to_the_ragdoll() {
         "the walk carries the figure forward: {moved}"
     );
     assert_eq!(session.joint_poses[0].len(), 20, "the mesh's skeleton");
+    // The mesh plays the animation on both sides: its hips walked with the bodies.
+    let rest_hips = session.loaded.skin.as_ref().unwrap().rig.rest[1].position;
+    for side in &session.joint_poses {
+        let hips = side[1].position - rest_hips;
+        assert!(
+            (hips.x - moved.x).abs() < 0.05,
+            "hips {hips} vs body {moved}"
+        );
+    }
     // Another half second loops back to the start of the cycle.
     for _ in 0..36 {
         session.step();
