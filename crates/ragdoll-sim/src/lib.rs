@@ -43,12 +43,55 @@
 //! solver. The [`Method`] trait behind a `World` ([`World::method`]) is what the app
 //! drives: metrics samples, what to draw, ray casts and the mouse grab.
 //!
+//! ## Acting on a figure
+//!
+//! What a game does to a ragdoll, as Jolt's ragdoll offers it, on every solver:
+//! [`World::apply_impulse`] (a hit), [`World::set_pose`] (a teleport, Jolt's
+//! `SetPose`), [`World::set_kinematic`] and [`World::move_kinematic`] (a body moved by
+//! the game with infinite mass, an animated character's root or limbs), and
+//! [`World::drive_to_pose`] / [`World::drive_joints`] (joint motors toward a pose,
+//! `DriveToPoseUsingMotors`; [`motor`] says what they do). Carry the human by its pelvis
+//! for half a second with its joints driven to the rest pose, then strike it and let go:
+//!
+//! ```
+//! use ragdoll_sim::glam::Vec3;
+//! use ragdoll_sim::scene::Pose;
+//! use ragdoll_sim::{MotorDrive, Solver, World};
+//!
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/scenes/human.af");
+//! let mut world = World::from_file(path, Solver::Multibody)?;
+//! let pelvis = world.body("hip").expect("the human has a hip");
+//! let rest: Vec<Pose> = world.scene().bodies.iter().map(|b| b.pose).collect();
+//! world.set_kinematic(pelvis, true);
+//! world.drive_to_pose(&rest, MotorDrive::default())?;
+//! let dt = world.scene().settings.timestep;
+//! let start = world.body_pose(pelvis).position;
+//! for k in 1..=30 {
+//!     let target = Pose::from_position(start + Vec3::X * (k as f32 * dt));
+//!     world.move_kinematic(pelvis, target, dt);
+//!     world.step();
+//! }
+//! assert!((world.body_pose(pelvis).position.x - (start.x + 0.5)).abs() < 1e-4);
+//! let head = world.body("head").expect("a head");
+//! let at = world.body_state(head).com;
+//! world.apply_impulse(head, Vec3::new(0.0, 0.0, 10.0), at);
+//! world.stop_motors();
+//! world.set_kinematic(pelvis, false);
+//! world.advance(0.5);
+//! assert!(world.body_pose(pelvis).position.y < start.y, "let go, it falls");
+//! # Ok::<(), ragdoll_sim::Error>(())
+//! ```
+//!
+//! `cargo run --release -p ragdoll-sim --example drive_pose` runs a longer version of
+//! this with every solver.
+//!
 //! ## Modules
 //!
 //! - [`scene`]: `SceneDesc`, mass properties, the `.af` and `.md5mesh` readers.
 //! - [`particle`]: the particle ragdoll, the `paper` (Verlet) and `rigid-frames` solvers.
 //! - [`rigid`]: the impulse-based multibody solver.
 //! - [`method`]: the trait both methods implement for the app.
+//! - [`motor`]: joint motors, the drive toward a pose both methods apply.
 //! - [`snapshot`]: what a method shows, the same way for both.
 //! - [`metrics`]: energy gain, joint gap, limit violation, penetration.
 //! - [`broadphase`]: the overlapping-box pairs both methods collide.
