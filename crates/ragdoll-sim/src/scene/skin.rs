@@ -287,5 +287,14 @@ mod tests {
                 .cast_segment(from + beside, -Vec3::X + beside)
                 .is_none()
         );
+        // A joint no body contains: the hit is found, and pushes no body.
+        let mut loose = bodies.clone();
+        loose[1].contained_joints.clear();
+        let skin = SkinnedMesh::new(&mesh, &rig, &loose);
+        let hit = skin
+            .posed(&joints)
+            .cast_segment(from, -Vec3::X)
+            .expect("the same triangle");
+        assert_eq!((hit.joint, hit.body), (1, None));
     }
 }
