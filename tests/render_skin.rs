@@ -72,7 +72,7 @@ fn the_skinned_mesh_is_drawn_on_both_sides_and_follows_the_fall() {
     let layout = target.last_layout().expect("rendered").view;
     let halves = ragdoll_lab::ui::viewports(layout, 1.0, state.layout);
     let skin = session.loaded.skin.clone().expect("loaded above");
-    for side in 0..2 {
+    for (side, half) in halves.iter().enumerate() {
         let posed = skin.skinned.posed(&session.joint_poses[side]);
         let p = posed.positions();
         let on_tint = |shift: Vec3| {
@@ -80,7 +80,7 @@ fn the_skinned_mesh_is_drawn_on_both_sides_and_follows_the_fall() {
             let mut total = 0;
             for t in &skin.skinned.triangles {
                 let centre = (p[t[0] as usize] + p[t[1] as usize] + p[t[2] as usize]) / 3.0;
-                let Some(px) = halves[side].project(&state.camera, centre + shift) else {
+                let Some(px) = half.project(&state.camera, centre + shift) else {
                     continue;
                 };
                 total += 1;
