@@ -9,8 +9,9 @@
 //! units and axes. The GPU pass draws from these same [`SkinVertex`] records, so what
 //! is hit here is what is drawn.
 //!
-//! A hit on the mesh is handed to a body as the seed (section 3, `containedjoints`)
-//! says: the joint nearest to the hit point, then the body that contains that joint.
+//! A hit on the mesh is handed to a body as MrElusive's articulated-figure document says
+//! under `containedjoints`: the joint nearest to the hit point, then the body that
+//! contains that joint.
 
 use super::md5mesh::Md5Mesh;
 use super::rig::Rig;
