@@ -8,9 +8,10 @@
 //! ahead of the centre, s = a Σᵢ |v̂ · eᵢ| for half edge a and the box's axes eᵢ (so a
 //! box meets the mesh when its front does, not when its centre does, and before its
 //! front reaches a collision shape just inside the mesh). Gravity bends the path by
-//! g Δt²/2, a fraction of a millimetre, which is left out. At the
-//! first triangle crossed, the joint nearest to the hit point is found and the body
-//! containing it ([`ragdoll_sim::scene::BodyDesc::contained_joints`]) receives the
+//! g Δt²/2, a fraction of a millimetre, which is left out.
+//!
+//! At the first triangle crossed, the joint nearest to the hit point is found and the
+//! body containing it ([`ragdoll_sim::scene::BodyDesc::contained_joints`]) receives the
 //! shot's momentum J = m v as an impulse at the hit point; the shot receives −J at its
 //! centre of mass, so it stops where it is and falls: a perfectly inelastic hit that
 //! keeps the pair's momentum. The shot then no longer hits the mesh on that side (a

@@ -468,7 +468,10 @@ impl App {
         };
         self.last = now;
         let timestep = self.session.settings().timestep as f64;
-        self.session.mesh_shots = self.state.show.mesh;
+        // Shots hit the mesh while it is drawn (see `impacts`).
+        self.session.mesh_shots = self.state.show.mesh
+            && (self.session.loaded.skin.as_ref())
+                .is_some_and(|s| s.rig.joints.len() <= crate::render::skin::MAX_JOINTS);
         for _ in 0..self.state.steps_due(dt, timestep) {
             self.session.step();
         }

@@ -183,3 +183,32 @@ fn a_shot_through_the_forearm_mesh_pushes_the_forearm_on_both_sides() {
         );
     }
 }
+
+#[test]
+fn a_shot_from_afar_hits_the_same_forearm_with_its_whole_momentum() {
+    // From 1.5 m, as from the camera: the shot drops under gravity on its way (the
+    // impulse gains m·g·t downward) but hits the same forearm, on both sides, with its
+    // whole momentum along the shot.
+    let mut s = session();
+    let (target, dir) = aim(&s);
+    s.shoot(target - dir * (1.5 + 0.3 + SHOT.edge), dir, &SHOT);
+    let mut steps = 0;
+    while s.mesh_impacts.len() < 2 && steps < 30 {
+        s.step();
+        steps += 1;
+    }
+    let forearm = body(&s, "lloarm");
+    let momentum = SHOT.mass() * SHOT.speed;
+    for side in 0..2 {
+        let impact = s
+            .mesh_impacts
+            .iter()
+            .find(|i| i.side == side)
+            .unwrap_or_else(|| panic!("side {side}: no hit on the mesh in {steps} steps"));
+        assert_eq!(impact.body, Some(forearm), "side {side}: {impact:?}");
+        assert!(
+            (impact.impulse.dot(dir) - momentum).abs() < 1e-3 * momentum,
+            "side {side}: {impact:?}"
+        );
+    }
+}

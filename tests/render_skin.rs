@@ -1,7 +1,8 @@
 //! The skinned md5 mesh of a Doom 3 figure, captured offscreen (llvmpipe in CI): with the
 //! bodies hidden the mesh alone draws the figure, blue on the left and red on the
-//! right; hiding it too leaves neither colour; after a fall the mesh is not where the
-//! bind pose put it.
+//! right; the CPU skin that shots are cast against lies where the GPU drew it; hiding the
+//! mesh too leaves neither colour; after a fall the mesh is not where the bind pose put
+//! it.
 
 use glam::Vec3;
 use ragdoll_lab::app_state::AppState;
@@ -64,6 +65,53 @@ fn the_skinned_mesh_is_drawn_on_both_sides_and_follows_the_fall() {
         blue > 200 && red > 200,
         "mesh: {blue} blue, {red} red pixels"
     );
+
+    // The CPU skin (what shots are cast against) lies where the GPU drew the mesh: the
+    // middles of its triangles, projected into each half, land on that half's tint; the
+    // same points 0.4 m to the side mostly do not.
+    let layout = target.last_layout().expect("rendered").view;
+    let halves = ragdoll_lab::ui::viewports(layout, 1.0, state.layout);
+    let skin = session.loaded.skin.clone().expect("loaded above");
+    for (side, half) in halves.iter().enumerate() {
+        let posed = skin.skinned.posed(&session.joint_poses[side]);
+        let p = posed.positions();
+        let on_tint = |shift: Vec3| {
+            let mut inside = 0;
+            let mut total = 0;
+            for t in &skin.skinned.triangles {
+                let centre = (p[t[0] as usize] + p[t[1] as usize] + p[t[2] as usize]) / 3.0;
+                let Some(px) = half.project(&state.camera, centre + shift) else {
+                    continue;
+                };
+                total += 1;
+                // A pixel of the 3×3 around it: small triangles' middles fall on
+                // antialiased edges, blended with the background.
+                let (x, y) = (px.x.round() as i64, px.y.round() as i64);
+                let tinted = (-1..=1).any(|dy| {
+                    (-1..=1).any(|dx| {
+                        let (x, y) = (x + dx, y + dy);
+                        if x < 0 || y < 0 || x >= W as i64 || y >= H as i64 {
+                            return false;
+                        }
+                        let [r, g, b, _] = mesh_only.pixel(x as u32, y as u32).map(i32::from);
+                        let tint = if side == 0 {
+                            b - r.max(g)
+                        } else {
+                            r - g.max(b)
+                        };
+                        tint > MARGIN
+                    })
+                });
+                inside += tinted as usize;
+            }
+            inside as f32 / total.max(1) as f32
+        };
+        let (here, beside) = (on_tint(Vec3::ZERO), on_tint(Vec3::new(0.0, 0.0, 0.4)));
+        assert!(
+            here > 0.9 && beside < 0.5,
+            "side {side}: {here} of the CPU skin's triangles on the drawn mesh, {beside} when moved aside"
+        );
+    }
 
     state.show.mesh = false;
     state.show.bodies = false;

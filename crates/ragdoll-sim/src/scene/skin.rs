@@ -9,15 +9,18 @@
 //! units and axes. The GPU pass draws from these same [`SkinVertex`] records, so what
 //! is hit here is what is drawn.
 //!
-//! A hit on the mesh is handed to a body as the seed (section 3, `containedjoints`)
-//! says: the joint nearest to the hit point, then the body that contains that joint.
+//! A hit on the mesh is handed to a body as MrElusive's articulated-figure document says
+//! under `containedjoints`: the joint nearest to the hit point, then the body that
+//! contains that joint.
 
 use super::md5mesh::Md5Mesh;
 use super::rig::Rig;
 use super::{BodyDesc, BodyId, Pose};
 use glam::Vec3;
+use parry3d::bounding_volume::Aabb;
 use parry3d::query::{Ray, RayCast};
 use parry3d::shape::TriMesh;
+use std::cell::OnceCell;
 
 /// Weights kept per vertex.
 pub const MAX_WEIGHTS: usize = 4;
@@ -121,17 +124,13 @@ impl SkinnedMesh {
     pub fn posed<'a>(&'a self, joints: &'a [Pose]) -> PosedMesh<'a> {
         let mut positions = Vec::new();
         self.positions(joints, &mut positions);
-        // A BVH over the posed triangles, built per pose: the mesh moves every step.
-        let mesh = if self.triangles.is_empty() {
-            None
-        } else {
-            TriMesh::new(positions.clone(), self.triangles.clone()).ok()
-        };
+        let bounds = (!positions.is_empty()).then(|| Aabb::from_points(positions.iter().copied()));
         PosedMesh {
             skin: self,
             joints,
             positions,
-            mesh,
+            bounds,
+            mesh: OnceCell::new(),
         }
     }
 }
@@ -141,7 +140,11 @@ pub struct PosedMesh<'a> {
     skin: &'a SkinnedMesh,
     joints: &'a [Pose],
     positions: Vec<Vec3>,
-    mesh: Option<TriMesh>,
+    /// The box around every vertex: a segment missing it misses the mesh.
+    bounds: Option<Aabb>,
+    /// A BVH over the posed triangles, built at the first segment that reaches
+    /// `bounds` (the mesh moves every step, so it is built per pose).
+    mesh: OnceCell<Option<TriMesh>>,
 }
 
 impl PosedMesh<'_> {
@@ -154,10 +157,15 @@ impl PosedMesh<'_> {
     /// and the body the hit pushes. `None` for a miss, a zero-length segment, or a mesh
     /// without triangles.
     pub fn cast_segment(&self, from: Vec3, to: Vec3) -> Option<MeshHit> {
-        let mesh = self.mesh.as_ref()?;
-        if from == to {
+        if from == to || self.skin.triangles.is_empty() {
             return None;
         }
+        let ray = Ray::new(from, to - from);
+        self.bounds?.cast_local_ray(&ray, 1.0, true)?;
+        let mesh = self
+            .mesh
+            .get_or_init(|| TriMesh::new(self.positions.clone(), self.skin.triangles.clone()).ok())
+            .as_ref()?;
         let ray = Ray::new(from, to - from);
         let hit = mesh.cast_local_ray_and_get_normal(&ray, 1.0, false)?;
         let point = ray.point_at(hit.time_of_impact);
@@ -280,5 +288,14 @@ mod tests {
                 .cast_segment(from + beside, -Vec3::X + beside)
                 .is_none()
         );
+        // A joint no body contains: the hit is found, and pushes no body.
+        let mut loose = bodies.clone();
+        loose[1].contained_joints.clear();
+        let skin = SkinnedMesh::new(&mesh, &rig, &loose);
+        let hit = skin
+            .posed(&joints)
+            .cast_segment(from, -Vec3::X)
+            .expect("the same triangle");
+        assert_eq!((hit.joint, hit.body), (1, None));
     }
 }

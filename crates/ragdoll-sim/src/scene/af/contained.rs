@@ -1,6 +1,7 @@
 //! `containedJoints`: which skeleton joints' parts of the visual mesh belong to which
 //! body, so that a projectile hitting the mesh near a joint pushes the body containing
-//! it (the seed's section 3: "a joint can only be contained by one body").
+//! it (MrElusive's articulated-figure document: "a joint can only be contained by one
+//! body").
 //!
 //! A body's list is read left to right as dhewm3's `idDeclModelDef::GetJointList` reads
 //! it: names separated by white space, each optionally prefixed `-` (remove rather than
