@@ -1,14 +1,13 @@
-//! The hinge angles id Software's own walks and runs give real Doom 3 figures, against
-//! the hinges' `limit` ranges as the reader gives them and mirrored.
+//! The sense of a Doom 3 hinge `limit c, w, s`, derived from the engine's source (see
+//! `hinge_limit_range` in the `.af` reader), held end to end: a hand-written rod on every
+//! solver, and the hinge angles id Software's own walks and runs give real figures.
 //!
-//! The sense of a hinge `limit c, w, s` is derived from the engine's source (see
-//! `hinge_limit_range` in the `.af` reader); this test confirms it with data the
-//! derivation did not use. id's files are not part of this repository: it runs only
-//! when `RAGDOLL_LAB_DOOM3_BASE` names a base folder and prints a note otherwise.
+//! id's files are not part of this repository: the walks run only when
+//! `RAGDOLL_LAB_DOOM3_BASE` names a base folder and print a note otherwise.
 //!
-//! For every character with limited hinges and every animation of its model whose name
-//! says walk or run, each frame's skeleton (model space, converted to our axes as the
-//! rig converts the `af_pose`) turns each body as its driving joint turns:
+//! Walks: for every character with limited hinges and every animation of its model
+//! whose name says walk or run, each frame's skeleton (model space, converted to our
+//! axes as the rig converts the `af_pose`) turns each body as its driving joint turns:
 //! `R_b = R_j R_rel`, with `R_rel` the body's rotation relative to its joint at load.
 //! The hinge angle is then measured as the multibody's gauge measures it: body1's
 //! rotation relative to body2 since load, right-handed about the axis. A frame is
@@ -17,7 +16,10 @@
 //! reading must hold more of them than its mirror image, or the derivation is wrong.
 
 use glam::{Quat, Vec3};
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure};
+use ragdoll_sim::Method;
+use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::rigid::MultibodyWorld;
+use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure, parse};
 use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::scene::md5anim;
 use ragdoll_sim::scene::rig::Rig;
@@ -209,4 +211,51 @@ fn real_walks_keep_their_hinges_inside_the_engine_reading_of_limit() {
         "the walks keep {in_ours} of {frames} hinge-frames inside the reader's hinge ranges \
          and {in_mirror} inside the mirrored ones"
     );
+}
+
+/// A rod hanging from a world hinge about Doom's `( 0, 1, 0 )` (Z up) with `limit 0, 30,
+/// 45`: the engine's cone axis is left `( −1, 0, 0 )` turned 0°, the shaft left turned
+/// −45° right-handed about +Y, so body1 may turn φ with `|φ − 45°| ≤ 15°`. The rod starts
+/// hanging (φ = 0, 30° outside); a right-handed turn φ about +Y takes its downward
+/// direction `( 0, 0, −1 )` to `( −sin φ, 0, −cos φ )`. Every solver must bring it to
+/// the nearer bound and gravity hold it there: the rod 30° off the vertical, its centre
+/// towards Doom −X (ours −X too: Z-up `( x, y, z )` is ours `( x, z, −y )`).
+#[test]
+fn a_rod_on_a_doom_hinge_rests_on_the_side_the_engine_allows() {
+    let text = "body \"rod\" { model box( ( -1, -1, -20 ), ( 1, 1, 20 ) ) origin ( 0, 0, 60 ) }\n\
+                hinge \"h\" { body1 \"rod\" body2 \"world\" anchor ( 0, 0, 80 ) axis ( 0, 1, 0 ) limit 0, 30, 45 }\n";
+    let sc = parse(text, std::path::Path::new("rod.af"), &AfOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc;
+    let anchor = Vec3::new(0.0, 80.0 * 0.0254, 0.0);
+    let methods: [(&str, Box<dyn Method>); 4] = [
+        ("multibody", Box::new(MultibodyWorld::new(&sc).unwrap())),
+        (
+            "rigid-frames",
+            Box::new(ParticleWorld::new(&sc, ParticleSolver::RigidFrames).unwrap()),
+        ),
+        (
+            "paper",
+            Box::new(ParticleWorld::new(&sc, ParticleSolver::Paper).unwrap()),
+        ),
+        (
+            "xpbd",
+            Box::new(ParticleWorld::new(&sc, ParticleSolver::Xpbd).unwrap()),
+        ),
+    ];
+    let mut states = Vec::new();
+    for (name, mut w) in methods {
+        for _ in 0..(3.0 / sc.settings.timestep).round() as usize {
+            w.step();
+        }
+        w.body_states(&mut states);
+        let r = states[0].com - anchor;
+        // The angle off the hanging direction, signed towards −X.
+        let off = (-r.x).atan2(-r.y).to_degrees();
+        println!("{name}: rod {off:.2}° off the vertical towards −X");
+        assert!(
+            (off - 30.0).abs() < 3.0,
+            "{name}: the rod rests {off:.2}° off the vertical towards −X, expected 30°"
+        );
+    }
 }
