@@ -354,6 +354,10 @@ AF = """/*
 	containedJoints name each body's joints for hits on the mesh; the sole joints
 	come last in the skeleton, outside the run `*Lloleg` takes, so the shins name
 	them as well.
+	A hinge `limit c, w, s` lets body1 turn s - c +- w/2 degrees right-handed about
+	the axis (Doom 3's cone is left turned -c, its shaft left turned -s): about +Y
+	(left), the knees' 45 +- 41 and 40 +- 45 swing the feet back and the elbows'
+	-40 +- 50 swing the hands forward, as a human's do.
 	Densities differ per body, as in id's figures, so that each body carries a human
 	segment's share of totalMass (Winter's anthropometric table: pelvis 14 %, thorax
 	and abdomen 36 %, head 8 %, upper arm 2.8 %, forearm and hand 2.2 %, thigh 10 %,
@@ -546,7 +550,7 @@ hinge "l_knee" {
 	body2 "lupleg"
 	anchor joint( "Lloleg" )
 	axis ( 0, 1, 0 )
-	limit 135, 82, 90
+	limit 45, 82, 90
 	friction 0.05
 }
 
@@ -555,7 +559,7 @@ hinge "r_knee" {
 	body2 "rupleg"
 	anchor joint( "Rloleg" )
 	axis ( 0, 1, 0 )
-	limit 130, 90, 90
+	limit 50, 90, 90
 	friction 0.05
 }
 

@@ -397,12 +397,14 @@ fn the_doom_figure_uses_everything_and_reports_ignored_keys() {
         .collect();
     owned.sort_unstable();
     assert_eq!(owned, (0..18).collect::<Vec<u32>>());
-    // Hinge `limit centre, width, shaft` = 45, 90, 0: body1 may turn 0..90 degrees.
+    // Hinge `limit centre, width, shaft` = 45, 90, 0: body1 may turn shaft − centre
+    // ± width/2 = −90..0 degrees about `( 0, 0, 1 )`, the T-posed left forearm (+Y)
+    // swinging forward (+X), as an elbow does.
     let find = |n: &str| &d.constraints.iter().find(|c| c.name == n).unwrap().kind;
     let ragdoll_sim::scene::JointKind::Hinge { limit: Some(l), .. } = find("l_elbow") else {
         panic!()
     };
-    assert!(l.min.abs() < 1e-6 && (l.max - 90f32.to_radians()).abs() < 1e-6);
+    assert!((l.min + 90f32.to_radians()).abs() < 1e-6 && l.max.abs() < 1e-6);
     // Universal: Doom 3's shafts along the bones become the cross's two axes, each
     // perpendicular to its shaft and to the other; the cone keeps shaft 1.
     let ragdoll_sim::scene::JointKind::Universal {

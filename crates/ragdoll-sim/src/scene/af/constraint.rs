@@ -114,7 +114,6 @@ pub(super) fn read_constraint(
                 }
             }
             "limit" => {
-                // Doom 3: centre of the V, its full width, the shaft's angle (degrees).
                 ctx.arity(e, 3..=3, "centre, width and shaft angles in degrees")?;
                 let (c, w, s) = (ctx.arg(e, 0)?, ctx.arg(e, 1)?, ctx.arg(e, 2)?);
                 if w < 0.0 {
@@ -123,10 +122,7 @@ pub(super) fn read_constraint(
                         format!("the limit's width must not be negative; found {w}"),
                     ));
                 }
-                range = Some(AngleRange {
-                    min: (c - s - w * 0.5).to_radians(),
-                    max: (c - s + w * 0.5).to_radians(),
-                });
+                range = Some(hinge_limit_range(c, w, s));
             }
             "range" => {
                 ctx.arity(e, 2..=2, "min and max angles in degrees")?;
@@ -321,6 +317,34 @@ pub(super) fn read_constraint(
     })
 }
 
+/// The range of our hinge angle for Doom 3's `limit c, w, s` (degrees in, radians out).
+///
+/// The engine (`idAF::LoadConstraint`, `idAFConstraint_Hinge::SetLimit`,
+/// `idAFConstraint_ConeLimit`) builds, at the `af_pose` where the figure is set up,
+/// `(left, up) = OrthogonalBasis(axis)`, a cone axis `left * idRotation(axis, c)`
+/// fixed in body2 and a shaft `left * idRotation(axis, s)` fixed in body1, and keeps
+/// the shaft within the cone's half apex angle `w/2` of the cone axis. `v * idRotation(n, θ)`
+/// is `Mᵀ v` with `M` the right-handed rotation matrix of θ about n, so it turns `v` by
+/// `−θ`: cone axis `= R(n, −c) left`, shaft `= R(n, −s) left`. Our hinge angle `φ` is
+/// body1's rotation relative to body2 about the axis, right-handed, zero at the file's
+/// pose (the same `af_pose`); the axis conversion is a proper rotation and keeps its
+/// sign. Seen from body2 the shaft is then `R(n, φ − s) left`, at the signed angle
+/// `φ − s + c` from the cone axis, and the cone allows `|φ − s + c| ≤ w/2`:
+///
+/// ```text
+/// s − c − w/2 ≤ φ ≤ s − c + w/2
+/// ```
+///
+/// The cone is a direction test, so the centre `s − c` counts modulo 360°; it is taken
+/// in (−180°, 180°], where our angle is measured.
+pub(super) fn hinge_limit_range(c: f32, w: f32, s: f32) -> AngleRange {
+    let centre = 180.0 - (180.0 - (s - c)).rem_euclid(360.0);
+    AngleRange {
+        min: (centre - w * 0.5).to_radians(),
+        max: (centre + w * 0.5).to_radians(),
+    }
+}
+
 pub(super) fn shaft1(ctx: &Ctx, shafts: Option<(Vec3, Vec3)>, pos: Pos) -> R<Vec3> {
     shafts.map(|s| s.0).ok_or_else(|| ctx.err(pos, "a universal joint's cone or pyramid limit applies to its first shaft; give `shafts` too"))
 }
@@ -351,4 +375,67 @@ pub(super) fn angle_range(ctx: &Ctx, lo: &Value, hi: &Value) -> R<AngleRange> {
         min: a.to_radians(),
         max: b.to_radians(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{AfOptions, parse};
+    use crate::scene::{AngleRange, JointKind};
+    use glam::Vec3;
+    use std::path::Path;
+
+    /// The range and axis (ours) the reader gives a hinge of a Doom 3-unit file with
+    /// `axis ( 0, 1, 0 )` and the given `limit`.
+    fn hinge(limit: &str) -> (AngleRange, Vec3) {
+        let text = format!(
+            "body \"shin\" {{ model box( ( -2, -2, -20 ), ( 2, 2, 0 ) ) origin ( 0, 0, 40 ) }}\n\
+             hinge \"knee\" {{ body1 \"shin\" body2 \"world\" anchor ( 0, 0, 40 ) axis ( 0, 1, 0 ) limit {limit} }}\n"
+        );
+        let scene = parse(&text, Path::new("t.af"), &AfOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        match &scene.desc.constraints[0].kind {
+            JointKind::Hinge {
+                axis,
+                limit: Some(r),
+                ..
+            } => (*r, *axis),
+            k => panic!("expected a limited hinge, got {k:?}"),
+        }
+    }
+
+    fn degrees(r: AngleRange) -> (f32, f32) {
+        (r.min.to_degrees(), r.max.to_degrees())
+    }
+
+    /// `limit 90, 60, 0` about Doom's `( 0, 1, 0 )` (Z up). The engine's
+    /// `OrthogonalBasis(( 0, 1, 0 ))` gives left `= ( −1, 0, 0 )`; `v * idRotation(n, θ)`
+    /// turns v by −θ right-handed, so the cone axis is left turned −90° about +Y:
+    /// `( 0, 0, −1 )`, straight down, and the shaft is left itself, `( −1, 0, 0 )`. The
+    /// shaft (body1's) may stray 30° from the cone axis (body2's). A right-handed turn φ
+    /// of body1 about +Y takes `( −1, 0, 0 )` to `( −cos φ, 0, sin φ )`, which points
+    /// down at φ = −90°: body1 may turn between −120° and −60°, never to positive angles.
+    /// Our Y-up axis is `( 0, 0, −1 )` (Z-up `( x, y, z )` is ours `( x, z, −y )`, a
+    /// proper rotation), about which right-handed angles are the same turns.
+    #[test]
+    fn a_hinge_limit_allows_the_side_doom_3_allows() {
+        let (range, axis) = hinge("90, 60, 0");
+        assert!((axis - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6, "{axis}");
+        let (lo, hi) = degrees(range);
+        assert!(
+            (lo + 120.0).abs() < 1e-3 && (hi + 60.0).abs() < 1e-3,
+            "[{lo}, {hi}]"
+        );
+    }
+
+    /// The cone tests directions, so a centre past a half turn wraps: with `limit −170,
+    /// 20, 30` the shaft is where the cone axis is after a turn of 200°, the same
+    /// direction as −160°.
+    #[test]
+    fn a_hinge_limit_centre_wraps_into_a_half_turn() {
+        let (lo, hi) = degrees(hinge("-170, 20, 30").0);
+        assert!(
+            (lo + 170.0).abs() < 1e-3 && (hi + 150.0).abs() < 1e-3,
+            "[{lo}, {hi}]"
+        );
+    }
 }
