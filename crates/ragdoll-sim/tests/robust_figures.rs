@@ -1,5 +1,7 @@
 //! Robustness of both methods on the articulated scenes (spider, human, capsule human):
-//! timesteps from 1/1000 to 1/10 s and 1 to 40 iterations give no NaN and no explosion.
+//! timesteps from 1/1000 to 1/10 s and 1 to 40 iterations give no NaN and no explosion,
+//! and neither do combinations of timestep, iterations and substeps for the multibody and
+//! rigid-frames solvers.
 //!
 //! "No explosion" is measured as a bound on every body's speed. The figures start at
 //! most about a metre up: free fall from there is √(2 g h) ≈ 4.5 m/s, and a limb
@@ -98,28 +100,10 @@ fn figures_stay_finite_and_bounded_across_timesteps_and_iterations() {
     println!("{}", report.join("\n"));
 }
 
-/// The multibody solver over combinations of timestep (1/1000–1/10 s), iterations
-/// (1–200) and substeps (1–50): every corner of the three ranges that costs little to
-/// run, the expensive corners (small timestep with many iterations and substeps) over
-/// fewer simulated seconds, and a middle point. Each figure stays finite with no body
-/// above 15 m/s. Ten of the 27 combinations of {1/1000, 1/60, 1/10} × {1, 40, 200} ×
-/// {1, 10, 50}, chosen so that every pair of values of two settings appears at least
-/// once (a pairwise covering set), keep the test within seconds.
+/// The multibody solver over combinations of timestep, iterations and substeps (a
+/// covering set, [`COMBINATIONS`]): each figure stays finite with no body above 15 m/s.
 #[test]
 fn multibody_figures_stay_bounded_across_timestep_iteration_and_substep_combinations() {
-    // (timestep, iterations, substeps, simulated seconds)
-    const COMBINATIONS: [(f32, u32, u32, f32); 10] = [
-        (0.001, 1, 1, 1.5),
-        (0.001, 40, 10, 0.5),
-        (0.001, 200, 50, 0.2),
-        (1.0 / 60.0, 1, 10, 3.0),
-        (1.0 / 60.0, 40, 50, 1.0),
-        (1.0 / 60.0, 200, 1, 2.0),
-        (0.1, 1, 50, 10.0),
-        (0.1, 40, 1, 10.0),
-        (0.1, 200, 10, 5.0),
-        (0.1, 200, 50, 3.0),
-    ];
     let mut report = Vec::new();
     for name in FIGURES {
         let base = scene(name);
@@ -138,3 +122,52 @@ fn multibody_figures_stay_bounded_across_timestep_iteration_and_substep_combinat
     }
     println!("{}", report.join("\n"));
 }
+
+/// The rigid-frames solver over the same covering set of timestep, iterations and
+/// substeps ([`COMBINATIONS`]), and over the corner where the capsule human once
+/// reached 32.9 m/s (1/20 s, 200 iterations, 50 substeps: the solver's substeps are
+/// iterations × substeps, capped at 1000 a frame). Each figure stays finite with no
+/// body above 15 m/s.
+#[test]
+fn rigid_frames_figures_stay_bounded_across_timestep_iteration_and_substep_combinations() {
+    let (mut report, mut failures) = (Vec::new(), Vec::new());
+    for name in FIGURES {
+        let base = scene(name);
+        let extra = (0.05, 200, 50, 3.0);
+        for (dt, iterations, substeps, seconds) in COMBINATIONS.into_iter().chain([extra]) {
+            let mut s = base.clone();
+            s.settings.timestep = dt;
+            s.settings.iterations = iterations;
+            s.settings.substeps = substeps;
+            let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");
+            let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
+            let top = fastest(&mut w, seconds, &what);
+            report.push(format!("{what}: top speed {top:.1} m/s"));
+            if top > MAX_SPEED {
+                failures.push(format!("{what}: a body reached {top} m/s"));
+            }
+        }
+    }
+    println!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Combinations of timestep (1/1000–1/10 s), iterations (1–200) and substeps (1–50):
+/// every corner of the three ranges that costs little to run, the expensive corners
+/// (small timestep with many iterations and substeps) over fewer simulated seconds, and
+/// a middle point. Ten of the 27 combinations of {1/1000, 1/60, 1/10} × {1, 40, 200} ×
+/// {1, 10, 50}, chosen so that every pair of values of two settings appears at least
+/// once (a pairwise covering set), keep the tests within seconds:
+/// (timestep, iterations, substeps, simulated seconds).
+const COMBINATIONS: [(f32, u32, u32, f32); 10] = [
+    (0.001, 1, 1, 1.5),
+    (0.001, 40, 10, 0.5),
+    (0.001, 200, 50, 0.2),
+    (1.0 / 60.0, 1, 10, 3.0),
+    (1.0 / 60.0, 40, 50, 1.0),
+    (1.0 / 60.0, 200, 1, 2.0),
+    (0.1, 1, 50, 10.0),
+    (0.1, 40, 1, 10.0),
+    (0.1, 200, 10, 5.0),
+    (0.1, 200, 50, 3.0),
+];

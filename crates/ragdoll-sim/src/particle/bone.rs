@@ -85,13 +85,6 @@ pub(crate) struct Bone {
     pub figure: u32,
     /// Collides with bones of its own figure.
     pub self_collision: bool,
-    /// The bone may still be inside what it started in (a file's rest pose, a body
-    /// added inside another): its old overlaps are pushed out at
-    /// `Settings::max_push_out_speed` (`friction::solve_normal`). Set when the bone is
-    /// made; cleared for good after the first substep that leaves it no old overlap.
-    pub pushing_out: bool,
-    /// Whether a contact of the current substep left the bone an old overlap.
-    pub still_inside: bool,
 }
 
 impl Bone {
@@ -111,8 +104,8 @@ impl Bone {
     }
 
     /// Takes `from`'s motion: all that the rigid-frames solver's substeps write of a bone
-    /// (its frame, the substep's start and displacement, its velocities, whether it is
-    /// still being pushed out), a quarter of its bytes. A batch of islands returns its bones to the world through this
+    /// (its frame, the substep's start and displacement, its velocities), a quarter of
+    /// its bytes. A batch of islands returns its bones to the world through this
     /// (`islands`); `particle_threads` checks the result is the serial one bit for bit.
     pub fn take_motion(&mut self, from: &Bone) {
         self.com = from.com;
@@ -122,8 +115,6 @@ impl Bone {
         self.dturn = from.dturn;
         self.lin_vel = from.lin_vel;
         self.ang_vel = from.ang_vel;
-        self.pushing_out = from.pushing_out;
-        self.still_inside = from.still_inside;
     }
 
     /// Inverse mass seen by the solver.

@@ -231,8 +231,6 @@ impl ParticleWorld {
             air: (desc.friction.linear, desc.friction.angular),
             figure: body as u32,
             self_collision: desc.self_collision,
-            pushing_out: !desc.is_fixed(),
-            still_inside: false,
         }
     }
 

@@ -432,9 +432,6 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 continue;
             }
             (b.lin_vel, b.ang_vel) = b.substep_velocity(h);
-            // Out of what it started in once a substep leaves it no old overlap.
-            b.pushing_out &= b.still_inside;
-            b.still_inside = false;
             b.com += b.dcom;
             b.dcom = Vec3A::ZERO;
         }
