@@ -15,9 +15,9 @@
 //!   (not among its four) moved with the bone's rigid motion from its old frame to
 //!   the new one. A particle shared by two bones takes the place the last set gives it.
 //!
-//! A bone set at a pose may overlap something: it is marked as pushing out, so the
-//! overlap is undone at the push-out speed (rigid frames), as for a body added inside
-//! another.
+//! A bone set at a pose may overlap something: like every overlap older than a substep,
+//! the rigid-frames solver undoes it at the push-out speed
+//! (`Settings::max_push_out_speed`), as for a body added inside another.
 
 use super::ParticleWorld;
 use super::xpbd::particles::PER_BONE;
@@ -50,7 +50,6 @@ impl ParticleWorld {
                 rotation: set.pose.rotation.normalize(),
             };
             self.place_bone(i, pose, velocity, set.velocity.is_some());
-            self.bones[i].pushing_out = true;
             self.bones[i].wake();
         }
     }
