@@ -652,8 +652,8 @@ macro_rules! suite {
 }
 
 suite!(multibody:
-    pendulum_at_5_degrees_keeps_its_exact_period_and_energy = "multibody: loses 2.6 % in 10 s",
-    pendulum_at_60_degrees_keeps_its_exact_period_and_energy = "multibody: loses 9.9 % in 10 s",
+    pendulum_at_5_degrees_keeps_its_exact_period_and_energy,
+    pendulum_at_60_degrees_keeps_its_exact_period_and_energy,
     torque_free_rotation_about_a_general_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_major_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_minor_axis_keeps_l_and_energy,

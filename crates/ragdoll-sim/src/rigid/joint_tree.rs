@@ -33,8 +33,8 @@
 //! [`TREE_BIAS`]), the relax pass `G Δv = −Ċ`. (The general update
 //! `λ += −s_m K⁻¹ r − s_i λ_acc` of a soft row is kept in [`JointTrees::solve`]; with
 //! soft rows a frictionless pendulum's bob hangs on a spring and loses the energy of its
-//! sag.) Only trees with a joint across a large mass ratio ([`MASS_RATIO`]) are solved
-//! this way; the others stay with the soft Gauss–Seidel rows.
+//! sag.) Only trees with a joint across a large mass ratio ([`MASS_RATIO`]) or to a
+//! static body are solved this way; the others stay with the soft Gauss–Seidel rows.
 //!
 //! Determinism: a tree's nodes are ordered by its own joints' and bodies' relative order
 //! only, so a tree solved alone (an island on another thread) gets the bits it gets in
@@ -103,7 +103,10 @@ pub struct JointTrees {
 
 const NO_PARENT: usize = usize::MAX;
 
-/// Mass ratio across a joint above which its tree is solved directly. Gauss–Seidel
+/// Mass ratio across a joint above which its tree is solved directly; a joint to a
+/// static body counts as an infinite ratio (a frictionless pendulum on the soft row
+/// hangs on a spring: it lost 2.6 % of its swing energy in 10 s at 5°, 9.9 % at 60°,
+/// 0.7 % on the rigid row). Gauss–Seidel
 /// converges at a rate set by the mass ratios it couples: at a few to one (the spiders,
 /// the capsule human, 3:1 at most) its soft joints hold within a millimetre, and there
 /// the soft rows are kept; the exact rigid rows then made the soft contacts the weakest
@@ -195,7 +198,6 @@ impl JointTrees {
                 ));
             }
         }
-        joints.direct = !chosen.is_empty();
         let mut trees = JointTrees {
             ok: true,
             ..JointTrees::default()
@@ -209,6 +211,10 @@ impl JointTrees {
                     let root = sets.find(a);
                     lopsided[root] = true;
                 }
+            } else {
+                // A joint to a static body: an infinite mass ratio.
+                let root = sets.find(if a != NO_PARENT { a } else { b });
+                lopsided[root] = true;
             }
         }
         chosen.retain(|&(r, a, b)| {
@@ -217,6 +223,7 @@ impl JointTrees {
             point_of_mut(joints, r).direct = keep;
             keep
         });
+        joints.direct = !chosen.is_empty();
         if chosen.is_empty() {
             return trees;
         }
