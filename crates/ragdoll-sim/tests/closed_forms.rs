@@ -652,8 +652,8 @@ macro_rules! suite {
 }
 
 suite!(multibody:
-    pendulum_at_5_degrees_keeps_its_exact_period_and_energy = "multibody: loses 2.6 % in 10 s",
-    pendulum_at_60_degrees_keeps_its_exact_period_and_energy = "multibody: loses 9.9 % in 10 s",
+    pendulum_at_5_degrees_keeps_its_exact_period_and_energy,
+    pendulum_at_60_degrees_keeps_its_exact_period_and_energy,
     torque_free_rotation_about_a_general_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_major_axis_keeps_l_and_energy,
     torque_free_rotation_near_the_minor_axis_keeps_l_and_energy,
@@ -666,13 +666,13 @@ suite!(multibody:
     box_at_rest_stays_put,
     stack_of_5_boxes_stands,
     stack_of_10_boxes_stands = "multibody: top box sinks 10.4 mm",
-    chain_of_mass_ratio_100_hangs_without_gaps = "multibody: joint gap 39.3 mm",
-    chain_of_mass_ratio_100_swings_without_gaps = "multibody: joint gap 20.4 mm",
+    chain_of_mass_ratio_100_hangs_without_gaps,
+    chain_of_mass_ratio_100_swings_without_gaps,
     box_hitting_a_wall_at_50_m_s_stays_face_on = "multibody: spin 2.0 rad/s, sideways 0.45 m/s",
     free_plate_hit_off_centre_keeps_momentum,
     box_starting_25_cm_in_the_ground_is_pushed_out_gently,
     boxes_starting_25_cm_inside_each_other_are_pushed_apart_gently,
-    joint_starting_10_degrees_outside_its_limit_returns_gently = "multibody: gains 2.6 % of the energy scale",
+    joint_starting_10_degrees_outside_its_limit_returns_gently,
     ball_limited_arms_come_to_rest_by_joint_friction,
     hinge_limited_arms_come_to_rest_by_joint_friction,
 );

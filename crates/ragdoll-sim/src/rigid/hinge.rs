@@ -66,7 +66,7 @@ impl JointSolve for HingeJoint {
         }
         self.align.solve(&self.frame, s, ctx, use_bias);
         self.point.solve(&self.frame, s, ctx, use_bias);
-        self.friction.solve(&self.frame, s, ctx);
+        self.friction.solve(&self.frame, s, ctx, &self.point);
     }
 
     fn project(&self, s: &mut BodyStates) {

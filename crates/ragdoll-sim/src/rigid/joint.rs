@@ -107,11 +107,13 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
 pub struct PointPart {
     /// Accumulated impulse on b (world).
     pub impulse: Vec3A,
+    /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
+    pub direct: bool,
     /// World offsets of the anchor from each centre of mass, at `prepare`.
-    ra: Vec3A,
-    rb: Vec3A,
+    pub(super) ra: Vec3A,
+    pub(super) rb: Vec3A,
     /// `p_b − p_a` at `prepare`.
-    c: Vec3A,
+    pub(super) c: Vec3A,
     /// How an impulse `p` on b turns each body, `Δω_b = I_b⁻¹ (r_b × p) = T_b p` and
     /// `Δω_a = −T_a p`: `T = I⁻¹ r̂` at `prepare`, so an iteration applies its impulse with
     /// two matrix–vector products and no cross products. Both, and `K⁻¹`, with 16-byte
@@ -144,7 +146,7 @@ impl PointPart {
 
     /// Applies the impulse `p` on b and `−p` on a.
     #[inline]
-    fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
+    pub(super) fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
         s.lin_vel[f.a] -= p * s.inv_mass[f.a];
         s.ang_vel[f.a] -= self.turn_a * p;
         s.lin_vel[f.b] += p * s.inv_mass[f.b];
@@ -161,6 +163,9 @@ impl PointPart {
     pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         if !use_bias {
             self.prepare(f, s);
+        }
+        if self.direct {
+            return;
         }
         let (ra, rb) = (self.ra, self.rb);
         let cdot = s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra);
@@ -651,15 +656,35 @@ impl FrictionMotor {
     /// that a joint without friction (most) pays only the test, not a call, in every
     /// iteration.
     #[inline]
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext) {
+    pub fn solve(
+        &mut self,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        point: &PointPart,
+    ) {
         if self.max_torque > 0.0 {
-            self.hold(f, s, ctx);
+            self.hold(f, s, ctx, point);
         }
     }
 
     /// [`FrictionMotor::solve`] of a motor with a positive cap.
-    fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext) {
-        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+    ///
+    /// The impulse is a couple, `l` on a and `−l` on b. When the joint's point rows are
+    /// solved exactly right after ([`super::joint_tree`]), a couple turns each body about
+    /// the anchor, not about its centre of mass: the point rows move the centre to keep
+    /// the anchor. So the effective inertia is then each body's about the anchor,
+    /// `I + m (|r|² 1 − r rᵀ)` (parallel axes), and a joint to a static body is held in
+    /// one update. With the inertias about the centres of mass, a bob on a frictional
+    /// hinge (`I_cm ≪ m r²`) took a few hundred alternations of couple and point rows
+    /// to hold, and slipped meanwhile.
+    fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, point: &PointPart) {
+        let sum = if point.direct {
+            about_anchor(s, f.a, point.ra) + about_anchor(s, f.b, point.rb)
+        } else {
+            f.inv_inertia_sum(s)
+        };
+        let Some(k_inv) = invert(sum) else {
             return;
         };
         let old = self.impulse;
@@ -674,6 +699,21 @@ impl FrictionMotor {
         self.impulse = new;
         f.apply_angular(s, new - old);
     }
+}
+
+/// The world inverse inertia of body `i` about the point at offset `r` from its centre
+/// of mass, `(I + m (|r|² 1 − r rᵀ))⁻¹`; zero for a body that does not move.
+fn about_anchor(s: &BodyStates, i: usize, r: Vec3A) -> Mat3A {
+    if !(s.inv_mass[i] > 0.0) {
+        return Mat3A::ZERO;
+    }
+    let Some(inertia) = invert(s.inv_inertia[i]) else {
+        return s.inv_inertia[i];
+    };
+    let m = 1.0 / s.inv_mass[i];
+    let shift = Mat3A::from_diagonal(glam::Vec3::splat(r.length_squared()))
+        - Mat3A::from_cols(r * r.x, r * r.y, r * r.z);
+    invert(inertia + shift * m).unwrap_or(s.inv_inertia[i])
 }
 
 /// Wraps an angle into (−π, π].

@@ -66,6 +66,10 @@ pub struct JointSet {
     /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), built with the
     /// set; `None` (and in the arrays gathered for one island) solves each joint alone.
     pub lanes: Option<JointLanes>,
+    /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes, which
+    /// solve every ball joint's and hinge's point rows, stand aside (set by
+    /// `JointTrees::build` before the substeps).
+    pub direct: bool,
 }
 
 /// Runs `$body` with `$j` bound to every joint, mutably (fields, not the solve trait).
@@ -334,7 +338,7 @@ impl JointSet {
         if let Some(lanes) = self
             .lanes
             .as_ref()
-            .filter(|l| l.fits(&self.ball, &self.hinge))
+            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
         {
             lanes.finish(&mut self.ball, &mut self.hinge);
         }
@@ -345,7 +349,7 @@ impl JointSet {
     fn in_lanes(&self) -> (bool, bool) {
         self.lanes
             .as_ref()
-            .filter(|l| l.fits(&self.ball, &self.hinge))
+            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
             .map_or((false, false), |l| (l.has_balls(), l.has_hinges()))
     }
 

@@ -6,7 +6,8 @@
 //! - `soft`: soft-constraint coefficients.
 //! - `joint`: building blocks every joint is made of; `limits`: swing, twist, ranges.
 //! - `ball`, `hinge`, `universal`, `fixed`, `slider`, `spring`: one file per
-//!   joint type; `joint_set`: the arrays of them.
+//!   joint type; `joint_set`: the arrays of them; `joint_tree`: the point rows of a
+//!   tree of joints across a large mass ratio, solved exactly (Baraff 1996).
 //! - `contact`: collision detection (with [`crate::broadphase`]) and the contact
 //!   cache; `contact_solver`: the contact rows of one step, over dense arrays;
 //!   `contact_wide`: the same rows four pairs at a time (graph colouring, SIMD).
@@ -32,6 +33,7 @@ mod integrate;
 mod island;
 mod joint;
 mod joint_set;
+mod joint_tree;
 mod joint_wide;
 mod kinematic;
 mod limits;

@@ -6,10 +6,13 @@
 //! 1. integrate velocities (gravity, air friction, gyroscopic term);
 //! 2. warm start joints and contacts with last substep's impulses;
 //! 3. solve with bias (soft constraints push errors out at `contact_hertz` /
-//!    `joint_hertz`, damped by `damping_ratio`), `iterations` times;
+//!    `joint_hertz`, damped by `damping_ratio`), `iterations` times; the point rows of
+//!    joint trees across a large mass ratio are solved exactly, after the other joint
+//!    rows of each iteration ([`super::joint_tree`]);
 //! 4. integrate positions;
 //! 5. relax: solve again without bias, removing the velocity the position feedback
-//!    added, so pushing out does not become bouncing.
+//!    added, so pushing out does not become bouncing (joints in
+//!    [`RELAX_JOINT_PASSES`] passes).
 //!
 //! After the substeps, the restitution pass, the position projection ([`super::project`]:
 //! what the soft constraints let give way is put back, positions only); then sleeping.
@@ -24,12 +27,21 @@ use super::contact_solver::{ContactConstraints, PushOutBudget};
 use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::joint_tree::JointTrees;
 use super::parallel;
 use super::project;
 use super::soft::{Softness, StepContext};
 use crate::scene::{Settings, SleepSettings};
 use crate::timings::{PhaseClock, PhaseTimes};
 use glam::Vec3;
+
+/// Joint passes of the relax step. The relax takes back the velocity the biased
+/// iterations added to push errors out; one Gauss–Seidel pass does not: a joint's
+/// angular rows (a limit, an alignment) act about the centre of mass, the point row
+/// then holds the anchor, and the two undo each other's work. A hinge door started
+/// 10° outside its range kept 2.6 % of the scene's energy scale as speed after one
+/// pass, 1.2 % after two, 0.6 % after three.
+const RELAX_JOINT_PASSES: u32 = 2;
 
 /// What every island's solve needs besides its bodies and constraints: the same for all
 /// islands of a step.
@@ -171,6 +183,7 @@ pub fn solve(
     p: &SolveParams,
 ) {
     let mut contacts = ContactConstraints::build(pairs, s, awake);
+    let mut trees = JointTrees::build(joints, s, awake);
     for sub in 0..p.substeps {
         integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
         if sub == 0 {
@@ -180,15 +193,24 @@ pub fn solve(
             update_inertia(s, motion, awake);
             joints.prepare_after_relax(s, awake);
         }
+        trees.factor(joints, s);
         joints.warm_start(s, awake);
         contacts.prepare_substep(s);
         contacts.warm_start(s);
         for _ in 0..p.iterations {
             joints.solve(s, awake, &p.ctx, true);
+            trees.solve(joints, s, &p.ctx, true);
             contacts.solve(s, &p.ctx, true);
         }
         integrate_positions(s, awake, p.ctx.h);
-        joints.solve(s, awake, &p.ctx, false);
+        for pass in 0..RELAX_JOINT_PASSES {
+            // The first pass prepares the point rows on the moved pose.
+            joints.solve(s, awake, &p.ctx, false);
+            if pass == 0 && !trees.is_empty() {
+                trees.factor(joints, s);
+            }
+            trees.solve(joints, s, &p.ctx, false);
+        }
         contacts.solve(s, &p.ctx, false);
     }
     joints.end_substeps();

@@ -92,7 +92,7 @@ impl JointSolve for UniversalJoint {
 
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let f = &self.frame;
-        self.friction.solve(f, s, ctx);
+        self.friction.solve(f, s, ctx, &self.point);
         if let Some(sw) = &mut self.swing {
             sw.solve(f, s, ctx, use_bias);
         }
