@@ -127,21 +127,18 @@ fn the_figure_is_built_from_the_af_pose_frame() {
 
 /// (method, metric, measured when written) over the threshold.
 ///
-/// Traced step by step, what is left comes from solver defects this figure meets and the
-/// closed-form suite names. The left knee starts 4° outside its limit with the foot on
-/// the ground, and both solvers turn that start into velocity
-/// (`joint_starting_10_degrees_outside_its_limit_returns_gently`): the first step sends
-/// the left shin off, and the figure folds onto that knee, which the multibody lets bend
-/// 2.1° past its limit and open 6.4 mm while the torso lands on it. The particle method
-/// opens a joint 23 mm and lets a body sink 10.5 mm into the ground when the figure
-/// lands; where its 13 % energy gain comes from is not traced.
-const KNOWN_GAPS: [(&str, &str, f64); 6] = [
-    ("particle", "energy_gain", 0.1306),
-    ("particle", "max_penetration_m", 0.0105),
-    ("particle", "max_joint_gap_m", 0.0234),
-    ("multibody", "energy_gain", 0.0370),
-    ("multibody", "max_joint_gap_m", 0.0064),
-    ("multibody", "max_limit_violation_deg", 2.06),
+/// The left knee starts 4° outside its limit with the foot on the ground, and the figure
+/// folds onto that knee as it lands. The rigid-frames solver brings the knee back by
+/// position at the push-out speed, but the landing opens a joint 6.9 mm, pushes a limit
+/// 5° past and gains 6 % of the energy scale. The multibody, whose trees of joints are
+/// solved exactly across this figure's mass ratios, keeps its energy and limits but lets a
+/// shin sink 10.02 mm and a joint open 5.6 mm on landing.
+const KNOWN_GAPS: [(&str, &str, f64); 5] = [
+    ("particle", "energy_gain", 0.0628),
+    ("particle", "max_joint_gap_m", 0.0069),
+    ("particle", "max_limit_violation_deg", 4.97),
+    ("multibody", "max_penetration_m", 0.0100),
+    ("multibody", "max_joint_gap_m", 0.0056),
 ];
 
 /// Runs 10 s from the load pose, which is recorded too (as `stats` does): energy the
