@@ -201,16 +201,7 @@ pub fn load_entity(
         eprintln!("warning: {w}");
     }
     let c = decls.character(entity).map_err(scene_err)?;
-    let opts = AfOptions {
-        mesh: opts.mesh.clone().or(c.mesh.clone()),
-        ..opts.clone()
-    };
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base.to_path_buf()),
-    };
-    let scene = af::load_figure(&c.af_file, &opts, &source).map_err(scene_err)?;
+    let scene = af::load_character(&c, base, opts).map_err(scene_err)?;
     Ok((scene, c))
 }
 

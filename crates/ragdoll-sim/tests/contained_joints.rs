@@ -4,7 +4,7 @@
 //! `assets/doom3`.
 
 use ragdoll_sim::scene::SceneDesc;
-use ragdoll_sim::scene::af::{AfOptions, AfScene, FigureSource, load, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, AfScene, load, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 use std::path::{Path, PathBuf};
 
@@ -182,16 +182,7 @@ fn every_joint_of_the_mod_humanoid_belongs_to_the_body_its_file_names() {
     let c = decls
         .character("monster_lab_human")
         .unwrap_or_else(|e| panic!("{e}"));
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base.clone()),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    let scene = load_figure(&c.af_file, &opts, &source).unwrap_or_else(|e| panic!("{e}"));
+    let scene = load_character(&c, &base, &AfOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     let mesh = ragdoll_sim::scene::md5mesh::load(c.mesh.as_ref().unwrap()).unwrap();
     let names = |body: &str| -> Vec<String> {
         contained(&scene.desc, body)

@@ -19,7 +19,7 @@ use glam::{Quat, Vec3};
 use ragdoll_sim::Method;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure, parse};
+use ragdoll_sim::scene::af::{AfOptions, load_character, parse};
 use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::scene::md5anim;
 use ragdoll_sim::scene::rig::Rig;
@@ -123,16 +123,7 @@ fn real_walks_keep_their_hinges_inside_the_engine_reading_of_limit() {
         let Ok(c) = decls.character(name) else {
             continue;
         };
-        let source = FigureSource {
-            figure: Some(c.figure.clone()),
-            pose_anim: c.af_pose.clone(),
-            base: Some(base.clone()),
-        };
-        let opts = AfOptions {
-            mesh: c.mesh.clone(),
-            ..Default::default()
-        };
-        let Ok(sc) = load_figure(&c.af_file, &opts, &source) else {
+        let Ok(sc) = load_character(&c, &base, &AfOptions::default()) else {
             continue;
         };
         let Some(rig) = &sc.rig else { continue };

@@ -13,7 +13,7 @@ use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::SceneDesc;
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -74,16 +74,7 @@ fn figures(base: &std::path::Path) -> Vec<(Vec<String>, SceneDesc)> {
             out[i].0.push(name.to_string());
             continue;
         }
-        let source = FigureSource {
-            figure: Some(c.figure.clone()),
-            pose_anim: c.af_pose.clone(),
-            base: Some(base.to_path_buf()),
-        };
-        let opts = AfOptions {
-            mesh: c.mesh.clone(),
-            ..Default::default()
-        };
-        match load_figure(&c.af_file, &opts, &source) {
+        match load_character(&c, base, &AfOptions::default()) {
             Ok(sc) => {
                 seen.insert(key, out.len());
                 out.push((vec![name.to_string()], sc.desc));

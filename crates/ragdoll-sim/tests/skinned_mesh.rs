@@ -8,7 +8,7 @@ use ragdoll_sim::Method;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::Pose;
-use ragdoll_sim::scene::af::{AfOptions, AfScene, FigureSource, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, AfScene, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::scene::md5mesh;
 use ragdoll_sim::scene::skin::SkinnedMesh;
@@ -21,16 +21,7 @@ fn figure() -> (AfScene, SkinnedMesh) {
     let c = decls
         .character("monster_lab_human")
         .unwrap_or_else(|e| panic!("{e}"));
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base.clone()),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    let scene = load_figure(&c.af_file, &opts, &source).unwrap_or_else(|e| panic!("{e}"));
+    let scene = load_character(&c, &base, &AfOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     let mesh = md5mesh::load(c.mesh.as_ref().unwrap()).unwrap_or_else(|e| panic!("{e}"));
     let skin = SkinnedMesh::new(&mesh, scene.rig.as_ref().unwrap(), &scene.desc.bodies);
     (scene, skin)

@@ -6,7 +6,7 @@ use glam::Vec3;
 use ragdoll_sim::Method;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::af::{AfOptions, AfScene, FigureSource, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, AfScene, load_character};
 use ragdoll_sim::scene::decl::{Doom3Base, Doom3Character};
 use ragdoll_sim::scene::takeover::{Takeover, TakeoverError};
 use ragdoll_sim::scene::{SceneDesc, md5anim, md5mesh, scene_mass_props};
@@ -23,16 +23,7 @@ fn character() -> Doom3Character {
 }
 
 fn figure(c: &Doom3Character) -> AfScene {
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base_dir()),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    load_figure(&c.af_file, &opts, &source).unwrap_or_else(|e| panic!("{e}"))
+    load_character(c, &base_dir(), &AfOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn takeover(anim_name: &str) -> Takeover {

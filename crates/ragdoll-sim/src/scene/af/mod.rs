@@ -33,6 +33,7 @@ mod parser;
 mod place;
 
 use crate::scene::SceneDesc;
+use crate::scene::decl::Doom3Character;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -177,6 +178,27 @@ pub fn load_figure(
 ) -> Result<AfScene, AfError> {
     let text = crate::scene::md5mesh::read_text(path, "file")?;
     parse_figure(&text, path, opts, source)
+}
+
+/// Builds an entity's figure as the engine does: the `articulatedFigure` its declarations
+/// name, on its mesh (unless `opts` names another), posed by its model's `af_pose`, with
+/// `base` (the Doom 3 base folder the declarations came from) resolving the file's
+/// `settings { model }`.
+pub fn load_character(
+    c: &Doom3Character,
+    base: &Path,
+    opts: &AfOptions,
+) -> Result<AfScene, AfError> {
+    let opts = AfOptions {
+        mesh: opts.mesh.clone().or_else(|| c.mesh.clone()),
+        ..opts.clone()
+    };
+    let source = FigureSource {
+        figure: Some(c.figure.clone()),
+        pose_anim: c.af_pose.clone(),
+        base: Some(base.to_path_buf()),
+    };
+    load_figure(&c.af_file, &opts, &source)
 }
 
 /// Reads an `.af` file from disk.
