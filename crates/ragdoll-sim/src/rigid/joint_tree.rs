@@ -99,6 +99,12 @@ pub struct JointTrees {
     /// Whether the last factorisation was usable (finite); otherwise the joints of the
     /// trees fall back to Gauss–Seidel for the substep.
     ok: bool,
+    /// Scratch of `factor`, kept between calls so the substeps allocate nothing: `D` of
+    /// every joint node and of every body node (indexed by node).
+    d_joint: Vec<Matrix3>,
+    d_body: Vec<Matrix6>,
+    /// Scratch of `solve`: every node's value.
+    x: Vec<Value>,
 }
 
 const NO_PARENT: usize = usize::MAX;
@@ -328,8 +334,12 @@ impl JointTrees {
     /// hands its joints back to Gauss–Seidel.
     pub fn factor(&mut self, joints: &mut JointSet, s: &BodyStates) {
         // `D` of every node, children subtracted as they are eliminated.
-        let mut d_joint: Vec<Matrix3> = vec![Matrix3::ZERO; self.nodes.len()];
-        let mut d_body: Vec<Matrix6> = vec![Matrix6::ZERO; self.nodes.len()];
+        let mut d_joint = std::mem::take(&mut self.d_joint);
+        let mut d_body = std::mem::take(&mut self.d_body);
+        d_joint.clear();
+        d_joint.resize(self.nodes.len(), Matrix3::ZERO);
+        d_body.clear();
+        d_body.resize(self.nodes.len(), Matrix6::ZERO);
         for (k, node) in self.nodes.iter().enumerate() {
             if let Node::Body { body, .. } = *node {
                 d_body[k] = body_mass(s, body);
@@ -384,6 +394,8 @@ impl JointTrees {
             Node::Joint { d_inv, up, .. } => d_inv.is_finite() && up.is_finite(),
         });
         self.ok = ok;
+        self.d_joint = d_joint;
+        self.d_body = d_body;
         for node in &self.nodes {
             if let Node::Joint { joint, .. } = *node {
                 point_of_mut(joints, joint).direct = ok;
@@ -395,7 +407,7 @@ impl JointTrees {
     /// `r = Ċ + bias_rate · C`, then the soft step's `λ += s_m λ' − s_i λ_acc`. The relax
     /// pass (`use_bias` false) solves rigidly with `r = Ċ`.
     pub fn solve(
-        &self,
+        &mut self,
         joints: &mut JointSet,
         s: &mut BodyStates,
         ctx: &StepContext,
@@ -415,20 +427,18 @@ impl JointTrees {
             Softness::RIGID
         };
         // Right-hand sides: zero for bodies, −r for joints.
-        let mut x: Vec<Value> = self
-            .nodes
-            .iter()
-            .map(|node| match *node {
-                Node::Body { .. } => Value::Body(Vector6::ZERO),
-                Node::Joint { joint, .. } => {
-                    let (a, b) = frame_bodies(joints, joint);
-                    let p = point_of(joints, joint);
-                    let cdot = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
-                    let r = cdot + soft.bias_rate * p.c;
-                    Value::Joint(Mat([[-r.x], [-r.y], [-r.z]]))
-                }
-            })
-            .collect();
+        let mut x = std::mem::take(&mut self.x);
+        x.clear();
+        x.extend(self.nodes.iter().map(|node| match *node {
+            Node::Body { .. } => Value::Body(Vector6::ZERO),
+            Node::Joint { joint, .. } => {
+                let (a, b) = frame_bodies(joints, joint);
+                let p = point_of(joints, joint);
+                let cdot = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
+                let r = cdot + soft.bias_rate * p.c;
+                Value::Joint(Mat([[-r.x], [-r.y], [-r.z]]))
+            }
+        }));
         // Up the tree: x_parent −= upᵀ x_child.
         for k in 0..self.nodes.len() {
             let parent = self.parent[k];
@@ -492,6 +502,7 @@ impl JointTrees {
                 _ => unreachable!("node and value kinds match"),
             }
         }
+        self.x = x;
     }
 }
 
@@ -616,6 +627,9 @@ impl<const N: usize> Mat<N, N> {
     }
 }
 
+/// The product, every term summed without skipping zero factors: a branch per entry
+/// keeps the compiler from vectorising the row updates, and the blocks are finite
+/// (`factor` checks), so a zero factor adds a zero.
 impl<const R: usize, const K: usize, const C: usize> std::ops::Mul<Mat<K, C>> for Mat<R, K> {
     type Output = Mat<R, C>;
 
@@ -624,10 +638,8 @@ impl<const R: usize, const K: usize, const C: usize> std::ops::Mul<Mat<K, C>> fo
         for r in 0..R {
             for k in 0..K {
                 let x = self.0[r][k];
-                if x != 0.0 {
-                    for c in 0..C {
-                        out.0[r][c] += x * o.0[k][c];
-                    }
+                for c in 0..C {
+                    out.0[r][c] += x * o.0[k][c];
                 }
             }
         }
