@@ -350,7 +350,7 @@ impl JointTrees {
             let parent = self.parent[k];
             match self.nodes[k] {
                 Node::Body { body, .. } => {
-                    let Some(d_inv) = d_body[k].try_inverse() else {
+                    let Some(d_inv) = d_body[k].try_inverse_blocks() else {
                         ok = false;
                         break;
                     };
@@ -586,6 +586,65 @@ impl<const R: usize, const C: usize> Mat<R, C> {
 
     fn is_finite(&self) -> bool {
         self.0.iter().flatten().all(|x| x.is_finite())
+    }
+}
+
+impl Matrix6 {
+    /// The 3×3 block at row `r0`, column `c0`.
+    fn block(&self, r0: usize, c0: usize) -> Mat3 {
+        let m = &self.0;
+        let col = |c: usize| Vec3::new(m[r0][c0 + c], m[r0 + 1][c0 + c], m[r0 + 2][c0 + c]);
+        Mat3::from_cols(col(0), col(1), col(2))
+    }
+
+    fn set_block(&mut self, r0: usize, c0: usize, b: Mat3) {
+        for c in 0..3 {
+            let v = b.col(c);
+            for r in 0..3 {
+                self.0[r0 + r][c0 + c] = v[r];
+            }
+        }
+    }
+
+    /// The inverse of a body's `D = [A B; C E]` (3×3 blocks) by its Schur complement
+    /// `S = E − C A⁻¹ B`:
+    ///
+    /// ```text
+    /// D⁻¹ = [ A⁻¹ + A⁻¹B S⁻¹ C A⁻¹   −A⁻¹B S⁻¹ ]
+    ///       [ −S⁻¹ C A⁻¹              S⁻¹       ]
+    /// ```
+    ///
+    /// A body's `D` is its mass matrix plus the positive semidefinite terms of its
+    /// eliminated children, so `A` (mass times the identity plus those terms) and `S` are
+    /// positive definite and need no pivoting. `None` when a block's determinant vanishes
+    /// or is not finite.
+    fn try_inverse_blocks(&self) -> Option<Self> {
+        let usable = |m: &Mat3| {
+            let det = m.determinant();
+            det.is_finite() && det.abs() > 1e-30
+        };
+        let a = self.block(0, 0);
+        let b = self.block(0, 3);
+        let c = self.block(3, 0);
+        let e = self.block(3, 3);
+        if !usable(&a) {
+            return None;
+        }
+        let a_inv = a.inverse();
+        let a_inv_b = a_inv * b;
+        let c_a_inv = c * a_inv;
+        let schur = e - c * a_inv_b;
+        if !usable(&schur) {
+            return None;
+        }
+        let s_inv = schur.inverse();
+        let top_right = -(a_inv_b * s_inv);
+        let mut out = Matrix6::ZERO;
+        out.set_block(0, 0, a_inv - top_right * c_a_inv);
+        out.set_block(0, 3, top_right);
+        out.set_block(3, 0, -(s_inv * c_a_inv));
+        out.set_block(3, 3, s_inv);
+        Some(out)
     }
 }
 
