@@ -3,6 +3,9 @@
 //! kept in `proptest-regressions/` and replayed first; crashes found while writing the
 //! reader are pinned as named tests below.
 
+mod common;
+
+use common::mutation::Mutation;
 use proptest::prelude::*;
 use ragdoll_sim::scene::af::{AfOptions, parse};
 use ragdoll_sim::scene::{MassSpec, validate};
@@ -73,66 +76,14 @@ const TOKENS: &[&str] = &[
     "\u{0}",
 ];
 
-#[derive(Debug, Clone)]
-enum Mutation {
-    Truncate(usize),
-    Delete(usize, usize),
-    Insert(usize, usize),
-    Replace(usize, usize),
-    DuplicateLine(usize),
-}
-
+/// A mutation over this reader's tokens.
 fn mutation() -> impl Strategy<Value = Mutation> {
-    prop_oneof![
-        any::<usize>().prop_map(Mutation::Truncate),
-        (any::<usize>(), 1usize..40).prop_map(|(a, n)| Mutation::Delete(a, n)),
-        (any::<usize>(), 0..TOKENS.len()).prop_map(|(a, t)| Mutation::Insert(a, t)),
-        (any::<usize>(), 0..TOKENS.len()).prop_map(|(a, t)| Mutation::Replace(a, t)),
-        any::<usize>().prop_map(Mutation::DuplicateLine),
-    ]
+    common::mutation::strategy(TOKENS.len())
 }
 
 /// Applies mutations on char boundaries.
 fn mutate(text: &str, muts: &[Mutation]) -> String {
-    let mut chars: Vec<char> = text.chars().collect();
-    for m in muts {
-        let len = chars.len().max(1);
-        match *m {
-            Mutation::Truncate(a) => chars.truncate(a % len),
-            Mutation::Delete(a, n) => {
-                let s = a % len;
-                let e = (s + n).min(chars.len());
-                if s < e {
-                    chars.drain(s..e);
-                }
-            }
-            Mutation::Insert(a, t) => {
-                let at = a % (chars.len() + 1);
-                let ins: Vec<char> = format!(" {} ", TOKENS[t]).chars().collect();
-                chars.splice(at..at, ins);
-            }
-            Mutation::Replace(a, t) => {
-                // Replace the word at `a` with a token.
-                let at = a % len;
-                let mut e = at;
-                while e < chars.len() && !chars[e].is_whitespace() {
-                    e += 1;
-                }
-                chars.splice(at..e, TOKENS[t].chars());
-            }
-            Mutation::DuplicateLine(a) => {
-                let text: String = chars.iter().collect();
-                let lines: Vec<&str> = text.lines().collect();
-                if !lines.is_empty() {
-                    let i = a % lines.len();
-                    let mut out: Vec<&str> = lines.clone();
-                    out.insert(i, lines[i]);
-                    chars = out.join("\n").chars().collect();
-                }
-            }
-        }
-    }
-    chars.into_iter().collect()
+    common::mutation::apply(text, muts, TOKENS)
 }
 
 /// The reader's contract on any text.

@@ -2,6 +2,9 @@
 //! reader: mutated files never panic; they either read or give one positioned error on
 //! one line, inside the text.
 
+mod common;
+
+use common::mutation::Mutation;
 use proptest::prelude::*;
 use ragdoll_sim::scene::af::AfError;
 use ragdoll_sim::scene::decl::Doom3Base;
@@ -80,51 +83,14 @@ const TOKENS: &[&str] = &[
     "\u{0}",
 ];
 
-#[derive(Debug, Clone)]
-enum Mutation {
-    Truncate(usize),
-    Delete(usize, usize),
-    Insert(usize, usize),
-    Replace(usize, usize),
-}
-
+/// A mutation over this reader's tokens.
 fn mutation() -> impl Strategy<Value = Mutation> {
-    prop_oneof![
-        any::<usize>().prop_map(Mutation::Truncate),
-        (any::<usize>(), 1usize..40).prop_map(|(a, n)| Mutation::Delete(a, n)),
-        (any::<usize>(), 0..TOKENS.len()).prop_map(|(a, t)| Mutation::Insert(a, t)),
-        (any::<usize>(), 0..TOKENS.len()).prop_map(|(a, t)| Mutation::Replace(a, t)),
-    ]
+    common::mutation::strategy(TOKENS.len())
 }
 
+/// Applies mutations on char boundaries.
 fn mutate(text: &str, muts: &[Mutation]) -> String {
-    let mut chars: Vec<char> = text.chars().collect();
-    for m in muts {
-        let len = chars.len().max(1);
-        match *m {
-            Mutation::Truncate(a) => chars.truncate(a % len),
-            Mutation::Delete(a, n) => {
-                let s = a % len;
-                let e = (s + n).min(chars.len());
-                if s < e {
-                    chars.drain(s..e);
-                }
-            }
-            Mutation::Insert(a, t) => {
-                let at = a % (chars.len() + 1);
-                chars.splice(at..at, format!(" {} ", TOKENS[t]).chars());
-            }
-            Mutation::Replace(a, t) => {
-                let at = a % len;
-                let mut e = at;
-                while e < chars.len() && !chars[e].is_whitespace() {
-                    e += 1;
-                }
-                chars.splice(at..e, TOKENS[t].chars());
-            }
-        }
-    }
-    chars.into_iter().collect()
+    common::mutation::apply(text, muts, TOKENS)
 }
 
 /// The error contract: inside the text, one line, named file.

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod mutation;
+
 use ragdoll_sim::glam::{Mat3, Vec3};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
