@@ -11,9 +11,14 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::body::BodyStates;
+use super::joint_rows::{
+    AlignRows, AngularRow, PointRows, Pose, Soft, Velocities, inertia, invert_symmetric,
+    orthonormal_pair, point_response,
+};
 use super::project::{ANGULAR_SLOP, JOINT_SLOP, MAX_ANGULAR_CORRECTION, MAX_LINEAR_CORRECTION};
 use super::soft::{Softness, Spring, StepContext};
-use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
+use crate::lanes::V3;
+use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 /// The two bodies of a joint and the joint anchor fixed in each.
 #[derive(Clone, Copy, Debug)]
@@ -95,62 +100,78 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
     if use_bias { ctx.joint } else { Softness::RIGID }
 }
 
-/// The ball-and-socket point constraint `p_b − p_a = 0`, three rows solved as a block:
-/// `K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b`.
+/// The ball-and-socket point constraint `p_b − p_a = 0`, one joint's
+/// [`PointRows`] (the rows, written once for one joint and for lanes of four) and its
+/// accumulated impulse.
 ///
-/// `K⁻¹` depends only on the positions and inertias, which hold still from
-/// [`PointPart::prepare`] (after the substep's velocity integration) until the positions
-/// are integrated: the substep's biased iterations share one inverse, as Box2D and Jolt
-/// share a joint's effective mass between velocity iterations. The relax pass comes after
-/// the positions moved and recomputes it.
+/// `K⁻¹` is prepared once per substep and shared by the biased iterations; the relax
+/// pass comes after the positions moved and prepares again.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointPart {
     /// Accumulated impulse on b (world).
     pub impulse: Vec3A,
     /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
     pub direct: bool,
-    /// World offsets of the anchor from each centre of mass, at `prepare`.
-    pub(super) ra: Vec3A,
-    pub(super) rb: Vec3A,
-    /// `p_b − p_a` at `prepare`.
-    pub(super) c: Vec3A,
-    /// How an impulse `p` on b turns each body, `Δω_b = I_b⁻¹ (r_b × p) = T_b p` and
-    /// `Δω_a = −T_a p`: `T = I⁻¹ r̂` at `prepare`, so an iteration applies its impulse with
-    /// two matrix–vector products and no cross products. Both, and `K⁻¹`, with 16-byte
-    /// columns as [`BodyStates::inv_inertia`], for products in SIMD lanes.
-    turn_a: Mat3A,
-    turn_b: Mat3A,
-    /// `K⁻¹` at `prepare`, `None` when `K` is singular (both bodies static).
-    k_inv: Option<Mat3A>,
+    /// The rows at `prepare`.
+    pub(super) rows: PointRows<f32>,
+}
+
+/// `v` as a one-lane vector.
+#[inline]
+pub(super) fn one(v: impl Into<Vec3>) -> V3<f32> {
+    let v = v.into();
+    V3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+/// The inverse masses of `f`'s bodies.
+#[inline]
+fn masses(f: &JointFrame, s: &BodyStates) -> [f32; 2] {
+    [s.inv_mass[f.a], s.inv_mass[f.b]]
 }
 
 impl PointPart {
     /// Evaluates the offsets, the error, the turns and `K⁻¹` on the current positions.
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
-        let (ra, rb) = f.offsets(s);
-        self.ra = Vec3A::from(ra);
-        self.rb = Vec3A::from(rb);
-        self.c = Vec3A::from((s.com[f.b] + rb) - (s.com[f.a] + ra));
-        self.weigh(f, s);
+        let local = [one(f.local_a), one(f.local_b)];
+        let pose = Pose::of(s, f.a, f.b);
+        self.rows.prepare(local, &pose, masses(f, s), true);
     }
 
     /// The turns and `K⁻¹` for the offsets of the last [`PointPart::prepare`] and the
     /// inertias now: all that changes when only the inertias were refreshed since.
     pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
-        let (ta, ka) = point_response(s, f.a, Vec3::from(self.ra));
-        let (tb, kb) = point_response(s, f.b, Vec3::from(self.rb));
-        self.turn_a = ta;
-        self.turn_b = tb;
-        self.k_inv = invert_symmetric(ka + kb).map(Mat3A::from);
+        let inertias = [inertia(s, f.a), inertia(s, f.b)];
+        self.rows.weigh(inertias, masses(f, s), true);
+    }
+
+    /// World offset of the anchor from a's centre of mass, at `prepare`.
+    #[inline]
+    pub(super) fn ra(&self) -> Vec3A {
+        self.rows.ra.lane(0).into()
+    }
+
+    /// World offset of the anchor from b's centre of mass, at `prepare`.
+    #[inline]
+    pub(super) fn rb(&self) -> Vec3A {
+        self.rows.rb.lane(0).into()
+    }
+
+    /// `p_b − p_a` at `prepare`.
+    #[inline]
+    pub(super) fn c(&self) -> Vec3A {
+        self.rows.c.lane(0).into()
     }
 
     /// Applies the impulse `p` on b and `−p` on a.
     #[inline]
     pub(super) fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
-        s.lin_vel[f.a] -= p * s.inv_mass[f.a];
-        s.ang_vel[f.a] -= self.turn_a * p;
-        s.lin_vel[f.b] += p * s.inv_mass[f.b];
-        s.ang_vel[f.b] += self.turn_b * p;
+        let mut v = Velocities::of(s, f.a, f.b);
+        self.rows.apply(&mut v, masses(f, s), one(p), true);
+        v.store(s, f.a, f.b);
     }
 
     /// Re-applies last substep's impulse (after [`PointPart::prepare`]).
@@ -164,17 +185,15 @@ impl PointPart {
         if !use_bias {
             self.prepare(f, s);
         }
-        if self.direct {
+        if self.direct || !self.rows.on {
             return;
         }
-        let (ra, rb) = (self.ra, self.rb);
-        let cdot = s.point_velocity(f.b, rb) - s.point_velocity(f.a, ra);
-        let soft = bilateral(ctx, use_bias);
-        let Some(k_inv) = self.k_inv else { return };
-        let p = -soft.mass_scale * (k_inv * (cdot + soft.bias_rate * self.c))
-            - soft.impulse_scale * self.impulse;
-        self.impulse += p;
-        self.apply(f, s, p);
+        let mut v = Velocities::of(s, f.a, f.b);
+        let mut impulse = one(self.impulse);
+        let soft = Soft::new(ctx, use_bias);
+        self.rows.solve(&mut v, masses(f, s), &mut impulse, &soft);
+        v.store(s, f.a, f.b);
+        self.impulse = impulse.lane(0).into();
     }
 
     /// Position projection: moves both bodies by `P = −K⁻¹ C` so the anchors meet, the
@@ -200,73 +219,16 @@ impl PointPart {
             }
             return;
         }
-        let (_, ka) = point_response(s, f.a, ra);
-        let (_, kb) = point_response(s, f.b, rb);
-        let Some(k_inv) = invert_symmetric(ka + kb) else {
+        let (_, ka) = point_response(inertia(s, f.a), s.inv_mass[f.a], one(ra));
+        let (_, kb) = point_response(inertia(s, f.b), s.inv_mass[f.b], one(rb));
+        let (k_inv, ok) = invert_symmetric(std::array::from_fn(|j| ka[j] + kb[j]));
+        if !ok {
             return;
-        };
-        let p = -(k_inv * c);
+        }
+        let p = -(k_inv * one(c)).lane(0);
         s.apply_position_impulse(f.a, ra, -p);
         s.apply_position_impulse(f.b, rb, p);
     }
-}
-
-/// A symmetric 3×3 matrix by its six entries, `m00, m01, m02, m11, m12, m22`: an
-/// effective mass, symmetric by construction, built and inverted with about half the
-/// products of a general one.
-#[derive(Clone, Copy, Debug)]
-pub struct SymMat3(pub [f32; 6]);
-
-impl std::ops::Add for SymMat3 {
-    type Output = SymMat3;
-
-    /// Entry-wise sum.
-    #[inline]
-    fn add(self, o: SymMat3) -> SymMat3 {
-        SymMat3(std::array::from_fn(|k| self.0[k] + o.0[k]))
-    }
-}
-
-/// A point's response to an impulse on body `i` at world offset `r`: the turn
-/// `T = I⁻¹ r̂` (`Δω = T p`) and the point-mass matrix `m⁻¹ 1 − r̂ I⁻¹ r̂ = m⁻¹ 1 + r̂ᵀ T`,
-/// whose entry `(j, k)` is `ĉ_j · t_k` with `ĉ_j` the columns of `r̂` and `t_k` those of
-/// `T`.
-#[inline]
-pub fn point_response(s: &BodyStates, i: usize, r: Vec3) -> (Mat3A, SymMat3) {
-    let c0 = Vec3A::new(0.0, r.z, -r.y);
-    let c1 = Vec3A::new(-r.z, 0.0, r.x);
-    let c2 = Vec3A::new(r.y, -r.x, 0.0);
-    let ii = s.inv_inertia[i];
-    let t = Mat3A::from_cols(ii * c0, ii * c1, ii * c2);
-    let m = s.inv_mass[i];
-    let k = SymMat3([
-        m + c0.dot(t.x_axis),
-        c0.dot(t.y_axis),
-        c0.dot(t.z_axis),
-        m + c1.dot(t.y_axis),
-        c1.dot(t.z_axis),
-        m + c2.dot(t.z_axis),
-    ]);
-    (t, k)
-}
-
-/// Inverse of a symmetric effective-mass matrix by its cofactors, `None` when singular
-/// (both bodies static).
-#[inline]
-pub fn invert_symmetric(k: SymMat3) -> Option<Mat3> {
-    let [a, b, c, d, e, f] = k.0;
-    let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
-    let det = a * ca + b * cb + c * cc;
-    if !(det.is_finite() && det.abs() > 1e-20) {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
-    Some(Mat3::from_cols(
-        Vec3::new(ca, cb, cc) * inv,
-        Vec3::new(cb, cd, ce) * inv,
-        Vec3::new(cc, ce, cf) * inv,
-    ))
 }
 
 /// Inverse of a 3×3 effective-mass matrix, `None` when singular (both bodies static).
@@ -334,12 +296,10 @@ impl AngularLock3 {
     }
 }
 
-/// Keeps a direction fixed in a aligned with one fixed in b: two rows about the
-/// directions perpendicular to it (the hinge's rotational part; a 0° cone).
-/// `C = P (d_b × d_a)`, `Ċ ≈ P (ω_a − ω_b)` with P the projection off `d_a`.
-///
-/// Like [`PointPart`], the rows and their 2×2 effective mass are evaluated once per
-/// substep in [`AlignPart::prepare`] and shared by the biased iterations.
+/// Keeps a direction fixed in a aligned with one fixed in b: one joint's
+/// [`AlignRows`] (the hinge's rotational part; a 0° cone), its directions and
+/// accumulated impulse. Like [`PointPart`], the rows and their 2×2 effective mass are
+/// prepared once per substep and shared by the biased iterations.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AlignPart {
     /// Direction in a's space.
@@ -348,17 +308,8 @@ pub struct AlignPart {
     pub local_b: Vec3,
     /// Accumulated impulse (two components along the current perpendiculars).
     pub impulse: [f32; 2],
-    /// The rows at `prepare`: two world directions perpendicular to `d_a`.
-    u: Vec3A,
-    v: Vec3A,
-    /// The error `d_b × d_a` along `u` and `v`.
-    error: [f32; 2],
-    /// The effective mass `K = [u v]ᵀ (I_a⁻¹ + I_b⁻¹) [u v]`: `k11`, `k12`, `k22`, and its
-    /// determinant.
-    k: [f32; 4],
-    /// How a unit impulse along each row turns each body: `I_a⁻¹ u`, `I_a⁻¹ v`,
-    /// `I_b⁻¹ u`, `I_b⁻¹ v`, so an iteration applies its impulse with scaled additions.
-    turn: [Vec3A; 4],
+    /// The rows at `prepare`.
+    rows: AlignRows<f32>,
 }
 
 impl AlignPart {
@@ -374,44 +325,28 @@ impl AlignPart {
     fn basis(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, Vec3, Vec3, Vec3) {
         let da = s.rot[f.a] * self.local_a;
         let db = s.rot[f.b] * self.local_b;
-        let (u, v) = da.any_orthonormal_pair();
-        (da, db, u, v)
+        let (u, v) = orthonormal_pair(one(da));
+        (da, db, u.lane(0), v.lane(0))
     }
 
     /// Evaluates the rows, the error and the effective mass on the current positions.
     pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
-        let (da, db, u, v) = self.basis(f, s);
-        let e = db.cross(da);
-        let (u, v, e) = (Vec3A::from(u), Vec3A::from(v), Vec3A::from(e));
-        self.u = u;
-        self.v = v;
-        self.error = [u.dot(e), v.dot(e)];
-        self.weigh(f, s);
+        let local = [one(self.local_a), one(self.local_b)];
+        self.rows.prepare(local, &Pose::of(s, f.a, f.b), true);
     }
 
     /// The turns and the effective mass for the rows of the last [`AlignPart::prepare`]
     /// and the inertias now: all that changes when only the inertias were refreshed
     /// since.
     pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
-        let (u, v) = (self.u, self.v);
-        let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
-        self.turn = [ia * u, ia * v, ib * u, ib * v];
-        let [au, av, bu, bv] = self.turn;
-        let (k11, k12, k22) = (u.dot(au + bu), u.dot(av + bv), v.dot(av + bv));
-        self.k = [k11, k12, k22, k11 * k22 - k12 * k12];
-    }
-
-    /// Applies the angular impulse `u l₀ + v l₁` to a and its opposite to b.
-    #[inline]
-    fn apply(&self, f: &JointFrame, s: &mut BodyStates, [l0, l1]: [f32; 2]) {
-        let [au, av, bu, bv] = self.turn;
-        s.ang_vel[f.a] += au * l0 + av * l1;
-        s.ang_vel[f.b] -= bu * l0 + bv * l1;
+        self.rows.weigh([inertia(s, f.a), inertia(s, f.b)], true);
     }
 
     /// Re-applies the accumulated impulse along the rows (after [`AlignPart::prepare`]).
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        self.apply(f, s, self.impulse);
+        let mut v = Velocities::of(s, f.a, f.b);
+        self.rows.apply(&mut v, self.impulse, true);
+        v.store(s, f.a, f.b);
     }
 
     /// One soft 2×2 block update; the relax pass (`use_bias` false) first prepares
@@ -420,26 +355,13 @@ impl AlignPart {
         if !use_bias {
             self.prepare(f, s);
         }
-        let (u, v) = (self.u, self.v);
-        let [k11, k12, k22, det] = self.k;
-        let w = f.rel_ang_vel(s);
-        if !(det.abs() > 1e-20) {
+        if !self.rows.on {
             return;
         }
-        let soft = bilateral(ctx, use_bias);
-        let r = [
-            u.dot(w) + soft.bias_rate * self.error[0],
-            v.dot(w) + soft.bias_rate * self.error[1],
-        ];
-        let sol = [
-            (k22 * r[0] - k12 * r[1]) / det,
-            (k11 * r[1] - k12 * r[0]) / det,
-        ];
-        let l0 = -soft.mass_scale * sol[0] - soft.impulse_scale * self.impulse[0];
-        let l1 = -soft.mass_scale * sol[1] - soft.impulse_scale * self.impulse[1];
-        self.impulse[0] += l0;
-        self.impulse[1] += l1;
-        self.apply(f, s, [l0, l1]);
+        let mut v = Velocities::of(s, f.a, f.b);
+        self.rows
+            .solve(&mut v, &mut self.impulse, &Soft::new(ctx, use_bias));
+        v.store(s, f.a, f.b);
     }
 
     /// Position projection: rotates the bodies so the two directions align again.
@@ -526,17 +448,25 @@ impl AxisRow {
         self.active = active;
     }
 
-    /// Applies the angular impulse `axis λ` to a and its opposite to b.
+    /// The row in one lane, for [`AngularRow`]'s updates.
     #[inline]
-    fn apply(&self, f: &JointFrame, s: &mut BodyStates, lambda: f32) {
-        s.ang_vel[f.a] += self.turn[0] * lambda;
-        s.ang_vel[f.b] -= self.turn[1] * lambda;
+    fn one_lane(&self) -> AngularRow<f32> {
+        AngularRow {
+            axis: one(self.axis),
+            c: self.c,
+            m: 1.0 / self.k,
+            turn: self.turn.map(one),
+            active: self.active,
+            on: self.active && self.k > 1e-20,
+        }
     }
 
     /// Re-applies the accumulated impulse.
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         if self.active {
-            self.apply(f, s, self.impulse);
+            let mut v = Velocities::of(s, f.a, f.b);
+            self.one_lane().warm_start(&mut v, self.impulse);
+            v.store(s, f.a, f.b);
         }
     }
 
@@ -549,7 +479,8 @@ impl AxisRow {
         }
     }
 
-    /// [`AxisRow::solve`] of an active row.
+    /// [`AxisRow::solve`] of an active row: a hard limit or an equality by
+    /// [`AngularRow::solve`], a soft limit here.
     fn solve_active(
         &mut self,
         f: &JointFrame,
@@ -561,38 +492,47 @@ impl AxisRow {
         if !(k > 1e-20) {
             return;
         }
-        let m = 1.0 / k;
+        let limit = match self.kind {
+            RowKind::Limit => true,
+            RowKind::Equality => false,
+            RowKind::SoftLimit { k: stiffness } => {
+                return self.solve_soft(f, s, ctx, stiffness);
+            }
+        };
+        let mut v = Velocities::of(s, f.a, f.b);
+        let soft = Soft::new(ctx, use_bias);
+        self.one_lane()
+            .solve(&mut v, &mut self.impulse, &soft, limit);
+        v.store(s, f.a, f.b);
+    }
+
+    /// Applies the angular impulse `axis λ` to a and its opposite to b.
+    #[inline]
+    fn apply(&self, f: &JointFrame, s: &mut BodyStates, lambda: f32) {
+        s.ang_vel[f.a] += self.turn[0] * lambda;
+        s.ang_vel[f.b] -= self.turn[1] * lambda;
+    }
+
+    /// The update of an active soft limit of `stiffness`.
+    fn solve_soft(
+        &mut self,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        stiffness: f32,
+    ) {
+        let k = self.k;
         let cdot = Vec3A::from(self.axis).dot(f.rel_ang_vel(s));
         let old = self.impulse;
-        let new = match self.kind {
-            RowKind::Limit | RowKind::Equality => {
-                let (bias, soft) = if self.c > 0.0 && self.kind == RowKind::Limit {
-                    // Speculative: allow closing the gap this substep, never pull.
-                    (self.c * ctx.inv_h, Softness::RIGID)
-                } else if use_bias {
-                    (ctx.joint.bias_rate * self.c, ctx.joint)
-                } else {
-                    (0.0, Softness::RIGID)
-                };
-                let l = -m * soft.mass_scale * (cdot + bias) - soft.impulse_scale * old;
-                if self.kind == RowKind::Limit {
-                    (old + l).max(0.0)
-                } else {
-                    old + l
-                }
-            }
-            RowKind::SoftLimit { k: stiffness } => {
-                if self.c >= 0.0 {
-                    0.0
-                } else {
-                    // Damping 1 % of the stiffness, as the tutorial's `-0.01 * force`.
-                    let Some(sp) = Spring::new(stiffness, 0.01 * stiffness, ctx.h) else {
-                        return;
-                    };
-                    let l = -(cdot + sp.bias_rate * self.c + sp.gamma * old) / (k + sp.gamma);
-                    (old + l).max(0.0)
-                }
-            }
+        let new = if self.c >= 0.0 {
+            0.0
+        } else {
+            // Damping 1 % of the stiffness, as the tutorial's `-0.01 * force`.
+            let Some(sp) = Spring::new(stiffness, 0.01 * stiffness, ctx.h) else {
+                return;
+            };
+            let l = -(cdot + sp.bias_rate * self.c + sp.gamma * old) / (k + sp.gamma);
+            (old + l).max(0.0)
         };
         self.impulse = new;
         self.apply(f, s, new - old);
@@ -680,7 +620,7 @@ impl FrictionMotor {
     /// to hold, and slipped meanwhile.
     fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, point: &PointPart) {
         let sum = if point.direct {
-            about_anchor(s, f.a, point.ra) + about_anchor(s, f.b, point.rb)
+            about_anchor(s, f.a, point.ra()) + about_anchor(s, f.b, point.rb())
         } else {
             f.inv_inertia_sum(s)
         };

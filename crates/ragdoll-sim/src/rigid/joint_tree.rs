@@ -434,8 +434,8 @@ impl JointTrees {
             Node::Joint { joint, .. } => {
                 let (a, b) = frame_bodies(joints, joint);
                 let p = point_of(joints, joint);
-                let cdot = s.point_velocity(b, p.rb) - s.point_velocity(a, p.ra);
-                let r = cdot + soft.bias_rate * p.c;
+                let cdot = s.point_velocity(b, p.rb()) - s.point_velocity(a, p.ra());
+                let r = cdot + soft.bias_rate * p.c();
                 Value::Joint(Mat([[-r.x], [-r.y], [-r.z]]))
             }
         }));
@@ -524,10 +524,10 @@ fn body_mass(s: &BodyStates, i: usize) -> Matrix6 {
 /// body1 (`Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`).
 fn jacobian(p: &PointPart, (a, b): (usize, usize), body: usize) -> Matrix3x6 {
     let (r, sign) = if body == b {
-        (Vec3::from(p.rb), 1.0)
+        (Vec3::from(p.rb()), 1.0)
     } else {
         debug_assert_eq!(body, a);
-        (Vec3::from(p.ra), -1.0)
+        (Vec3::from(p.ra()), -1.0)
     };
     // −r̂ ω = ω × r: rows of −r̂ are (0, r_z, −r_y), (−r_z, 0, r_x), (r_y, −r_x, 0).
     Mat([

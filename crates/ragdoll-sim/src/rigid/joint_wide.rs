@@ -8,13 +8,13 @@
 //! which no body appears twice, each joint in a later bundle than every earlier joint
 //! on its bodies: every body meets its joints in the same order as one by one, and a
 //! bundle's joints touch disjoint bodies, so solving its lanes at once is solving them
-//! in any order. Each lane repeats the scalar joint's arithmetic — the same operations
-//! in the same order (`crate::lanes` keeps glam's order of sums and products) — and a
-//! lane whose scalar update would do nothing (a row far from its bound, a singular
-//! effective mass, a joint between sleeping bodies) keeps its old values by a select.
-//! So a world solved in lanes has the one-by-one solve's bits: the test
+//! in any order. The rows are [`super::joint_rows`]'s, the same code the joints run
+//! one by one, instantiated with `f32x4`; a lane whose update one by one would do
+//! nothing (a row far from its bound, a singular effective mass, a joint between
+//! sleeping bodies) keeps its old values by a select. So a world solved in lanes has the
+//! one-by-one solve's bits by construction, on every target: the test
 //! `joints_in_lanes_give_the_bits_of_joints_one_by_one` (`rigid::world`) compares them
-//! frame by frame, and the piles' traces match those of the one-by-one solver.
+//! frame by frame.
 //!
 //! The rows live in the lanes for a whole solve: prepared there from the bodies' poses
 //! and inertias, warm-started, iterated, prepared again and relaxed there. Only the limit
@@ -28,22 +28,14 @@
 //! Only the common shapes are bundled: hinges with a hard range and no friction, ball
 //! joints with a hard cone, no twist limit and no friction (a pile's humans). A type
 //! with any other joint is solved one by one, as are the other joint types.
-//!
-//! Only on x86-64, where the lanes repeat glam's SSE2 code (its `Vec3A` cross product
-//! fused where the target has FMA, as `Vec3x4::cross_a` is): glam's code for other
-//! targets orders its sums otherwise, and the lanes would then differ from the one-by-one
-//! solve that islands solved on other threads use, and results would depend on the
-//! number of threads.
-
-// `!(k > ε)` on purpose, as in the scalar joints: NaN must skip the row too.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::ball::BallJoint;
-use super::body::{BodyStates, VelocitiesX4};
+use super::body::BodyStates;
 use super::hinge::HingeJoint;
 use super::joint::{AxisRow, JointFrame, RowKind};
+use super::joint_rows::{self, AlignRows, AngularRow, PointRows, Pose};
 use super::limits::{MARGIN, Swing};
-use super::soft::{Softness, StepContext};
+use super::soft::StepContext;
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4, f4};
 use glam::{Vec3, Vec3A};
 use wide::f32x4;
@@ -103,52 +95,12 @@ fn is_set(m: f32x4, k: usize) -> bool {
     m.as_array()[k].to_bits() != 0
 }
 
-/// The soft coefficients of a pass, in lanes: the joint softness in the biased
-/// iterations, [`Softness::RIGID`] in the relax pass (the scalar `bilateral`).
-struct Soft {
-    bias_rate: f32x4,
-    mass_scale: f32x4,
-    impulse_scale: f32x4,
-    inv_h: f32x4,
-    use_bias: bool,
-}
-
-impl Soft {
-    fn new(ctx: &StepContext, use_bias: bool) -> Soft {
-        let s = if use_bias { ctx.joint } else { Softness::RIGID };
-        Soft {
-            bias_rate: f32x4::splat(s.bias_rate),
-            mass_scale: f32x4::splat(s.mass_scale),
-            impulse_scale: f32x4::splat(s.impulse_scale),
-            inv_h: f32x4::splat(ctx.inv_h),
-            use_bias,
-        }
-    }
-}
-
-/// The velocities of a bundle's bodies: linear and angular of each lane's a and b.
-struct Velocities {
-    va: Vec3x4,
-    wa: Vec3x4,
-    vb: Vec3x4,
-    wb: Vec3x4,
-}
-
-impl Velocities {
-    fn x4(&self) -> VelocitiesX4 {
-        [self.va, self.wa, self.vb, self.wb]
-    }
-}
-
+/// The soft coefficients of a pass in lanes.
+type Soft = joint_rows::Soft<f32x4>;
+/// The velocities of a bundle's bodies.
+type Velocities = joint_rows::Velocities<f32x4>;
 /// The poses and world inverse inertias of a bundle's bodies.
-struct Bodies {
-    rot_a: Quatx4,
-    rot_b: Quatx4,
-    com_a: Vec3x4,
-    com_b: Vec3x4,
-    ia: Mat3x4,
-    ib: Mat3x4,
-}
+type Bodies = Pose<f32x4>;
 
 /// The world inverse inertias of a bundle's bodies.
 #[derive(Clone, Copy, Debug, Default)]
@@ -266,6 +218,12 @@ impl Lanes {
         };
     }
 
+    /// The inverse masses of the lanes' bodies a and b.
+    #[inline]
+    fn inv_mass(&self) -> [f32x4; 2] {
+        [self.inv_mass_a, self.inv_mass_b]
+    }
+
     fn gather(&self, s: &BodyStates) -> Velocities {
         let [va, wa, vb, wb] = s.velocities_x4(self.a, self.b);
         Velocities { va, wa, vb, wb }
@@ -274,62 +232,19 @@ impl Lanes {
     /// Writes the live lanes' moving bodies back (no body is in two lanes).
     fn scatter(&self, s: &mut BodyStates, v: &Velocities) {
         let masses = [self.inv_mass_a, self.inv_mass_b];
-        s.set_velocities_x4([self.a, self.b], masses, &v.x4(), |k| is_set(self.live, k));
+        let v = [v.va, v.wa, v.vb, v.wb];
+        s.set_velocities_x4([self.a, self.b], masses, &v, |k| is_set(self.live, k));
     }
 }
 
-/// Four [`super::joint::PointPart`]s and their anchors.
+/// Four [`super::joint::PointPart`]s: their anchors, rows and impulses.
 #[derive(Clone, Copy, Debug, Default)]
 struct PointX4 {
     /// The anchor in each body's space (the joints' frames).
     local_a: Vec3x4,
     local_b: Vec3x4,
     impulse: Vec3x4,
-    ra: Vec3x4,
-    rb: Vec3x4,
-    c: Vec3x4,
-    turn_a: Mat3x4,
-    turn_b: Mat3x4,
-    k_inv: Mat3x4,
-    /// Live lanes with an invertible `K`.
-    on: f32x4,
-}
-
-/// `T = I⁻¹ r̂` and the entries of `m⁻¹ 1 + r̂ᵀ T` in lanes (the scalar
-/// `point_response`, the columns of `r̂` with their zeros, products in glam's order).
-#[inline]
-fn point_response(ii: Mat3x4, m: f32x4, r: Vec3x4) -> (Mat3x4, [f32x4; 6]) {
-    let [c0, c1, c2] = Mat3x4::skew(r).cols;
-    let t = [ii * c0, ii * c1, ii * c2];
-    let k = [
-        m + c0.dot(t[0]),
-        c0.dot(t[1]),
-        c0.dot(t[2]),
-        m + c1.dot(t[1]),
-        c1.dot(t[2]),
-        m + c2.dot(t[2]),
-    ];
-    (Mat3x4 { cols: t }, k)
-}
-
-/// The scalar `invert_symmetric` in lanes, with the mask of the lanes where it is
-/// defined.
-#[inline]
-fn invert_symmetric(k: [f32x4; 6]) -> (Mat3x4, f32x4) {
-    let [a, b, c, d, e, f] = k;
-    let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
-    let det = a * ca + b * cb + c * cc;
-    let size = det.abs();
-    let ok = size.simd_gt(f32x4::splat(1e-20)) & size.simd_lt(f32x4::splat(f32::INFINITY));
-    let inv = f32x4::ONE / det;
-    let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
-    let col = |x, y, z| Vec3x4 { x, y, z } * inv;
-    (
-        Mat3x4 {
-            cols: [col(ca, cb, cc), col(cb, cd, ce), col(cc, ce, cf)],
-        },
-        ok,
-    )
+    rows: PointRows<f32x4>,
 }
 
 impl PointX4 {
@@ -342,141 +257,51 @@ impl PointX4 {
         }
     }
 
-    /// The scalar `prepare`: offsets and error on the poses now, then [`PointX4::weigh`].
     fn prepare(&mut self, l: &Lanes, p: &Bodies) {
-        self.ra = p.rot_a.rotate_as_glam(self.local_a);
-        self.rb = p.rot_b.rotate_as_glam(self.local_b);
-        self.c = (p.com_b + self.rb) - (p.com_a + self.ra);
-        self.weigh(l, p.ia, p.ib);
+        let local = [self.local_a, self.local_b];
+        self.rows.prepare(local, p, l.inv_mass(), l.live);
     }
 
-    /// The turns and `K⁻¹` for the offsets of the last preparation and the inertias.
     fn weigh(&mut self, l: &Lanes, ia: Mat3x4, ib: Mat3x4) {
-        let (ta, ka) = point_response(ia, l.inv_mass_a, self.ra);
-        let (tb, kb) = point_response(ib, l.inv_mass_b, self.rb);
-        self.turn_a = ta;
-        self.turn_b = tb;
-        let (k_inv, ok) = invert_symmetric(std::array::from_fn(|j| ka[j] + kb[j]));
-        self.k_inv = k_inv;
-        self.on = l.live & ok;
-    }
-
-    /// Applies `p` on b and `−p` on a in the lanes `on`.
-    #[inline]
-    fn apply(&self, v: &mut Velocities, l: &Lanes, p: Vec3x4, on: f32x4) {
-        v.va = Vec3x4::select(on, v.va - p * l.inv_mass_a, v.va);
-        v.wa = Vec3x4::select(on, v.wa - self.turn_a * p, v.wa);
-        v.vb = Vec3x4::select(on, v.vb + p * l.inv_mass_b, v.vb);
-        v.wb = Vec3x4::select(on, v.wb + self.turn_b * p, v.wb);
+        self.rows.weigh([ia, ib], l.inv_mass(), l.live);
     }
 
     fn warm_start(&self, v: &mut Velocities, l: &Lanes) {
-        self.apply(v, l, self.impulse, l.live);
+        self.rows.apply(v, l.inv_mass(), self.impulse, l.live);
     }
 
-    /// The scalar `solve` (the relax pass prepares first, in [`JointLanes`]).
     #[inline]
     fn solve(&mut self, v: &mut Velocities, l: &Lanes, soft: &Soft) {
-        // `point_velocity`: `Vec3A` cross products.
-        let cdot = (v.vb + v.wb.cross_a(self.rb)) - (v.va + v.wa.cross_a(self.ra));
-        let p = (self.k_inv * (cdot + self.c * soft.bias_rate)) * -soft.mass_scale
-            - self.impulse * soft.impulse_scale;
-        self.impulse = Vec3x4::select(self.on, self.impulse + p, self.impulse);
-        self.apply(v, l, p, self.on);
+        self.rows.solve(v, l.inv_mass(), &mut self.impulse, soft);
     }
 }
 
-/// Four [`super::joint::AlignPart`]s and their directions.
+/// Four [`super::joint::AlignPart`]s: their directions, rows and impulses.
 #[derive(Clone, Copy, Debug, Default)]
 struct AlignX4 {
     /// The direction in each body's space.
     local_a: Vec3x4,
     local_b: Vec3x4,
     impulse: [f32x4; 2],
-    u: Vec3x4,
-    v: Vec3x4,
-    error: [f32x4; 2],
-    /// `k11`, `k12`, `k22`, det.
-    k: [f32x4; 4],
-    /// `I_a⁻¹ u`, `I_a⁻¹ v`, `I_b⁻¹ u`, `I_b⁻¹ v`.
-    turn: [Vec3x4; 4],
-    /// Live lanes with a non-singular effective mass.
-    on: f32x4,
-}
-
-/// glam's `Vec3::any_orthonormal_pair` in lanes (Duff et al., with `signum` as
-/// `copysign(1, z)`).
-#[inline]
-fn any_orthonormal_pair(d: Vec3x4) -> (Vec3x4, Vec3x4) {
-    let sign_bit = f32x4::splat(-0.0);
-    let sign = (d.z & sign_bit) | f32x4::ONE;
-    let a = -f32x4::ONE / (sign + d.z);
-    let b = d.x * d.y * a;
-    (
-        Vec3x4 {
-            x: f32x4::ONE + sign * d.x * d.x * a,
-            y: sign * b,
-            z: -sign * d.x,
-        },
-        Vec3x4 {
-            x: b,
-            y: sign + d.y * d.y * a,
-            z: -d.y,
-        },
-    )
+    rows: AlignRows<f32x4>,
 }
 
 impl AlignX4 {
-    /// The scalar `prepare`: the rows and the error on the poses now, then
-    /// [`AlignX4::weigh`].
     fn prepare(&mut self, l: &Lanes, p: &Bodies) {
-        let da = p.rot_a.rotate_as_glam(self.local_a);
-        let db = p.rot_b.rotate_as_glam(self.local_b);
-        let (u, v) = any_orthonormal_pair(da);
-        let e = db.cross(da);
-        self.u = u;
-        self.v = v;
-        self.error = [u.dot(e), v.dot(e)];
-        self.weigh(l, p.ia, p.ib);
+        self.rows.prepare([self.local_a, self.local_b], p, l.live);
     }
 
-    /// The turns and the effective mass for the rows of the last preparation.
     fn weigh(&mut self, l: &Lanes, ia: Mat3x4, ib: Mat3x4) {
-        let (u, v) = (self.u, self.v);
-        self.turn = [ia * u, ia * v, ib * u, ib * v];
-        let [au, av, bu, bv] = self.turn;
-        let (k11, k12, k22) = (u.dot(au + bu), u.dot(av + bv), v.dot(av + bv));
-        let det = k11 * k22 - k12 * k12;
-        self.k = [k11, k12, k22, det];
-        self.on = l.live & det.abs().simd_gt(f32x4::splat(1e-20));
-    }
-
-    #[inline]
-    fn apply(&self, v: &mut Velocities, [l0, l1]: [f32x4; 2], on: f32x4) {
-        let [au, av, bu, bv] = self.turn;
-        v.wa = Vec3x4::select(on, v.wa + (au * l0 + av * l1), v.wa);
-        v.wb = Vec3x4::select(on, v.wb - (bu * l0 + bv * l1), v.wb);
+        self.rows.weigh([ia, ib], l.live);
     }
 
     fn warm_start(&self, v: &mut Velocities, l: &Lanes) {
-        self.apply(v, self.impulse, l.live);
+        self.rows.apply(v, self.impulse, l.live);
     }
 
-    /// The scalar `solve` (the relax pass prepares first, in [`JointLanes`]).
     #[inline]
     fn solve(&mut self, v: &mut Velocities, soft: &Soft) {
-        let w = v.wa - v.wb;
-        let [k11, k12, k22, det] = self.k;
-        let r0 = self.u.dot(w) + soft.bias_rate * self.error[0];
-        let r1 = self.v.dot(w) + soft.bias_rate * self.error[1];
-        let sol0 = (k22 * r0 - k12 * r1) / det;
-        let sol1 = (k11 * r1 - k12 * r0) / det;
-        let [i0, i1] = self.impulse;
-        let l0 = -soft.mass_scale * sol0 - soft.impulse_scale * i0;
-        let l1 = -soft.mass_scale * sol1 - soft.impulse_scale * i1;
-        let on = self.on;
-        self.impulse = [on.select(i0 + l0, i0), on.select(i1 + l1, i1)];
-        self.apply(v, [l0, l1], on);
+        self.rows.solve(v, &mut self.impulse, soft);
     }
 }
 
@@ -485,15 +310,7 @@ impl AlignX4 {
 #[derive(Clone, Copy, Debug, Default)]
 struct RowX4 {
     impulse: f32x4,
-    axis: Vec3x4,
-    c: f32x4,
-    /// `1/k`.
-    m: f32x4,
-    turn: [Vec3x4; 2],
-    /// Live lanes whose row is active (warm-started).
-    active: f32x4,
-    /// Active lanes with a positive `k` (solved).
-    on: f32x4,
+    row: AngularRow<f32x4>,
 }
 
 impl RowX4 {
@@ -505,15 +322,15 @@ impl RowX4 {
             // Most rows are far from their bounds: nothing to solve or warm-start, and
             // the unused lanes' axes and turns are never read.
             self.impulse = l.live.select(f32x4::ZERO, self.impulse);
-            self.active = f32x4::ZERO;
-            self.on = f32x4::ZERO;
+            self.row.active = f32x4::ZERO;
+            self.row.on = f32x4::ZERO;
             return;
         }
         let mut impulse = *self.impulse.as_array();
         let (mut axis, mut c, mut m) = ([Vec3::ZERO; LANES], [0.0; LANES], [0.0; LANES]);
         let mut turn = [[Vec3::ZERO; LANES]; 2];
         let (mut active, mut on) = ([false; LANES], [false; LANES]);
-        for k in (0..LANES).filter(|&k| is_set(l.live, k)) {
+        for k in live {
             let r = row(k);
             axis[k] = r.axis;
             c[k] = r.c;
@@ -528,46 +345,24 @@ impl RowX4 {
             }
         }
         self.impulse = f32x4::new(impulse);
-        self.axis = Vec3x4::from_fn(|k| axis[k]);
-        self.c = f32x4::new(c);
-        self.m = f32x4::new(m);
-        self.turn = turn.map(|t| Vec3x4::from_fn(|k| t[k]));
-        self.active = mask(|k| active[k]);
-        self.on = mask(|k| on[k]);
+        self.row = AngularRow {
+            axis: Vec3x4::from_fn(|k| axis[k]),
+            c: f32x4::new(c),
+            m: f32x4::new(m),
+            turn: turn.map(|t| Vec3x4::from_fn(|k| t[k])),
+            active: mask(|k| active[k]),
+            on: mask(|k| on[k]),
+        };
     }
 
     fn warm_start(&self, v: &mut Velocities) {
-        let on = self.active;
-        v.wa = Vec3x4::select(on, v.wa + self.turn[0] * self.impulse, v.wa);
-        v.wb = Vec3x4::select(on, v.wb - self.turn[1] * self.impulse, v.wb);
+        self.row.warm_start(v, self.impulse);
     }
 
-    /// The scalar `AxisRow::solve` of a [`RowKind::Limit`] row: past the limit
-    /// (`C ≤ 0`) soft, short of it speculative (the gap may close this substep), the
-    /// impulse never pulling.
+    /// A [`RowKind::Limit`] row's update.
     #[inline]
     fn solve(&mut self, v: &mut Velocities, soft: &Soft) {
-        let zero = f32x4::ZERO;
-        let one = f32x4::ONE;
-        let cdot = self.axis.dot(v.wa - v.wb);
-        let old = self.impulse;
-        let speculative = self.c.simd_gt(zero);
-        // The scalar row takes its bias as 0 (not 0 · C) in the relax pass.
-        let (bias, mass_scale, impulse_scale) = if soft.use_bias {
-            (soft.bias_rate * self.c, soft.mass_scale, soft.impulse_scale)
-        } else {
-            (zero, one, zero)
-        };
-        let bias = speculative.select(self.c * soft.inv_h, bias);
-        let mass_scale = speculative.select(one, mass_scale);
-        let impulse_scale = speculative.select(zero, impulse_scale);
-        let l = -self.m * mass_scale * (cdot + bias) - impulse_scale * old;
-        let new = (old + l).fast_max(zero);
-        let on = self.on;
-        self.impulse = on.select(new, old);
-        let d = new - old;
-        v.wa = Vec3x4::select(on, v.wa + self.turn[0] * d, v.wa);
-        v.wb = Vec3x4::select(on, v.wb - self.turn[1] * d, v.wb);
+        self.row.solve(v, &mut self.impulse, soft, true);
     }
 }
 
@@ -647,9 +442,6 @@ impl JointLanes {
         bodies: usize,
         anchor: usize,
     ) -> Option<JointLanes> {
-        if !cfg!(target_arch = "x86_64") {
-            return None;
-        }
         let worth = |n: usize| n >= 2 * LANES;
         let mut lanes = JointLanes {
             planned: [balls.len(), hinges.len()],

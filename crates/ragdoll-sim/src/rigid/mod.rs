@@ -32,6 +32,7 @@ mod impulse;
 mod integrate;
 mod island;
 mod joint;
+mod joint_rows;
 mod joint_set;
 mod joint_tree;
 mod joint_wide;

@@ -523,7 +523,6 @@ mod tests {
     /// the static anchor (the lanes must follow the anchor's index) — and stretches on
     /// two threads, whose islands are solved one by one, hand the impulses back and
     /// forth. (No joint to the world: that would put its figure in a joint tree.)
-    #[cfg(target_arch = "x86_64")]
     #[test]
     fn joints_in_lanes_give_the_bits_of_joints_one_by_one() {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
