@@ -84,11 +84,11 @@ pub(crate) struct ContactPoint {
     /// drift from it since is slip static friction may take back
     /// (`friction::ANCHOR_PULL`); their approach before touching is not. `None` until
     /// the point is first pressed in such a run: it is measured then
-    /// (`friction::solve_normal`), not for every speculative point at every substep's
+    /// (`friction::normal_target`), not for every speculative point at every substep's
     /// start.
     pub touched_at: Option<Vec3>,
     /// Overlap (m) the point's last normal solve left to push out later, at most
-    /// `max_push_out_speed` × h a substep (`friction::solve_normal`); `∞` before its
+    /// `max_push_out_speed` × h a substep (`friction::normal_target`); `∞` before its
     /// first solve.
     pub left: f32,
     /// [`ContactPoint::left`] as the current substep started: the only overlap the
