@@ -665,7 +665,7 @@ suite!(multibody:
     box_on_20_degrees_with_mu_half_holds,
     box_at_rest_stays_put,
     stack_of_5_boxes_stands,
-    stack_of_10_boxes_stands = "multibody: top box sinks 10.4 mm",
+    stack_of_10_boxes_stands,
     chain_of_mass_ratio_100_hangs_without_gaps,
     chain_of_mass_ratio_100_swings_without_gaps,
     box_hitting_a_wall_at_50_m_s_stays_face_on = "multibody: spin 2.0 rad/s, sideways 0.45 m/s",

@@ -380,9 +380,8 @@ impl ContactConstraints {
                     // Speculative: the gap may close this substep, no further.
                     (sep * ctx.inv_h, 1.0, 0.0)
                 } else if use_bias {
-                    let c = (sep + LINEAR_SLOP).min(0.0);
                     (
-                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
+                        (ctx.contact.bias_rate * sep).max(-ctx.max_push_out),
                         ctx.contact.mass_scale,
                         ctx.contact.impulse_scale,
                     )
@@ -507,8 +506,7 @@ impl ContactConstraints {
             let n = pc.normal;
             for p in &self.points[pc.start..pc.start + pc.count] {
                 let sep = current_separation(pc, p, s);
-                let pushed = (-push.bias_rate * (p.start_separation + LINEAR_SLOP))
-                    .clamp(0.0, push.max_speed);
+                let pushed = (-push.bias_rate * p.start_separation).clamp(0.0, push.max_speed);
                 let room = ((push.max_speed - pushed) * per_iteration).min(MAX_LINEAR_CORRECTION);
                 let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-room, 0.0);
                 if c == 0.0 {

@@ -19,7 +19,6 @@
 //! back to the scalar constraints once the substeps are done (`Bundle::write_back`).
 
 use super::body::BodyStates;
-use super::contact::LINEAR_SLOP;
 use super::contact_solver::{PairConstraint, PointConstraint};
 use super::soft::StepContext;
 use crate::lanes::{Quatx4, Vec3x4, f4};
@@ -218,12 +217,11 @@ impl Bundle {
         } else {
             (zero, zero, one, zero)
         };
-        let slop = f32x4::splat(LINEAR_SLOP);
         for p in &mut self.points[..self.slots] {
             // Speculative (the gap may close this substep, no further) or soft.
             let sep = p.separation;
             let speculative = sep.simd_gt(zero);
-            let soft_bias = (bias_rate * (sep + slop).fast_min(zero)).fast_max(push_out);
+            let soft_bias = (bias_rate * sep).fast_max(push_out);
             let bias = speculative.select(sep * inv_h, soft_bias);
             let mass_scale = speculative.select(one, soft_mass);
             let impulse_scale = speculative.select(zero, soft_impulse);
