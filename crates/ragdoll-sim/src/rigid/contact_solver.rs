@@ -1,5 +1,5 @@
 //! The contact solve of one step over dense constraint arrays (Box2D v3's
-//! `contact_solver.c`, in 3D, scalar).
+//! `contact_solver.c`, in 3D).
 //!
 //! [`super::contact`] keeps what must survive between steps — parry's manifold and, per
 //! point, its body-space anchors and accumulated impulses. At the start of a step's
@@ -11,7 +11,7 @@
 //!   step, as Box2D fixes them), and the effective masses `1 / (J M⁻¹ Jᵀ)`;
 //! - per substep ([`ContactConstraints::prepare_substep`], after the world inverse
 //!   inertias were refreshed): `I⁻¹ (r × d)` for each row and the separation the biased
-//!   iterations share.
+//!   iterations share (in the rows of [`super::contact_rows`]).
 //!
 //! An iteration then reads a row's velocity as `d·(v_b − v_a) + (r_b × d)·ω_b −
 //! (r_a × d)·ω_a` and applies an impulse λ as `v ± d λ/m`, `ω ± I⁻¹(r × d) λ`: dot
@@ -21,16 +21,19 @@
 //! between steps; [`ContactConstraints::store_impulses`] writes the impulses back to
 //! the pairs for the next step's warm start.
 //!
-//! Most pairs are solved four at a time by [`super::contact_wide`] (graph colouring,
-//! SIMD lanes); the rest one by one here, first, in the pairs' order, each pair's points
-//! in order.
+//! The rows themselves are [`super::contact_rows`], written once over the lane type:
+//! most pairs are solved four at a time (graph colouring, SIMD lanes), the rest one by
+//! one, first, in the pairs' order, each pair's points in order. The restitution pass
+//! and the position projection run here, over all pairs in order.
 
 use super::body::BodyStates;
 use super::contact::{ContactPair, LINEAR_SLOP};
-use super::contact_wide::{self, Bundle, LANES, SLOTS};
+use super::contact_rows::{self, ContactLanes, SLOTS};
 use super::project::{CONTACT_CORRECTION, MAX_LINEAR_CORRECTION, POSITION_ITERATIONS};
 use super::soft::StepContext;
-use glam::{Mat3, Vec3, Vec3A};
+use crate::lanes::LANES;
+use glam::{Vec3, Vec3A};
+use wide::f32x4;
 
 /// What bounds the contact projection's push-out in one step (see
 /// [`ContactConstraints::project`]).
@@ -71,8 +74,12 @@ pub(super) struct PairConstraint {
     pub(super) rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
     pub(super) rolling_impulse: Vec3,
-    /// `(I_a⁻¹ + I_b⁻¹)⁻¹` of the substep; `None` when singular (both bodies static).
-    pub(super) rolling_mass: Option<Mat3>,
+    /// The face row's Jacobian (see [`super::contact_rows`]): the mean of the points'
+    /// `r_a × n` and `r_b × n`, which is `r̄ × n` at the points' centroid r̄.
+    pub(super) ja_c: Vec3,
+    pub(super) jb_c: Vec3,
+    /// `J̄ M⁻¹ J̄ᵀ` of the face row, with the inertia at the start of the step.
+    pub(super) face_k: f32,
 }
 
 /// One contact point's rows: non-penetration along the normal, friction along the two
@@ -87,22 +94,12 @@ pub(super) struct PointConstraint {
     pub(super) base_separation: f32,
     /// Separation when the step's constraints were built (negative: overlap).
     pub(super) start_separation: f32,
-    /// Separation at the start of the substep's biased iterations: set only for the
-    /// pairs solved one by one (a bundle forms its own in its lanes).
-    pub(super) separation: f32,
     /// `r_a × n`, `r_b × n`.
     pub(super) ja_n: Vec3,
     pub(super) jb_n: Vec3,
     /// `r_a × t_k`, `r_b × t_k`.
     pub(super) ja_t: [Vec3; 2],
     pub(super) jb_t: [Vec3; 2],
-    /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia: set only for the
-    /// pairs solved one by one (a bundle forms its own in its lanes).
-    pub(super) ia_n: Vec3,
-    pub(super) ib_n: Vec3,
-    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`, likewise.
-    pub(super) ia_t: [Vec3; 2],
-    pub(super) ib_t: [Vec3; 2],
     /// `1 / (n·K·n)`, with the inertia at the start of the step.
     pub(super) normal_mass: f32,
     /// Effective masses of the two tangent rows.
@@ -134,10 +131,10 @@ fn inverse_or_zero(x: f32) -> f32 {
 pub struct ContactConstraints {
     pairs: Vec<PairConstraint>,
     points: Vec<PointConstraint>,
-    /// The pairs solved one by one, first, in array order (see [`super::contact_wide`]).
-    single: Vec<u32>,
+    /// The pairs solved one by one, first, in array order (see [`super::contact_rows`]).
+    single: ContactLanes<f32>,
     /// The other pairs, four at a time, colour by colour.
-    bundles: Vec<Bundle>,
+    bundles: ContactLanes<f32x4>,
 }
 
 impl ContactConstraints {
@@ -178,10 +175,13 @@ impl ContactConstraints {
             let mass =
                 |ja: Vec3, jb: Vec3| inverse_or_zero(ma + mb + ja.dot(ia * ja) + jb.dot(ib * jb));
             let start = out.points.len();
+            let (mut ja_c, mut jb_c) = (Vec3::ZERO, Vec3::ZERO);
             for (c, separation) in pair.contact_points() {
                 let ra = s.rot[a] * c.local_a;
                 let rb = s.rot[b] * c.local_b;
                 let (ja_n, jb_n) = (ra.cross(normal), rb.cross(normal));
+                ja_c += ja_n;
+                jb_c += jb_n;
                 let ja_t = tangents.map(|t| ra.cross(t));
                 let jb_t = tangents.map(|t| rb.cross(t));
                 out.points.push(PointConstraint {
@@ -189,7 +189,6 @@ impl ContactConstraints {
                     local_b: c.local_b,
                     base_separation: separation - normal.dot((s.com[b] + rb) - (s.com[a] + ra)),
                     start_separation: separation,
-                    separation,
                     ja_n,
                     jb_n,
                     ja_t,
@@ -211,6 +210,7 @@ impl ContactConstraints {
                     ..Default::default()
                 });
             }
+            let (ja_c, jb_c) = (ja_c / points.max(1.0), jb_c / points.max(1.0));
             out.pairs.push(PairConstraint {
                 a,
                 b,
@@ -225,19 +225,22 @@ impl ContactConstraints {
                 restitution: pair.restitution,
                 rolling_arm: pair.rolling_arm,
                 rolling_impulse: pair.rolling_impulse,
-                rolling_mass: None,
+                ja_c,
+                jb_c,
+                face_k: ma + mb + ja_c.dot(ia * ja_c) + jb_c.dot(ib * jb_c),
             });
         }
         out.bundle(s.len());
         out
     }
 
-    /// Colours the pairs and loads the bundles (see [`super::contact_wide`]). Rolling
-    /// pairs (their resistance is a row of the whole pair) and pairs with more points
-    /// than a bundle has room for are solved one by one.
+    /// Colours the pairs and loads the groups of four and the pairs solved one by one
+    /// (see [`super::contact_rows`]). Rolling pairs (their resistance is a row of the
+    /// whole pair) and pairs with more points than a group has room for are solved one
+    /// by one.
     fn bundle(&mut self, bodies: usize) {
         let moving = |i: usize, inv_mass: f32| (inv_mass > 0.0).then_some(i);
-        let (colors, single) = contact_wide::color(
+        let (colors, single) = contact_rows::color(
             bodies,
             self.pairs.iter().map(|p| {
                 (
@@ -247,15 +250,15 @@ impl ContactConstraints {
                 )
             }),
         );
-        self.single = single;
-        self.bundles
-            .reserve_exact(colors.iter().map(|c| c.len().div_ceil(LANES)).sum());
+        for &i in &single {
+            let i = i as usize;
+            self.single.load(&[i], &[&self.pairs[i]], &self.points);
+        }
         for color in &colors {
             for chunk in color.chunks(LANES) {
-                let lanes: [&PairConstraint; LANES] =
-                    std::array::from_fn(|k| &self.pairs[chunk[k.min(chunk.len() - 1)] as usize]);
-                self.bundles
-                    .push(Bundle::load(&lanes[..chunk.len()], &self.points));
+                let index: Vec<usize> = chunk.iter().map(|&i| i as usize).collect();
+                let lanes: Vec<&PairConstraint> = index.iter().map(|&i| &self.pairs[i]).collect();
+                self.bundles.load(&index, &lanes, &self.points);
             }
         }
     }
@@ -263,7 +266,10 @@ impl ContactConstraints {
     /// Writes the accumulated impulses back to the pairs the constraints were built from,
     /// for the next step's warm start (the friction impulse as a world vector).
     pub fn store_impulses(&self, pairs: &mut [ContactPair]) {
-        debug_assert!(self.bundles.is_empty(), "end_substeps not called");
+        debug_assert!(
+            self.single.is_empty() && self.bundles.is_empty(),
+            "end_substeps not called"
+        );
         for pc in &self.pairs {
             let pair = &mut pairs[pc.slot];
             pair.rolling_impulse = pc.rolling_impulse;
@@ -278,171 +284,38 @@ impl ContactConstraints {
 
     /// Per substep, once the world inverse inertias are refreshed: each row's
     /// `I⁻¹ (r × d)`, the rolling mass, and the separation the biased iterations share
-    /// (between the velocity and the position integration the bodies do not move). The
-    /// bundled pairs' `I⁻¹ (r × d)` and separations are formed in their lanes
-    /// (`Bundle::refresh`), so here only for the pairs solved one by one.
+    /// (between the velocity and the position integration the bodies do not move).
     pub fn prepare_substep(&mut self, s: &BodyStates) {
-        self.separate_singles(s);
-        for &i in &self.single {
-            let pc = &mut self.pairs[i as usize];
-            let (ia, ib) = (s.inv_inertia[pc.a], s.inv_inertia[pc.b]);
-            for p in &mut self.points[pc.start..pc.start + pc.count] {
-                p.ia_n = ia * p.ja_n;
-                p.ib_n = ib * p.jb_n;
-                p.ia_t = p.ja_t.map(|j| ia * j);
-                p.ib_t = p.jb_t.map(|j| ib * j);
-            }
-            if pc.rolling_arm > 0.0 {
-                let k = ia + ib;
-                pc.rolling_mass = (k.determinant().abs() > 1e-20).then(|| Mat3::from(k.inverse()));
-            }
-        }
-        for bundle in &mut self.bundles {
-            bundle.refresh(s, true);
-        }
+        self.single.refresh(s, true);
+        self.bundles.refresh(s, true);
     }
 
-    /// The separations now of the points of the pairs solved one by one (a bundle forms
-    /// its own: `Bundle::refresh`).
-    fn separate_singles(&mut self, s: &BodyStates) {
-        for &i in &self.single {
-            let pc = &self.pairs[i as usize];
-            for p in &mut self.points[pc.start..pc.start + pc.count] {
-                p.separation = current_separation(pc, p, s);
-            }
-        }
-    }
-
-    /// After the substeps: the bundles hand their impulses back to the points, which the
+    /// After the substeps: the groups hand their impulses back to the points, which the
     /// restitution pass, the projection and [`ContactConstraints::store_impulses`] read.
     pub fn end_substeps(&mut self) {
-        // By reference: draining moved each bundle (2.5 KB) out before writing it back.
-        for bundle in &self.bundles {
-            bundle.write_back(&mut self.points);
-        }
-        self.bundles.clear();
+        self.single.write_back(&mut self.points, &mut self.pairs);
+        self.bundles.write_back(&mut self.points, &mut self.pairs);
     }
 
     /// Re-applies the accumulated impulses (last substep's, or last step's carried over).
     pub fn warm_start(&self, s: &mut BodyStates) {
-        for pc in self.single.iter().map(|&i| &self.pairs[i as usize]) {
-            let (a, b) = (pc.a, pc.b);
-            let (mut va, mut wa) = (Vec3::from(s.lin_vel[a]), Vec3::from(s.ang_vel[a]));
-            let (mut vb, mut wb) = (Vec3::from(s.lin_vel[b]), Vec3::from(s.ang_vel[b]));
-            let [t0, t1] = pc.tangents;
-            for p in &self.points[pc.start..pc.start + pc.count] {
-                let [l0, l1] = p.tangent_impulse;
-                let linear = pc.normal * p.normal_impulse + t0 * l0 + t1 * l1;
-                va -= linear * pc.inv_mass_a;
-                vb += linear * pc.inv_mass_b;
-                wa -= p.ia_n * p.normal_impulse + p.ia_t[0] * l0 + p.ia_t[1] * l1;
-                wb += p.ib_n * p.normal_impulse + p.ib_t[0] * l0 + p.ib_t[1] * l1;
-            }
-            wa -= s.inv_inertia[a] * pc.rolling_impulse;
-            wb += s.inv_inertia[b] * pc.rolling_impulse;
-            s.lin_vel[a] = Vec3A::from(va);
-            s.ang_vel[a] = Vec3A::from(wa);
-            s.lin_vel[b] = Vec3A::from(vb);
-            s.ang_vel[b] = Vec3A::from(wb);
-        }
-        for bundle in &self.bundles {
-            bundle.warm_start(s);
-        }
+        self.single.warm_start(s);
+        self.bundles.warm_start(s);
     }
 
-    /// One Gauss–Seidel pass: soft non-penetration, then friction capped by the normal
-    /// impulse just computed (Box2D v3's order; friction first would cap it with a
-    /// normal impulse the relax pass is about to raise, and slide too easily). The biased
-    /// pass reads the separations of [`ContactConstraints::prepare_substep`]; the relax
-    /// pass, after the positions moved, evaluates them anew first.
+    /// One Gauss–Seidel pass over the pairs solved one by one, then the groups of four
+    /// ([`ContactLanes::solve`]). The biased pass reads the separations of
+    /// [`ContactConstraints::prepare_substep`]; the relax pass, after the positions
+    /// moved, evaluates them anew first.
     pub fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         if !use_bias {
             // The relax pass comes after the positions moved. The velocity solve does not
             // move them, so every point's separation is evaluated once, up front.
-            self.separate_singles(s);
-            for bundle in &mut self.bundles {
-                bundle.refresh(s, false);
-            }
+            self.single.refresh(s, false);
+            self.bundles.refresh(s, false);
         }
-        for &i in &self.single {
-            let pc = &mut self.pairs[i as usize];
-            let (a, b) = (pc.a, pc.b);
-            let (mut va, mut wa) = (Vec3::from(s.lin_vel[a]), Vec3::from(s.ang_vel[a]));
-            let (mut vb, mut wb) = (Vec3::from(s.lin_vel[b]), Vec3::from(s.ang_vel[b]));
-            let (ma, mb) = (pc.inv_mass_a, pc.inv_mass_b);
-            let n = pc.normal;
-            let [t0, t1] = pc.tangents;
-            let mut total_normal = 0.0;
-            for k in pc.start..pc.start + pc.count {
-                let p = &mut self.points[k];
-                let sep = p.separation;
-                let (bias, mass_scale, impulse_scale) = if sep > 0.0 {
-                    // Speculative: the gap may close this substep, no further.
-                    (sep * ctx.inv_h, 1.0, 0.0)
-                } else if use_bias {
-                    let c = (sep + LINEAR_SLOP).min(0.0);
-                    (
-                        (ctx.contact.bias_rate * c).max(-ctx.max_push_out),
-                        ctx.contact.mass_scale,
-                        ctx.contact.impulse_scale,
-                    )
-                } else {
-                    (0.0, 1.0, 0.0)
-                };
-                // Non-penetration.
-                let vn = row_velocity(n, vb - va, p.ja_n, p.jb_n, wa, wb);
-                let l =
-                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
-                let new = (p.normal_impulse + l).max(0.0);
-                let d = new - p.normal_impulse;
-                p.normal_impulse = new;
-                p.max_normal_impulse = p.max_normal_impulse.max(new);
-                total_normal += new;
-                va -= n * (d * ma);
-                vb += n * (d * mb);
-                wa -= p.ia_n * d;
-                wb += p.ib_n * d;
-
-                // Coulomb friction: both tangent rows from the same velocity, the
-                // impulse clamped to the disk of radius μλₙ.
-                let dv = vb - va;
-                let v0 = row_velocity(t0, dv, p.ja_t[0], p.jb_t[0], wa, wb);
-                let v1 = row_velocity(t1, dv, p.ja_t[1], p.jb_t[1], wa, wb);
-                let [o0, o1] = p.tangent_impulse;
-                let (mut n0, mut n1) = (o0 - p.tangent_mass[0] * v0, o1 - p.tangent_mass[1] * v1);
-                let cap = pc.friction * p.normal_impulse;
-                let len2 = n0 * n0 + n1 * n1;
-                if len2 > cap * cap {
-                    let scale = cap / len2.sqrt();
-                    n0 *= scale;
-                    n1 *= scale;
-                }
-                p.tangent_impulse = [n0, n1];
-                let (d0, d1) = (n0 - o0, n1 - o1);
-                let linear = t0 * d0 + t1 * d1;
-                va -= linear * ma;
-                vb += linear * mb;
-                wa -= p.ia_t[0] * d0 + p.ia_t[1] * d1;
-                wb += p.ib_t[0] * d0 + p.ib_t[1] * d1;
-            }
-            // Rolling resistance: drive the relative angular velocity to zero with at most
-            // ρ r Σλₙ of angular impulse (Box2D v3's rolling resistance, in 3D).
-            if let (true, Some(mass)) = (pc.rolling_arm > 0.0, pc.rolling_mass) {
-                let cap = pc.rolling_arm * total_normal;
-                let old = pc.rolling_impulse;
-                let new = (old - mass * (wb - wa)).clamp_length_max(cap);
-                pc.rolling_impulse = new;
-                wa -= s.inv_inertia[a] * (new - old);
-                wb += s.inv_inertia[b] * (new - old);
-            }
-            s.lin_vel[a] = Vec3A::from(va);
-            s.ang_vel[a] = Vec3A::from(wa);
-            s.lin_vel[b] = Vec3A::from(vb);
-            s.ang_vel[b] = Vec3A::from(wb);
-        }
-        for bundle in &mut self.bundles {
-            bundle.solve(s, ctx, use_bias);
-        }
+        self.single.solve(s, ctx, use_bias);
+        self.bundles.solve(s, ctx, use_bias);
     }
 
     /// Box2D's restitution pass, after the substeps: points that were approaching faster
@@ -507,8 +380,7 @@ impl ContactConstraints {
             let n = pc.normal;
             for p in &self.points[pc.start..pc.start + pc.count] {
                 let sep = current_separation(pc, p, s);
-                let pushed = (-push.bias_rate * (p.start_separation + LINEAR_SLOP))
-                    .clamp(0.0, push.max_speed);
+                let pushed = (-push.bias_rate * p.start_separation).clamp(0.0, push.max_speed);
                 let room = ((push.max_speed - pushed) * per_iteration).min(MAX_LINEAR_CORRECTION);
                 let c = (CONTACT_CORRECTION * (sep + LINEAR_SLOP)).clamp(-room, 0.0);
                 if c == 0.0 {

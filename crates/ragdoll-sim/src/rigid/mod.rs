@@ -9,8 +9,9 @@
 //!   joint type; `joint_set`: the arrays of them; `joint_tree`: the point rows of a
 //!   tree of joints across a large mass ratio, solved exactly (Baraff 1996).
 //! - `contact`: collision detection (with [`crate::broadphase`]) and the contact
-//!   cache; `contact_solver`: the contact rows of one step, over dense arrays;
-//!   `contact_wide`: the same rows four pairs at a time (graph colouring, SIMD).
+//!   cache; `contact_solver`: the contact constraints of one step, over dense arrays;
+//!   `contact_rows`: the rows, written once for one pair and four at a time (graph
+//!   colouring, SIMD lanes).
 //! - `impulse`: what acts on bodies from outside (an impulse, a new pose) and the
 //!   wake it brings.
 //! - `kinematic`: bodies moved by the game along a path, infinite mass to the solver.
@@ -24,8 +25,8 @@
 mod ball;
 mod body;
 mod contact;
+mod contact_rows;
 mod contact_solver;
-mod contact_wide;
 mod fixed;
 mod hinge;
 mod impulse;
