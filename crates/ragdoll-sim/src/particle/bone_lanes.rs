@@ -11,7 +11,7 @@
 //! threads, and a joint solved alone gets the bits it gets in a group.
 
 use super::bone::{Aim, Bone, Side};
-use crate::lanes::{Q, Real, V3};
+use crate::lanes::{LANES, Q, Real, V3};
 use glam::{Quat, Vec3};
 
 /// A lane mask with every lane where `f(k)` holds.
@@ -57,18 +57,34 @@ impl<R: Real> SideLanes<R> {
     /// The bones `sides` (the world for `None`), one per lane: `sides[k]` for lane `k <
     /// R::WIDTH`.
     pub fn gather(bones: &[Bone], sides: &[Side]) -> SideLanes<R> {
-        let bone = |k: usize| sides[k].map(|i| &bones[i]);
-        let moving = |k: usize| bone(k).filter(|b| !b.is_static());
+        // One pass over the bones into arrays, then each field into lanes.
+        let mut com = [Vec3::ZERO; LANES];
+        let mut dcom = [Vec3::ZERO; LANES];
+        let mut rot = [Quat::IDENTITY; LANES];
+        let mut dturn = [Quat::IDENTITY; LANES];
+        let mut inv_mass = [0.0; LANES];
+        let mut inv_inertia = [Vec3::ZERO; LANES];
+        let mut moving = [false; LANES];
+        for (k, s) in sides.iter().enumerate().take(R::WIDTH) {
+            let Some(i) = *s else { continue };
+            let b = &bones[i];
+            (com[k], dcom[k]) = (b.com.into(), b.dcom.into());
+            rot[k] = b.rot;
+            dturn[k] = b.dturn;
+            if !b.is_static() {
+                inv_mass[k] = 1.0 / b.mass;
+                inv_inertia[k] = b.inv_inertia_local.into();
+                moving[k] = true;
+            }
+        }
         SideLanes {
-            com: V3::from_fn(|k| bone(k).map_or(Vec3::ZERO, |b| b.com.into())),
-            dcom: V3::from_fn(|k| bone(k).map_or(Vec3::ZERO, |b| b.dcom.into())),
-            rot: Q::from_fn(|k| bone(k).map_or(Quat::IDENTITY, |b| b.rot)),
-            dturn: Q::from_fn(|k| bone(k).map_or(Quat::IDENTITY, |b| b.dturn)),
-            inv_mass: R::from_fn(|k| moving(k).map_or(0.0, |b| 1.0 / b.mass)),
-            inv_inertia: V3::from_fn(|k| {
-                moving(k).map_or(Vec3::ZERO, |b| b.inv_inertia_local.into())
-            }),
-            moving: mask::<R>(|k| moving(k).is_some()),
+            com: V3::from_fn(|k| com[k]),
+            dcom: V3::from_fn(|k| dcom[k]),
+            rot: Q::from_fn(|k| rot[k]),
+            dturn: Q::from_fn(|k| dturn[k]),
+            inv_mass: R::from_fn(|k| inv_mass[k]),
+            inv_inertia: V3::from_fn(|k| inv_inertia[k]),
+            moving: mask::<R>(|k| moving[k]),
         }
     }
 
