@@ -83,7 +83,7 @@ pub(crate) struct AngleLimit {
 }
 
 /// How far inside its range (rad, on the half-angle) a limit's angle must be for
-/// [`AngleLimit::solve`] to pass it by without measuring it: far beyond the rounding of
+/// [`RangeLanes::solve`] (and a cone for [`ConeLanes::solve`]) to pass it by without measuring it: far beyond the rounding of
 /// `tan`, `atan2` and the products (~1e-7 rad), so the quick test never says inside
 /// when the measured angle is not.
 const INSIDE_MARGIN: f32 = 1e-4;
