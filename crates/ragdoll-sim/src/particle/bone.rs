@@ -16,7 +16,7 @@
 //! ([`Bone::advance`]).
 
 use crate::scene::{BodyCollider, Pose};
-use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
+use glam::{Mat3, Quat, Vec3, Vec3A};
 
 /// The six edges of a tetrahedron, as pairs of corner indices.
 pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
@@ -509,7 +509,7 @@ pub(crate) fn positional_along(
     lambda
 }
 
-/// Which frame a point correction ([`point`]) takes its arms from.
+/// Which frame a joint's point correction (`bone_lanes::point`) takes its arms from.
 ///
 /// A projection at the substep's end — arms from the frame now, as position-based
 /// dynamics projects — turns part of every correction across the motion: gravity
@@ -542,82 +542,6 @@ impl Aim {
             Aim::End
         }
     }
-}
-
-/// A shared point held exactly: moves point `local_a` of side `a` (its bone frame) and
-/// `local_b` of side `b` so that `pa − pb` changes by `delta`, in one 3×3 solve.
-///
-/// With the arms `r` that `aim` takes, the impulse `Δλ = K⁻¹ delta`, `K = Σ (1/M −
-/// [r]× I⁻¹ [r]×)` over the moving sides, moves each centre by `±Δλ / M` and turns each
-/// frame by `±I⁻¹ (r × Δλ)`. One solve closes the gap to first order in every
-/// direction at once; a correction along the gap alone (a scalar projection) leaves
-/// the directions it couples to for the next pass.
-pub(crate) fn point(
-    bones: &mut [Bone],
-    (a, local_a): (Side, Vec3),
-    (b, local_b): (Side, Vec3),
-    delta: Vec3A,
-    aim: Aim,
-) {
-    if delta.length_squared() < 1e-18 {
-        return;
-    }
-    let side = |s: Side, local: Vec3| {
-        let i = s.filter(|&i| !bones[i].is_static())?;
-        let bone = &bones[i];
-        let arm = match aim {
-            Aim::Start => bone.dturn.inverse() * Vec3A::from(local),
-            Aim::End => Vec3A::from(local),
-        };
-        let d = Mat3A::from_diagonal(Vec3::from(bone.inv_inertia_local));
-        let skew = skew(arm);
-        let k = Mat3A::from_diagonal(Vec3::splat(bone.inv_mass())) - skew * d * skew;
-        let r = Mat3A::from_quat(bone.rot);
-        Some((i, arm, r * k * r.transpose()))
-    };
-    let (sa, sb) = (side(a, local_a), side(b, local_b));
-    let k = sa.map_or(Mat3A::ZERO, |s| s.2) + sb.map_or(Mat3A::ZERO, |s| s.2);
-    let det = k.determinant();
-    if det.is_nan() || det.abs() <= 1e-30 {
-        return;
-    }
-    let impulse = k.inverse() * delta;
-    for (s, sign) in [(sa, 1.0f32), (sb, -1.0)] {
-        if let Some((i, arm, _)) = s {
-            let b = &mut bones[i];
-            let p = impulse * sign;
-            let turn = b.inv_inertia_local * arm.cross(b.rot.inverse() * p);
-            b.dcom += p * b.inv_mass();
-            b.rot = rotate_local(b.rot, turn);
-            b.dturn = rotate_local(b.dturn, turn);
-        }
-    }
-}
-
-/// The cross-product matrix, `skew(a) b = a × b`.
-fn skew(a: Vec3A) -> Mat3A {
-    Mat3A::from_cols(
-        Vec3A::new(0.0, a.z, -a.y),
-        Vec3A::new(-a.z, 0.0, a.x),
-        Vec3A::new(a.y, -a.x, 0.0),
-    )
-}
-
-/// XPBD angular constraint: rotates side `a` relative to `b` by the rotation vector
-/// `dphi` (split by generalised inverse inertia). As in [`positional`], the turn is
-/// `μ = φ² / (W + α̃ φ²)` about `dphi` itself, `W = φ² w` the inverse inertia about it
-/// unnormalised, rather than `φ / (w + α̃)` about `dphi / φ`.
-pub(crate) fn angular(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3A, alpha_tilde: f32) {
-    let angle2 = dphi.length_squared();
-    if angle2 < 1e-18 {
-        return;
-    }
-    let corr = Correction::turning(bones, a, b, dphi);
-    let den = corr.w + alpha_tilde * angle2;
-    if den <= 0.0 {
-        return;
-    }
-    corr.apply(bones, angle2 / den);
 }
 
 /// Orientation of a side (identity for the world).

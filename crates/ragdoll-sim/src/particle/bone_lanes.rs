@@ -1,30 +1,37 @@
-//! Bones in SIMD lanes: four constraints' bones on one side, one to a lane, and the
-//! XPBD corrections of `bone.rs` (`Lever`, `Correction`, `point`, `angular`) four
-//! at a time. The joint pass (`joint_lanes`) solves four figures' joints side by side
-//! with these.
+//! Bones in lanes: each constraint's bone on one side, one to a lane of a [`Real`]
+//! (`f32`: one constraint; `f32x4`: four side by side), and the XPBD corrections of the
+//! joints written once over it: the 3×3 point solve ([`point`]) and the turn
+//! ([`angular`]). The joint pass (`joint_lanes`) solves four figures' joints side by
+//! side with these; a joint solved alone ([`super::joints::Joint::solve_between`]) runs
+//! the same code with `R = f32` ([`on_pair`]).
 //!
 //! Every operation is lane by lane (`crate::lanes`), so a constraint's correction is the
-//! same bits whichever constraints share its instruction: the batches of islands, which
-//! group constraints differently, give the serial result on any number of threads.
+//! same bits whichever constraints share its instruction, or none: the batches of
+//! islands, which group constraints differently, give the serial result on any number of
+//! threads, and a joint solved alone gets the bits it gets in a group.
 
 use super::bone::{Aim, Bone, Side};
-use crate::lanes::{LANES, Quatx4, Vec3x4, f4};
+use crate::lanes::{LANES, Q, Real, V3};
 use glam::{Quat, Vec3};
-use wide::f32x4;
 
 /// A lane mask with every lane where `f(k)` holds.
-pub(super) fn mask(f: impl Fn(usize) -> bool) -> f32x4 {
-    f4(|k| if f(k) { f32::from_bits(u32::MAX) } else { 0.0 })
+pub(super) fn mask<R: Real>(f: impl Fn(usize) -> bool) -> R::Mask {
+    R::from_fn(|k| if f(k) { 1.0 } else { 0.0 }).gt(R::ZERO)
+}
+
+/// Whether `m` holds in lane `k`.
+#[inline]
+pub(super) fn holds<R: Real>(m: R::Mask, k: usize) -> bool {
+    R::select(m, R::ONE, R::ZERO).lane(k) != 0.0
 }
 
 /// `f` of each lane of `x` set in `mask`, else 0: the scalar functions (`acos`, `atan2`,
 /// `asin`) of the few lanes near a limit.
-pub(super) fn per_lane(mask: f32x4, x: f32x4, f: impl Fn(usize, f32) -> f32) -> f32x4 {
-    let bits = mask.to_bitmask();
-    let x = x.to_array();
-    f4(|k| {
-        if bits & (1 << k) != 0 {
-            f(k, x[k])
+pub(super) fn per_lane<R: Real>(m: R::Mask, x: R, f: impl Fn(usize, f32) -> f32) -> R {
+    let on = R::select(m, R::ONE, R::ZERO);
+    R::from_fn(|k| {
+        if on.lane(k) != 0.0 {
+            f(k, x.lane(k))
         } else {
             0.0
         }
@@ -33,22 +40,24 @@ pub(super) fn per_lane(mask: f32x4, x: f32x4, f: impl Fn(usize, f32) -> f32) -> 
 
 /// Each lane's bone on one side of its constraint (the world, and an empty lane, as a
 /// bone that never moves): what the corrections read and write of it.
-pub(super) struct SideLanes {
-    com: Vec3x4,
-    dcom: Vec3x4,
+pub(super) struct SideLanes<R: Real> {
+    com: V3<R>,
+    dcom: V3<R>,
     /// The frame now.
-    pub rot: Quatx4,
+    pub rot: Q<R>,
     /// The turn since the substep's start (`Bone::dturn`).
-    dturn: Quatx4,
-    inv_mass: f32x4,
-    inv_inertia: Vec3x4,
+    dturn: Q<R>,
+    inv_mass: R,
+    inv_inertia: V3<R>,
     /// Lanes whose bone takes corrections.
-    moving: f32x4,
+    moving: R::Mask,
 }
 
-impl SideLanes {
-    /// The bones `sides` (the world for `None`), one per lane.
-    pub fn gather(bones: &[Bone], sides: &[Side; LANES]) -> SideLanes {
+impl<R: Real> SideLanes<R> {
+    /// The bones `sides` (the world for `None`), one per lane: `sides[k]` for lane `k <
+    /// R::WIDTH`.
+    pub fn gather(bones: &[Bone], sides: &[Side]) -> SideLanes<R> {
+        // One pass over the bones into arrays, then each field into lanes.
         let mut com = [Vec3::ZERO; LANES];
         let mut dcom = [Vec3::ZERO; LANES];
         let mut rot = [Quat::IDENTITY; LANES];
@@ -56,7 +65,7 @@ impl SideLanes {
         let mut inv_mass = [0.0; LANES];
         let mut inv_inertia = [Vec3::ZERO; LANES];
         let mut moving = [false; LANES];
-        for (k, s) in sides.iter().enumerate() {
+        for (k, s) in sides.iter().enumerate().take(R::WIDTH) {
             let Some(i) = *s else { continue };
             let b = &bones[i];
             (com[k], dcom[k]) = (b.com.into(), b.dcom.into());
@@ -69,22 +78,21 @@ impl SideLanes {
             }
         }
         SideLanes {
-            com: Vec3x4::from_fn(|k| com[k]),
-            dcom: Vec3x4::from_fn(|k| dcom[k]),
-            rot: Quatx4::from_fn(|k| rot[k]),
-            dturn: Quatx4::from_fn(|k| dturn[k]),
-            inv_mass: f32x4::new(inv_mass),
-            inv_inertia: Vec3x4::from_fn(|k| inv_inertia[k]),
-            moving: mask(|k| moving[k]),
+            com: V3::from_fn(|k| com[k]),
+            dcom: V3::from_fn(|k| dcom[k]),
+            rot: Q::from_fn(|k| rot[k]),
+            dturn: Q::from_fn(|k| dturn[k]),
+            inv_mass: R::from_fn(|k| inv_mass[k]),
+            inv_inertia: V3::from_fn(|k| inv_inertia[k]),
+            moving: mask::<R>(|k| moving[k]),
         }
     }
 
     /// Writes the moving lanes' frames back to their bones.
-    pub fn scatter(&self, bones: &mut [Bone], sides: &[Side; LANES]) {
-        let moving = self.moving.to_bitmask();
-        for (k, s) in sides.iter().enumerate() {
+    pub fn scatter(&self, bones: &mut [Bone], sides: &[Side]) {
+        for (k, s) in sides.iter().enumerate().take(R::WIDTH) {
             if let Some(i) = *s
-                && moving & (1 << k) != 0
+                && holds::<R>(self.moving, k)
             {
                 let b = &mut bones[i];
                 b.dcom = self.dcom.lane(k).into();
@@ -95,30 +103,29 @@ impl SideLanes {
     }
 
     /// World position of a point given in the bone frame, `com + (dcom + R p)`.
-    pub fn world(&self, local: Vec3x4) -> Vec3x4 {
+    pub fn world(&self, local: V3<R>) -> V3<R> {
         self.com + (self.dcom + self.rot.rotate(local))
     }
 
-    /// The lever of a correction whose angular part is `axis` (`(p − c) × n`, or `n`
-    /// for a pure turn): `I⁻¹ (R⁻¹ axis)` in the bone frame and the generalised inverse
-    /// mass `linear + local · turn` (`bone::Lever::of`); zero for a bone that takes no
-    /// correction.
-    fn lever(&self, axis: Vec3x4, linear: f32x4) -> (Vec3x4, f32x4) {
+    /// The lever of a turn about `axis`: `I⁻¹ (R⁻¹ axis)` in the bone frame and the
+    /// inverse inertia about `axis`, `local · turn` (times `|axis|²`); zero for a bone
+    /// that takes no correction.
+    fn lever(&self, axis: V3<R>) -> (V3<R>, R) {
         let local = self.rot.inverse_rotate(axis);
         let turn = self.inv_inertia.mul_elem(local);
-        (turn, linear + local.dot(turn))
+        (turn, local.dot(turn))
     }
 
-    /// A point constraint's side (`point`): the point's arm in the bone frame, from
-    /// the frame at the substep's start (`d⁻¹ p`) or now (`p`), and its `K` in the world, `1/M − [r₀]× I⁻¹ [r₀]×`, as
-    /// `xx, yy, zz, xy, xz, yz`.
-    fn point_block(&self, local: Vec3x4, aim: Aim) -> (Vec3x4, [f32x4; 6]) {
+    /// A point constraint's side ([`point`]): the point's arm in the bone frame, from
+    /// the frame at the substep's start (`d⁻¹ p`) or now (`p`), and its `K` in the
+    /// world, `1/M − [r₀]× I⁻¹ [r₀]×`, as `xx, yy, zz, xy, xz, yz`.
+    fn point_block(&self, local: V3<R>, aim: Aim) -> (V3<R>, [R; 6]) {
         let arm = match aim {
             Aim::Start => self.dturn.inverse_rotate(local),
             Aim::End => local,
         };
-        let zero = f32x4::ZERO;
-        let col = |x, y, z| Vec3x4 { x, y, z };
+        let zero = R::ZERO;
+        let col = |x, y, z| V3 { x, y, z };
         let d = [self.inv_inertia.x, self.inv_inertia.y, self.inv_inertia.z];
         let u = [
             col(zero, -arm.z, arm.y),
@@ -142,81 +149,80 @@ impl SideLanes {
     /// Applies a point constraint's impulse `p` (world) at the arm `arm` (`point_block`)
     /// in the lanes of `mask`: the centre moves by `p / M`, the frame turns by
     /// `I⁻¹ (arm × R⁻¹ p)` (bone frame).
-    fn apply_point(&mut self, mask: f32x4, arm: Vec3x4, p: Vec3x4) {
+    fn apply_point(&mut self, mask: R::Mask, arm: V3<R>, p: V3<R>) {
         let turn = self
             .inv_inertia
             .mul_elem(arm.cross(self.rot.inverse_rotate(p)));
         self.apply(mask, Some(p), turn);
     }
 
-    /// Turns the lanes in `mask` by `turn` (bone frame) and moves them by `shift`
-    /// times the inverse mass (world): `bone::Lever::apply`.
+    /// Turns the lanes in `mask` by `turn` (bone frame, `q + ½ q [turn, 0]` normalised:
+    /// `bone::rotate_local`) and moves them by `shift` times the inverse mass (world).
     #[inline]
-    fn apply(&mut self, mask: f32x4, shift: Option<Vec3x4>, turn: Vec3x4) {
+    fn apply(&mut self, mask: R::Mask, shift: Option<V3<R>>, turn: V3<R>) {
         let mask = mask & self.moving;
         if let Some(shift) = shift {
-            self.dcom = Vec3x4::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
+            self.dcom = V3::select(mask, self.dcom + shift * self.inv_mass, self.dcom);
         }
-        self.rot = Quatx4::select(mask, self.rot.rotate_local(turn), self.rot);
-        self.dturn = Quatx4::select(mask, self.dturn.rotate_local(turn), self.dturn);
+        self.rot = Q::select(mask, self.rot.rotate_local(turn), self.rot);
+        self.dturn = Q::select(mask, self.dturn.rotate_local(turn), self.dturn);
     }
 }
 
-/// `bone::Correction::turning` in lanes: a turn between two sides about a direction,
-/// its levers computed once.
-#[derive(Clone, Copy)]
-pub(super) struct Correction {
-    ta: Vec3x4,
-    tb: Vec3x4,
-    /// Generalised inverse inertia about it.
-    pub w: f32x4,
+/// Runs `rows` on the bones of sides `a` and `b` of `bones` gathered one to a lane of
+/// an `f32`, and writes them back: a joint solved alone, by the code the lanes run.
+pub(super) fn on_pair(
+    bones: &mut [Bone],
+    a: Side,
+    b: Side,
+    rows: impl FnOnce(&mut SideLanes<f32>, &mut SideLanes<f32>),
+) {
+    let mut sa = SideLanes::<f32>::gather(bones, &[a]);
+    let mut sb = SideLanes::<f32>::gather(bones, &[b]);
+    rows(&mut sa, &mut sb);
+    sa.scatter(bones, &[a]);
+    sb.scatter(bones, &[b]);
 }
 
-impl Correction {
-    /// `Correction::turning`: turning `a` about `n` and `b` against it.
-    pub fn turning(a: &SideLanes, b: &SideLanes, n: Vec3x4) -> Correction {
-        let (ta, wa) = a.lever(n, f32x4::ZERO);
-        let (tb, wb) = b.lever(n, f32x4::ZERO);
-        Correction { ta, tb, w: wa + wb }
-    }
-
-    /// Applies the multiplier `λ` in the lanes of `mask`: `a` turns by `n λ w`
-    /// relative to `b`.
-    #[inline]
-    pub fn apply(&self, a: &mut SideLanes, b: &mut SideLanes, lambda: f32x4, mask: f32x4) {
-        a.apply(mask, None, self.ta * lambda);
-        b.apply(mask, None, self.tb * -lambda);
-    }
+/// [`angular`] of a joint solved alone: turns side `a` of `bones` relative to `b` by
+/// the rotation vector `dphi` (world), compliance `α̃`.
+pub(super) fn angular_pair(bones: &mut [Bone], a: Side, b: Side, dphi: Vec3, alpha: f32) {
+    let dphi = V3::from_fn(|_| dphi);
+    on_pair(bones, a, b, |sa, sb| angular(sa, sb, dphi, alpha, true));
 }
 
-/// `bone::point` in lanes: moves point `local_a` of `a` and `local_b` of `b` (bone
-/// frames) so that `pa − pb` changes by `delta`, in one 3×3 solve against the arms
-/// `aim` takes, in the lanes of `mask`.
-pub(super) fn point(
-    (a, local_a): (&mut SideLanes, Vec3x4),
-    (b, local_b): (&mut SideLanes, Vec3x4),
-    delta: Vec3x4,
+/// Moves point `local_a` of `a` and `local_b` of `b` (bone frames) so that `pa − pb`
+/// changes by `delta`, in one 3×3 solve against the arms `aim` takes (`bone::Aim`), in
+/// the lanes of `mask`.
+///
+/// With the arms `r`, the impulse `Δλ = K⁻¹ delta`, `K = Σ (1/M − [r]× I⁻¹ [r]×)` over
+/// the moving sides, moves each centre by `±Δλ / M` and turns each frame by
+/// `±I⁻¹ (r × Δλ)`. One solve closes the gap to first order in every direction at
+/// once; a correction along the gap alone (a scalar projection) leaves the directions
+/// it couples to for the next pass.
+pub(super) fn point<R: Real>(
+    (a, local_a): (&mut SideLanes<R>, V3<R>),
+    (b, local_b): (&mut SideLanes<R>, V3<R>),
+    delta: V3<R>,
     aim: Aim,
-    mask: f32x4,
+    mask: R::Mask,
 ) {
     // `K = Σ (1/M + Σ_i I⁻¹_i u_i u_iᵀ)` with `u_i = R (e_i × r₀)`: `−[r₀]× I⁻¹ [r₀]×`
     // in the world, `r₀` the arm in the bone frame at the substep's start.
     let (arm_a, ka) = a.point_block(local_a, aim);
     let (arm_b, kb) = b.point_block(local_b, aim);
-    let k: [f32x4; 6] = std::array::from_fn(|i| ka[i] + kb[i]);
+    let k: [R; 6] = std::array::from_fn(|i| ka[i] + kb[i]);
     let [xx, yy, zz, xy, xz, yz] = k;
     // The adjugate of the symmetric `K`, and its determinant.
     let (axx, ayy, azz) = (yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy);
     let (axy, axz, ayz) = (xz * yz - xy * zz, xy * yz - xz * yy, xy * xz - xx * yz);
     let det = xx * axx + xy * axy + xz * axz;
-    let mask = mask
-        & delta.length_squared().simd_ge(f32x4::splat(1e-18))
-        & det.abs().simd_gt(f32x4::splat(1e-30));
-    if !mask.any() {
+    let mask = mask & delta.length_squared().ge(R::splat(1e-18)) & det.abs().gt(R::splat(1e-30));
+    if !R::any(mask) {
         return;
     }
-    let inv = f32x4::ONE / det;
-    let impulse = Vec3x4 {
+    let inv = R::ONE / det;
+    let impulse = V3 {
         x: (axx * delta.x + axy * delta.y + axz * delta.z) * inv,
         y: (axy * delta.x + ayy * delta.y + ayz * delta.z) * inv,
         z: (axz * delta.x + ayz * delta.y + azz * delta.z) * inv,
@@ -225,18 +231,28 @@ pub(super) fn point(
     b.apply_point(mask, arm_b, -impulse);
 }
 
-/// `bone::angular` in lanes: turns `a` relative to `b` by `dphi`, compliance `α̃`, in
-/// the lanes of `mask`.
-pub(super) fn angular(
-    a: &mut SideLanes,
-    b: &mut SideLanes,
-    dphi: Vec3x4,
-    alpha: f32x4,
-    mask: f32x4,
+/// XPBD angular constraint (Müller et al. 2020, eq. 2–5 for a turn): turns `a` relative
+/// to `b` by the rotation vector `dphi`, split by generalised inverse inertia, compliance
+/// `α̃` (compliance / h²), in the lanes of `mask`. With `φ = |dphi|` and `w` the inverse
+/// inertia about `dphi / φ`, the turn is `μ = φ² / (W + α̃ φ²)` about `dphi` itself, `W =
+/// φ² w` (the levers taken about `dphi` unnormalised), rather than `φ / (w + α̃)` about
+/// `dphi / φ`: no square root and division before the levers.
+pub(super) fn angular<R: Real>(
+    a: &mut SideLanes<R>,
+    b: &mut SideLanes<R>,
+    dphi: V3<R>,
+    alpha: R,
+    mask: R::Mask,
 ) {
     let angle2 = dphi.length_squared();
-    let corr = Correction::turning(a, b, dphi);
-    let den = corr.w + alpha * angle2;
-    let mask = mask & angle2.simd_ge(f32x4::splat(1e-18)) & den.simd_gt(f32x4::ZERO);
-    corr.apply(a, b, angle2 / den, mask);
+    let (ta, wa) = a.lever(dphi);
+    let (tb, wb) = b.lever(dphi);
+    let den = wa + wb + alpha * angle2;
+    let mask = mask & angle2.ge(R::splat(1e-18)) & den.gt(R::ZERO);
+    if !R::any(mask) {
+        return;
+    }
+    let lambda = angle2 / den;
+    a.apply(mask, None, ta * lambda);
+    b.apply(mask, None, tb * -lambda);
 }

@@ -6,7 +6,10 @@
 //! particles, since the frame is — and corrects it with the point's generalised inverse
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
 
-use super::bone::{Aim, Bone, Side, angular, point, positional, side_rot, side_world};
+use super::bone::{Aim, Bone, Side, positional, side_rot, side_world};
+use super::bone_lanes::{angular_pair, on_pair, point};
+use super::joint_lanes::hinge_axes;
+use crate::lanes::V3;
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
 use crate::scene::{JointKind, SwingLimit as SwingDesc};
@@ -393,47 +396,38 @@ impl Joint {
     }
 
     /// One XPBD pass over the joint between body1 at `a` and body2 at `b` of `bones`:
-    /// axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of islands stepped on its
-    /// own thread holds its bones under its own indices.
+    /// axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of
+    /// islands stepped on its own thread holds its bones under its own indices. The
+    /// rows the lanes also solve (hinge axes, anchor, cone, range) are their code run
+    /// with one joint to a lane (`joint_lanes`), so a ball or hinge gets the same bits
+    /// here as in a group of four.
     pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32, aim: Aim) {
         let inv_h2 = 1.0 / (h * h);
         match self.kind {
             JointType::Hinge { axis_a, axis_b } => {
-                // Align the axes: rotate body1 by the rotation taking its axis onto body2's.
-                let ta = side_rot(bones, a) * Vec3A::from(axis_a);
-                let tb = side_rot(bones, b) * Vec3A::from(axis_b);
-                // The turn is `asin(s)` about `c / s`, `s = |c|`: `c asin(s) / s`.
-                let c = ta.cross(tb);
-                let s2 = c.length_squared();
-                if s2 > 1e-18 {
-                    angular(bones, a, b, c * hinge_turn_ratio(s2), 0.0);
-                }
+                let (axis_a, axis_b) = (V3::from_fn(|_| axis_a), V3::from_fn(|_| axis_b));
+                on_pair(bones, a, b, |sa, sb| {
+                    hinge_axes(sa, sb, axis_a, axis_b, true)
+                });
             }
             JointType::Universal { shaft_a, shaft_b } => {
-                let s1 = side_rot(bones, a) * Vec3A::from(shaft_a);
-                let s2 = side_rot(bones, b) * Vec3A::from(shaft_b);
+                // The shafts kept perpendicular: turned about `s1 × s2` by the angle
+                // their dot product is off a right angle, `asin(s1 · s2)`.
+                let s1 = side_rot(bones, a) * shaft_a;
+                let s2 = side_rot(bones, b) * shaft_b;
                 let n = s1.cross(s2);
                 let l = n.length();
                 if l > 1e-9 {
-                    angular(
-                        bones,
-                        a,
-                        b,
-                        -n / l * s1.dot(s2).clamp(-1.0, 1.0).asin(),
-                        0.0,
-                    );
+                    let angle = s1.dot(s2).clamp(-1.0, 1.0).asin();
+                    angular_pair(bones, a, b, -n / l * angle, 0.0);
                 }
             }
             JointType::Fixed | JointType::Slider { .. } => {
                 let e = self.orientation_error(bones, a, b);
-                angular(bones, a, b, Vec3A::from(e), 0.0);
+                angular_pair(bones, a, b, e, 0.0);
             }
             JointType::Ball | JointType::Spring { .. } => {}
         }
-        let (pa, pb) = (
-            side_world(bones, a, self.anchor_a),
-            side_world(bones, b, self.anchor_b),
-        );
         match self.kind {
             JointType::Spring {
                 stretch,
@@ -442,6 +436,10 @@ impl Joint {
                 min,
                 max,
             } => {
+                let (pa, pb) = (
+                    side_world(bones, a, self.anchor_a),
+                    side_world(bones, b, self.anchor_b),
+                );
                 let d = pb - pa;
                 let len = d.length();
                 if len > 1e-9 {
@@ -460,12 +458,21 @@ impl Joint {
                 }
             }
             JointType::Slider { axis_b } => {
+                let (pa, pb) = (
+                    side_world(bones, a, self.anchor_a),
+                    side_world(bones, b, self.anchor_b),
+                );
                 let axis = side_rot(bones, b) * Vec3A::from(axis_b);
                 let d = pb - pa;
                 positional(bones, a, b, pa, pb, d - axis * axis.dot(d), 0.0);
             }
             _ => {
-                point(bones, (a, self.anchor_a), (b, self.anchor_b), pb - pa, aim);
+                let la = V3::from_fn(|_| self.anchor_a);
+                let lb = V3::from_fn(|_| self.anchor_b);
+                on_pair(bones, a, b, |sa, sb| {
+                    let (pa, pb) = (sa.world(la), sb.world(lb));
+                    point((sa, la), (sb, lb), pb - pa, aim, true);
+                });
             }
         }
         let alpha = self.limit_compliance * inv_h2;

@@ -7,7 +7,9 @@
 //! section 3.3.3 "joint limits") that rotates the bones back onto the limit, split by
 //! generalised inverse inertia.
 
-use super::bone::{Bone, Side, angular, side_rot};
+use super::bone::{Bone, Side, side_rot};
+use super::bone_lanes::{SideLanes, angular, angular_pair, holds, on_pair, per_lane};
+use crate::lanes::{Q, Real, V3};
 use glam::{Quat, Vec3, Vec3A};
 
 /// A swing limit in the bones' frames.
@@ -36,13 +38,6 @@ pub(crate) enum Swing {
 }
 
 impl Swing {
-    /// Whether a shaft at cosine `c` to the axis is surely inside: only a cone tells
-    /// (a pyramid is always measured).
-    #[inline]
-    fn surely_inside(&self, c: f32) -> bool {
-        matches!(*self, Swing::Cone { cos_inside, .. } if c > cos_inside)
-    }
-
     /// A cone of half-angle `half_angle` (rad), with its quick inside test.
     pub fn cone(half_angle: f32) -> Swing {
         let inner = half_angle - INSIDE_MARGIN;
@@ -88,7 +83,7 @@ pub(crate) struct AngleLimit {
 }
 
 /// How far inside its range (rad, on the half-angle) a limit's angle must be for
-/// [`AngleLimit::solve`] to pass it by without measuring it: far beyond the rounding of
+/// [`RangeLanes::solve`] (and a cone for [`ConeLanes::solve`]) to pass it by without measuring it: far beyond the rounding of
 /// `tan`, `atan2` and the products (~1e-7 rad), so the quick test never says inside
 /// when the measured angle is not.
 const INSIDE_MARGIN: f32 = 1e-4;
@@ -171,51 +166,161 @@ impl AngleLimit {
         ]
     }
 
-    /// Whether the relative rotation `Δ` ([`AngleLimit::relative`], `w ≥ 0`) is inside the
-    /// range by [`INSIDE_MARGIN`] at least, told without its angle: `(v · x) / w` between
-    /// the bounds of [`AngleLimit::inside`].
-    #[inline]
-    fn surely_inside(&self, d: Quat) -> bool {
-        let y = d.x * self.axis_a.x + d.y * self.axis_a.y + d.z * self.axis_a.z;
-        let [lo, hi] = self.inside;
-        d.w > 0.0 && y >= d.w * lo && y <= d.w * hi
-    }
-
     /// Excess beyond the range (rad, ≥ 0).
     pub fn violation(&self, bones: &[Bone], a: Side, b: Side) -> f32 {
         let (phi, _) = self.angle(bones, a, b);
         (phi - self.max).max(self.min - phi).max(0.0)
     }
 
-    /// Rotates the bones back into the range: XPBD on `C = φ − bound` along its gradient
-    /// `J` ([`AngleLimit::angle`]), `Δλ = −C / (Jᵀ W J)` with `W` the two inverse
-    /// inertias.
+    /// Rotates the bones back into the range widened by `slack` on both sides
+    /// ([`RangeLanes::solve`], for this one joint).
+    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
+        let range = RangeLanes::<f32>::from_fn(|_| (*self, slack));
+        on_pair(bones, a, b, |sa, sb| range.solve(sa, sb, alpha_tilde, true));
+    }
+}
+
+/// Angle ranges ([`AngleLimit`]) of one constraint per lane, their range widened by the
+/// joint's `slack` (`Joint::slack`; built for a run of substeps, while it holds).
+pub(super) struct RangeLanes<R: Real> {
+    axis_a: V3<R>,
+    /// `(q_b⁻¹ q_a)` at rest, inverted.
+    rest_inv: Q<R>,
+    min: R,
+    max: R,
+    /// [`AngleLimit::inside`], made for the range itself.
+    lo: R,
+    hi: R,
+}
+
+impl<R: Real> RangeLanes<R> {
+    /// The limit and slack `f(k)` in lane `k`.
+    pub fn from_fn(f: impl Fn(usize) -> (AngleLimit, f32)) -> RangeLanes<R> {
+        RangeLanes {
+            axis_a: V3::from_fn(|k| f(k).0.axis_a),
+            rest_inv: Q::from_fn(|k| f(k).0.rest_rel.inverse()),
+            min: R::from_fn(|k| f(k).0.min - f(k).1),
+            max: R::from_fn(|k| f(k).0.max + f(k).1),
+            lo: R::from_fn(|k| f(k).0.inside[0]),
+            hi: R::from_fn(|k| f(k).0.inside[1]),
+        }
+    }
+
+    /// Whether the relative rotation `Δ` ([`AngleLimit::angle`], `w ≥ 0`) is inside the
+    /// range by [`INSIDE_MARGIN`] at least, told without its angle: `(v · x) / w`
+    /// between the bounds of [`AngleLimit::inside`].
+    #[inline]
+    fn inside(&self, d: Q<R>) -> R::Mask {
+        let y = d.v.dot(self.axis_a);
+        d.w.gt(R::ZERO) & y.ge(d.w * self.lo) & y.le(d.w * self.hi)
+    }
+
+    /// Rotates the bones back into the range, in the lanes of `active`: XPBD on `C = φ −
+    /// bound` along its gradient `J` ([`AngleLimit::angle`]), `Δλ = −C / (Jᵀ W J)` with
+    /// `W` the two inverse inertias, compliance `α̃`.
     ///
     /// Turning about the axis alone (`J`'s value in pure twist) also restores the angle,
     /// but at a large swing it is far from the least-inertia correction: the capsule
     /// human's shoulder (twist ±45°, swung 130°) then turned the upper arm, light about
     /// its own axis, back and forth against the elbow every substep and spun the arm up
-    /// to 60-120 rad/s; over 24 starts shifted 0-23 mm in height the state energy rose
-    /// by up to 30 %, and by at most 0.6 % along the gradient.
+    /// to 60-120 rad/s; along the gradient the state energy stays within 0.6 %.
     ///
     /// Most limits are inside their range most of the time: that is told from `Δ` alone
-    /// ([`AngleLimit::inside`]), and the `atan2` and the gradient are only evaluated for
-    /// a limit near or past a bound (the same corrections, bit for bit: a limit the quick
-    /// test passes by is one whose measured angle its clamp would leave as it is).
-    /// `slack` widens the range on both sides (`Joint::slack`); the quick test, made
-    /// for the range itself, stays a sure one.
-    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
-        let d = self.relative(bones, a, b);
-        if self.surely_inside(d) {
+    /// ([`RangeLanes::inside`]), and the `atan2` and the gradient are only evaluated for
+    /// a limit near or past a bound (the same corrections: a limit the quick test passes
+    /// by is one whose measured angle its clamp would leave as it is). The slack widens
+    /// the range; the quick test, made for the range itself, stays a sure one.
+    pub fn solve(&self, a: &mut SideLanes<R>, b: &mut SideLanes<R>, alpha: R, active: R::Mask) {
+        let d = self.rest_inv.mul_quat(b.rot.conjugate().mul_quat(a.rot));
+        let flip = d.w.lt(R::ZERO);
+        let d = Q::select(flip, d.scale(R::splat(-1.0)), d);
+        let near = active & !self.inside(d);
+        if !R::any(near) {
             return;
         }
-        let (phi, j) = self.angle_of(d, side_rot(bones, a));
-        let target = phi.clamp(self.min - slack, self.max + slack);
+        let (w, y) = (d.w, d.v.dot(self.axis_a));
+        let phi = per_lane(near, y, |k, y| 2.0 * y.atan2(w.lane(k)));
+        let n = w * w + y * y;
+        let x = self.axis_a;
+        let grad = (x * (w * w) + x.cross(d.v) * w + d.v * y) * (R::ONE / n);
+        let grad = V3::select(n.gt(R::splat(1e-12)), grad, x);
+        let j = a.rot.rotate(grad);
+        let target = phi.max(self.min).min(self.max);
         let j2 = j.length_squared();
-        if target != phi && j2 > 1e-12 {
-            // `angular` turns by an angle along a unit direction: `J/|J|` by `C/|J|`.
-            angular(bones, a, b, j * ((target - phi) / j2), alpha_tilde);
+        let moved = target.lt(phi) | target.gt(phi);
+        let fix = near & moved & j2.gt(R::splat(1e-12));
+        // `angular` turns by an angle along a unit direction: `J/|J|` by `C/|J|`.
+        angular(a, b, j * ((target - phi) / j2), alpha, fix);
+    }
+}
+
+/// Cone swing limits ([`Swing::Cone`]) of one constraint per lane, widened by the
+/// joint's `slack`.
+pub(super) struct ConeLanes<R: Real> {
+    shaft_a: V3<R>,
+    axis_b: V3<R>,
+    half_angle: R,
+    /// [`Swing::Cone`]'s `cos_inside`, made for the cone itself.
+    cos_inside: R,
+}
+
+impl<R: Real> ConeLanes<R> {
+    /// The cone and slack `f(k)` in lane `k`; `None` if a lane's swing is no cone.
+    pub fn from_fn(f: impl Fn(usize) -> (SwingLimit, f32)) -> Option<ConeLanes<R>> {
+        let cone = |k: usize| match f(k).0.kind {
+            Swing::Cone {
+                half_angle,
+                cos_inside,
+            } => Some((half_angle + f(k).1, cos_inside)),
+            Swing::Pyramid { .. } => None,
+        };
+        let cones: Vec<(f32, f32)> = (0..R::WIDTH).map(cone).collect::<Option<_>>()?;
+        Some(ConeLanes {
+            shaft_a: V3::from_fn(|k| f(k).0.shaft_a),
+            axis_b: V3::from_fn(|k| f(k).0.axis_b),
+            half_angle: R::from_fn(|k| cones[k].0),
+            cos_inside: R::from_fn(|k| cones[k].1),
+        })
+    }
+
+    /// The shaft `s`'s angle to the axis `ax` in the lanes of `active` where it is past
+    /// the cone, and those lanes; `None` when none is. Most shafts are well inside
+    /// their cone most of the time: told from the cosine, the `acos` only for a shaft
+    /// near or past the cone (the same answer: `acos` is decreasing, and the margin far
+    /// exceeds its rounding).
+    fn breach(&self, s: V3<R>, ax: V3<R>, active: R::Mask) -> Option<(R, R::Mask)> {
+        let c = s.dot(ax);
+        let near = active & !c.gt(self.cos_inside);
+        if !R::any(near) {
+            return None;
         }
+        let phi = per_lane(near, c, |_, c| c.clamp(-1.0, 1.0).acos());
+        let over = near & phi.gt(self.half_angle);
+        R::any(over).then_some((phi, over))
+    }
+
+    /// Turns the shaft back onto the cone, in the lanes of `active`, compliance `α̃`:
+    /// about `s × axis` (any perpendicular when they are parallel) by the excess.
+    pub fn solve(&self, a: &mut SideLanes<R>, b: &mut SideLanes<R>, alpha: R, active: R::Mask) {
+        let s = a.rot.rotate(self.shaft_a);
+        let ax = b.rot.rotate(self.axis_b);
+        let Some((phi, over)) = self.breach(s, ax, active) else {
+            return;
+        };
+        let mut n = s.cross(ax);
+        let degenerate = over & n.length_squared().lt(R::splat(1e-12));
+        if R::any(degenerate) {
+            let p = V3::from_fn(|k| {
+                if holds::<R>(degenerate, k) {
+                    perpendicular(ax.lane(k))
+                } else {
+                    Vec3::ZERO
+                }
+            });
+            n = V3::select(degenerate, p, n);
+        }
+        let n = n * (R::ONE / n.length_squared().sqrt());
+        angular(a, b, n * (phi - self.half_angle), alpha, over);
     }
 }
 
@@ -225,29 +330,12 @@ impl SwingLimit {
         (side_rot(bones, a) * self.shaft_a, qb * self.axis_b, qb)
     }
 
-    /// The direction the shaft must be rotated to, if it is outside the limit widened
-    /// by `slack` (rad).
-    fn target(&self, bones: &[Bone], a: Side, b: Side, slack: f32) -> Option<(Vec3, f32)> {
+    /// A pyramid's shaft turn back onto the pyramid widened by `slack` (rad), if it is
+    /// outside: the unit axis and the angle (a cone is solved by [`ConeLanes`]).
+    fn pyramid_target(&self, bones: &[Bone], a: Side, b: Side, slack: f32) -> Option<(Vec3, f32)> {
         let (s, ax, qb) = self.dirs(bones, a, b);
         match self.kind {
-            Swing::Cone { half_angle, .. } => {
-                // Most shafts are well inside their cone most of the time: told from
-                // the cosine, the `acos` only for a shaft near or past the cone (the same
-                // result: `acos` is decreasing, and the margin far exceeds its rounding).
-                let c = s.dot(ax);
-                if self.kind.surely_inside(c) {
-                    return None;
-                }
-                let phi = c.clamp(-1.0, 1.0).acos();
-                let half_angle = half_angle + slack;
-                (phi > half_angle).then(|| {
-                    let mut n = s.cross(ax);
-                    if n.length_squared() < 1e-12 {
-                        n = perpendicular(ax);
-                    }
-                    (n.normalize(), phi - half_angle)
-                })
-            }
+            Swing::Cone { .. } => None,
             Swing::Pyramid { h1, h2, u, v } => {
                 let (h1, h2) = (h1 + slack, h2 + slack);
                 let (u, v) = (qb * u, qb * v);
@@ -286,8 +374,10 @@ impl SwingLimit {
 
     /// Rotates the shaft back onto the cone or pyramid widened by `slack`.
     pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
-        if let Some((n, angle)) = self.target(bones, a, b, slack) {
-            angular(bones, a, b, Vec3A::from(n * angle), alpha_tilde);
+        if let Some(cone) = ConeLanes::<f32>::from_fn(|_| (*self, slack)) {
+            on_pair(bones, a, b, |sa, sb| cone.solve(sa, sb, alpha_tilde, true));
+        } else if let Some((n, angle)) = self.pyramid_target(bones, a, b, slack) {
+            angular_pair(bones, a, b, n * angle, alpha_tilde);
         }
     }
 }
@@ -349,12 +439,12 @@ mod tests {
         }
     }
 
-    /// The cone's quick inside test (`SwingLimit::target`) gives the measured angle's
+    /// The cone's quick inside test (`ConeLanes::breach`) gives the measured angle's
     /// answer for every shaft, and passes by every shaft well inside: nine half-angles
     /// from 0 to 180°, half the shafts within 5e-4 rad of the cone.
     #[test]
     fn cone_quick_inside_test_agrees_with_the_acos() {
-        use super::{Swing, SwingLimit};
+        use super::{ConeLanes, Swing, SwingLimit, V3};
         let axis = Vec3::new(-0.2, 0.9, 0.4).normalize();
         let across = axis.any_orthonormal_vector();
         let mut next = uniform(0x1234_5678_u32);
@@ -380,17 +470,18 @@ mod tests {
                     shaft_a: shaft,
                     ..limit
                 };
-                // The solver's answer against the measured angle's, for the world as
-                // both sides (no bones: their frames are the identity).
+                // The solver's answer against the measured angle's.
+                let cone = ConeLanes::<f32>::from_fn(|_| (limit, 0.0)).expect("a cone");
                 let measured = shaft.dot(axis).clamp(-1.0, 1.0).acos() > h;
+                let (s, ax) = (V3::from_fn(|_| shaft), V3::from_fn(|_| axis));
                 assert_eq!(
-                    limit.target(&[], None, None, 0.0).is_some(),
+                    cone.breach(s, ax, true).is_some(),
                     measured,
                     "{deg} deg cone, shaft at {angle} rad"
                 );
                 if angle < h - 1e-3 {
                     well_inside += 1;
-                    passed += usize::from(limit.kind.surely_inside(shaft.dot(axis)));
+                    passed += usize::from(shaft.dot(axis) > cone.cos_inside);
                 }
             }
         }
@@ -398,13 +489,13 @@ mod tests {
         assert_eq!(passed, well_inside, "well inside yet measured");
     }
 
-    /// The quick inside test of `AngleLimit::solve` never passes by a limit whose
+    /// The quick inside test of `RangeLanes::solve` never passes by a limit whose
     /// measured angle is outside its range, and does pass by one well inside: over
     /// rotations of every twist and swing, for hinge, twist and cone-like ranges, a 0°
     /// range and a whole turn.
     #[test]
     fn quick_inside_test_agrees_with_the_measured_angle() {
-        use super::AngleLimit;
+        use super::{AngleLimit, Q, RangeLanes};
         let d = |deg: f32| deg.to_radians();
         let ranges = [
             (d(-45.0), d(45.0)),
@@ -435,7 +526,8 @@ mod tests {
                     q = -q;
                 }
                 let (phi, _) = limit.angle_of(q, Quat::IDENTITY);
-                let quick = limit.surely_inside(q);
+                let range = RangeLanes::<f32>::from_fn(|_| (limit, 0.0));
+                let quick = range.inside(Q::from_fn(|_| q));
                 assert!(
                     !quick || (min..=max).contains(&phi),
                     "[{min}, {max}]: passed by at {phi}"
