@@ -1,8 +1,8 @@
 //! Constraint blocks: the six Doom 3 types, their limits, and our limit extensions.
 
 use super::ctx::{Ctx, Defaults, R, unknown_key};
-use super::lexer::Pos;
 use super::parser::{Block, Entry, Value};
+use crate::scene::lexer::Pos;
 use crate::scene::{
     AngleRange, BodyId, BodyRef, ConstraintDesc, JointKind, LimitStyle, SwingLimit, TwistLimit,
 };
