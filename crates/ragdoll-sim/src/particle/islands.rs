@@ -10,8 +10,6 @@
 //! joints kept in world order, a manifold's points still consecutive), stepped by the
 //! very code that steps the whole world (`rigid_frames::run_substeps`), and scattered back:
 //! the serial result bit for bit, on any number of threads.
-//!
-//! The union-find here is also sleeping's.
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
@@ -20,27 +18,9 @@ use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
 use super::rigid_frames::{self, Part};
 use crate::scene::Settings;
+use crate::union_find::UnionFind;
 use glam::Vec3A;
 use rayon::prelude::*;
-
-/// The root of `i`'s set, halving the path on the way.
-pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let p = parent[parent[i as usize] as usize];
-        parent[i as usize] = p;
-        i = p;
-    }
-    i
-}
-
-/// Joins the sets of `a` and `b`; the lower index stays the root.
-pub(super) fn union(parent: &mut [u32], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a as u32), find(parent, b as u32));
-    if ra != rb {
-        let (lo, hi) = (ra.min(rb), ra.max(rb));
-        parent[hi as usize] = lo;
-    }
-}
 
 /// Batches per thread: a few, so that rayon's work stealing evens out islands of
 /// unequal cost, but not so many that gathering dominates small islands.
@@ -93,12 +73,12 @@ impl Plan {
         // the 352-byte bones (most of the island search on a 1000-human pile).
         let is_static: Vec<bool> = bones.iter().map(Bone::is_static).collect();
         let moving = |s: Side| s.filter(|&i| !is_static[i]);
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut sets = UnionFind::new(n);
         let links = w.links.iter().map(|l| l.sides());
         let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a), m.b));
         for (a, b) in links.chain(touching) {
             if let (Some(a), Some(b)) = (moving(a), moving(b)) {
-                union(&mut parent, a, b);
+                sets.union(a, b);
             }
         }
         // Each moving bone's island, named by its root; a constraint's is that of its
@@ -108,7 +88,7 @@ impl Plan {
                 if is_static[i] {
                     NONE
                 } else {
-                    find(&mut parent, i as u32)
+                    sets.find(i) as u32
                 }
             })
             .collect();
