@@ -8,15 +8,16 @@
 //! loop meets its contacts and joints in the same relative order. So each batch of
 //! islands is gathered into dense arrays of its own (bones renumbered, contacts and
 //! joints kept in world order, a manifold's points still consecutive), stepped by the
-//! very code that steps the whole world (`rigid_frames::run_substeps`), and scattered back:
+//! very code that steps the whole world (`rigid_frames::run_substeps`, handed in as
+//! `substeps` so this file does not depend on the solver), and scattered back:
 //! the serial result bit for bit, on any number of threads.
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
 use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
-use super::joint_lanes::Lockstep;
+use super::joint_lanes::{Entry, Lockstep};
 use super::joints::JointSet;
-use super::rigid_frames::{self, Part};
+use crate::method::Grab;
 use crate::scene::Settings;
 use crate::union_find::UnionFind;
 use glam::Vec3A;
@@ -340,11 +341,34 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[&Batch]) {
         });
 }
 
+/// What the substeps between two collision detections read and write: the world's
+/// own arrays, or a batch of islands gathered into arrays of its own ([`Batch`]). Every
+/// index — a contact's bones, a joint's sides — is into these.
+///
+/// There are no particle arrays: a bone's four particles sit rigidly in its frame at
+/// the end of every substep, at `world(rest_k)` with velocity `lin_vel + ω × (R rest_k)`
+/// (`Bone::corner`, `Bone::corner_velocity`), so they are evaluated where a substep
+/// needs them instead of being stored three times over (positions, previous positions,
+/// velocities: 144 B a bone, and the traffic of writing them every substep).
+pub(super) struct Part<'a> {
+    pub bones: &'a mut [Bone],
+    /// Contact manifolds as detected, and their points (`Manifold::range`).
+    pub manifolds: &'a [Manifold],
+    pub points: &'a mut [ContactPoint],
+    /// Its joints in the world's order, with their sides in `bones`
+    /// ([`JointSet::entries`]), and the joint pass over them.
+    pub joints: &'a [Entry<'a>],
+    pub lockstep: &'a Lockstep,
+    /// The mouse grab; it acts only where its bone is (see `grab_improved`).
+    pub grab: Option<Grab>,
+}
+
 /// A batch stepped in a detection chunk of a frame and the joint pass over its
 /// joints, kept for the next chunk ([`Batch::gather`]).
 pub(super) type Kept = (Batch, Lockstep);
 
-/// Runs `count` substeps of length `h`, each of the plan's batches on its own rayon task.
+/// Runs `count` substeps of length `h` (`substeps`, the solver's kernel over a [`Part`]),
+/// each of the plan's batches on its own rayon task.
 /// `kept` holds the batches of the frame's last chunk and their joint passes: the
 /// batch at the same place here is gathered into the kept one (its bones not copied
 /// again if they are the same bones) and reuses its pass if its joints are the same
@@ -356,6 +380,7 @@ pub(super) fn run_substeps(
     h: f32,
     s: &Settings,
     kept: &mut Vec<Kept>,
+    substeps: impl Fn(&mut Part, u32, f32, &Settings) + Sync,
 ) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
@@ -398,7 +423,7 @@ pub(super) fn run_substeps(
                 lockstep: &lockstep,
                 grab: world.grab,
             };
-            rigid_frames::run_substeps(&mut part, count, h, s);
+            substeps(&mut part, count, h, s);
             (batch, lockstep)
         })
         .collect();
