@@ -444,7 +444,7 @@ mod tests {
     /// as it did when only the bones' indices were compared), on any number of threads.
     #[test]
     fn a_bone_that_woke_between_chunks_is_copied_again() {
-        let text = include_str!("islands_wake_chain.af");
+        let text = include_str!("../../tests/data/islands_wake_chain.af");
         let path = std::path::Path::new("islands_wake_chain.af");
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
