@@ -8,6 +8,7 @@ pub mod camera;
 pub mod gpu;
 pub mod mesh;
 pub mod palette;
+mod pipeline;
 pub mod skin;
 
 use bytemuck::{Pod, Zeroable};
@@ -276,224 +277,18 @@ pub struct Renderer {
 impl Renderer {
     /// Builds pipelines and unit meshes for targets of `format`, `samples` MSAA samples.
     pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat, samples: u32) -> Renderer {
-        let shader = device.create_shader_module(wgpu::include_wgsl!("../../shaders/scene.wgsl"));
-        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("camera"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
-            bind_group_layouts: &[Some(&camera_layout)],
-            immediate_size: 0,
-        });
-        let cameras = (0..2)
-            .map(|_| {
-                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("camera"),
-                    size: std::mem::size_of::<CameraUniform>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("camera"),
-                    layout: &camera_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, group)
-            })
-            .collect();
-
-        let mesh_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
-        let inst_attrs = wgpu::vertex_attr_array![
-            3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4,
-            7 => Float32x4, 8 => Float32x4
-        ];
-        let mesh_buffers = [
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &mesh_attrs,
-            }),
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<Instance>() as u64,
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &inst_attrs,
-            }),
-        ];
-        let ground_attrs = wgpu::vertex_attr_array![0 => Float32x3];
-        let ground_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: 12,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &ground_attrs,
-        })];
-        let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
-        let line_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<LineVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &line_attrs,
-        })];
-
-        let depth = |write: bool, compare: wgpu::CompareFunction| wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(write),
-            depth_compare: Some(compare),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        };
-        let pipeline = |label: &str,
-                        vs: &str,
-                        fs: &str,
-                        buffers: &[Option<wgpu::VertexBufferLayout>],
-                        topology: wgpu::PrimitiveTopology,
-                        cull: bool,
-                        depth_stencil: wgpu::DepthStencilState,
-                        blend: Option<wgpu::BlendState>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &shader,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    cull_mode: cull.then_some(wgpu::Face::Back),
-                    ..Default::default()
-                },
-                depth_stencil: Some(depth_stencil),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &shader,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        use wgpu::CompareFunction as C;
-        use wgpu::PrimitiveTopology as T;
-        let mesh_pipeline = pipeline(
-            "mesh",
-            "vs_mesh",
-            "fs_mesh",
-            &mesh_buffers,
-            T::TriangleList,
-            true,
-            depth(true, C::Less),
-            None,
-        );
-        // Particles and sticks sit inside the bodies they drive; they are drawn over them
-        // (an x-ray, like Doom 3's af_show* overlays) without touching the depth buffer.
-        let overlay_pipeline = pipeline(
-            "overlay",
-            "vs_mesh",
-            "fs_mesh",
-            &mesh_buffers,
-            T::TriangleList,
-            true,
-            depth(false, C::Always),
-            None,
-        );
-        let line_pipeline = pipeline(
-            "lines",
-            "vs_line",
-            "fs_line",
-            &line_buffers,
-            T::LineList,
-            false,
-            depth(false, C::Always),
-            None,
-        );
-        let ground_pipeline = pipeline(
-            "ground",
-            "vs_ground",
-            "fs_ground",
-            &ground_buffers,
-            T::TriangleList,
-            false,
-            depth(true, C::Less),
-            None,
-        );
-        // Each shadow pixel is darkened once: the stencil passes only where it is still 0.
-        let stencil_face = wgpu::StencilFaceState {
-            compare: C::Equal,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::IncrementClamp,
-        };
-        let shadow_pipeline = pipeline(
-            "shadow",
-            "vs_shadow",
-            "fs_shadow",
-            &mesh_buffers,
-            T::TriangleList,
-            false,
-            wgpu::DepthStencilState {
-                stencil: wgpu::StencilState {
-                    front: stencil_face,
-                    back: stencil_face,
-                    read_mask: 0xff,
-                    write_mask: 0xff,
-                },
-                ..depth(false, C::LessEqual)
-            },
-            Some(wgpu::BlendState::ALPHA_BLENDING),
-        );
-
-        let mut meshes = HashMap::new();
-        meshes.insert(
-            MeshKey::Cube,
-            GpuMesh::new(device, &mesh::unit_cube(), "cube"),
-        );
-        meshes.insert(
-            MeshKey::Capsule,
-            GpuMesh::new(device, &mesh::unit_capsule(24, 16), "capsule"),
-        );
-        meshes.insert(
-            MeshKey::Sphere,
-            GpuMesh::new(device, &mesh::unit_sphere(12, 8), "sphere"),
-        );
-        meshes.insert(
-            MeshKey::Cylinder,
-            GpuMesh::new(device, &mesh::unit_round(24, 1.0), "cylinder"),
-        );
-        meshes.insert(
-            MeshKey::Cone,
-            GpuMesh::new(device, &mesh::unit_round(24, 0.0), "cone"),
-        );
-
+        let camera_layout = pipeline::uniform_layout(device, "camera");
+        let target = pipeline::Target { format, samples };
+        let pipelines = ScenePipelines::new(device, &camera_layout, target);
         Renderer {
             samples,
-            mesh_pipeline,
-            overlay_pipeline,
-            shadow_pipeline,
-            ground_pipeline,
-            line_pipeline,
-            cameras,
-            meshes,
+            mesh_pipeline: pipelines.mesh,
+            overlay_pipeline: pipelines.overlay,
+            shadow_pipeline: pipelines.shadow,
+            ground_pipeline: pipelines.ground,
+            line_pipeline: pipelines.line,
+            cameras: camera_buffers(device, &camera_layout),
+            meshes: unit_meshes(device),
             hulls: HashMap::new(),
             instances: GrowBuffer::new(device, "instances"),
             lines: GrowBuffer::new(device, "lines"),
@@ -502,7 +297,7 @@ impl Renderer {
             draws: Vec::new(),
             targets: None,
             format,
-            skin: skin::SkinRenderer::new(device, format, samples, &camera_layout),
+            skin: skin::SkinRenderer::new(device, target, &camera_layout),
             show_bodies: true,
             show_mesh: true,
         }
@@ -803,6 +598,192 @@ impl Renderer {
 }
 
 /// The part of `vp` inside a `size` target, in whole pixels; `None` if empty.
+/// One camera uniform buffer and its bind group per side.
+fn camera_buffers(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+    (0..2)
+        .map(|_| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("camera"),
+                size: std::mem::size_of::<CameraUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("camera"),
+                layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
+            (buffer, group)
+        })
+        .collect()
+}
+
+/// The unit meshes instances of every shape but hulls are drawn with.
+fn unit_meshes(device: &wgpu::Device) -> HashMap<MeshKey, GpuMesh> {
+    HashMap::from([
+        (
+            MeshKey::Cube,
+            GpuMesh::new(device, &mesh::unit_cube(), "cube"),
+        ),
+        (
+            MeshKey::Capsule,
+            GpuMesh::new(device, &mesh::unit_capsule(24, 16), "capsule"),
+        ),
+        (
+            MeshKey::Sphere,
+            GpuMesh::new(device, &mesh::unit_sphere(12, 8), "sphere"),
+        ),
+        (
+            MeshKey::Cylinder,
+            GpuMesh::new(device, &mesh::unit_round(24, 1.0), "cylinder"),
+        ),
+        (
+            MeshKey::Cone,
+            GpuMesh::new(device, &mesh::unit_round(24, 0.0), "cone"),
+        ),
+    ])
+}
+
+/// The pipelines of `shaders/scene.wgsl`, all with the camera as their one bind group.
+struct ScenePipelines {
+    /// Instanced shapes, depth-tested.
+    mesh: wgpu::RenderPipeline,
+    /// Particles and sticks sit inside the bodies they drive; they are drawn over them
+    /// (an x-ray, like Doom 3's af_show* overlays) without touching the depth buffer.
+    overlay: wgpu::RenderPipeline,
+    /// Shapes flattened onto the ground; each shadow pixel is darkened once: the
+    /// stencil passes only where it is still 0.
+    shadow: wgpu::RenderPipeline,
+    ground: wgpu::RenderPipeline,
+    /// Joint axes, limits and the grab, over everything.
+    line: wgpu::RenderPipeline,
+}
+
+impl ScenePipelines {
+    fn new(
+        device: &wgpu::Device,
+        camera_layout: &wgpu::BindGroupLayout,
+        target: pipeline::Target,
+    ) -> ScenePipelines {
+        use pipeline::{Stage, depth, render_pipeline};
+        use wgpu::CompareFunction as C;
+        use wgpu::PrimitiveTopology as T;
+        let shader = device.create_shader_module(wgpu::include_wgsl!("../../shaders/scene.wgsl"));
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(camera_layout)],
+            immediate_size: 0,
+        });
+        let mesh_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
+        let inst_attrs = wgpu::vertex_attr_array![
+            3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4,
+            7 => Float32x4, 8 => Float32x4
+        ];
+        let mesh_buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<MeshVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &mesh_attrs,
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<Instance>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &inst_attrs,
+            }),
+        ];
+        let ground_attrs = wgpu::vertex_attr_array![0 => Float32x3];
+        let ground_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: 12,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &ground_attrs,
+        })];
+        let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+        let line_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<LineVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &line_attrs,
+        })];
+        let build = |stage: Stage| render_pipeline(device, &layout, target, stage);
+        let stencil_face = wgpu::StencilFaceState {
+            compare: C::Equal,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::IncrementClamp,
+        };
+        ScenePipelines {
+            mesh: build(Stage {
+                label: "mesh",
+                shader: &shader,
+                vs: "vs_mesh",
+                fs: "fs_mesh",
+                buffers: &mesh_buffers,
+                topology: T::TriangleList,
+                cull: true,
+                depth_stencil: depth(true, C::Less),
+                blend: None,
+            }),
+            overlay: build(Stage {
+                label: "overlay",
+                shader: &shader,
+                vs: "vs_mesh",
+                fs: "fs_mesh",
+                buffers: &mesh_buffers,
+                topology: T::TriangleList,
+                cull: true,
+                depth_stencil: depth(false, C::Always),
+                blend: None,
+            }),
+            line: build(Stage {
+                label: "lines",
+                shader: &shader,
+                vs: "vs_line",
+                fs: "fs_line",
+                buffers: &line_buffers,
+                topology: T::LineList,
+                cull: false,
+                depth_stencil: depth(false, C::Always),
+                blend: None,
+            }),
+            ground: build(Stage {
+                label: "ground",
+                shader: &shader,
+                vs: "vs_ground",
+                fs: "fs_ground",
+                buffers: &ground_buffers,
+                topology: T::TriangleList,
+                cull: false,
+                depth_stencil: depth(true, C::Less),
+                blend: None,
+            }),
+            shadow: build(Stage {
+                label: "shadow",
+                shader: &shader,
+                vs: "vs_shadow",
+                fs: "fs_shadow",
+                buffers: &mesh_buffers,
+                topology: T::TriangleList,
+                cull: false,
+                depth_stencil: wgpu::DepthStencilState {
+                    stencil: wgpu::StencilState {
+                        front: stencil_face,
+                        back: stencil_face,
+                        read_mask: 0xff,
+                        write_mask: 0xff,
+                    },
+                    ..depth(false, C::LessEqual)
+                },
+                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+            }),
+        }
+    }
+}
+
 fn clip_viewport(vp: Viewport, size: (u32, u32)) -> Option<Viewport> {
     let x0 = vp.x.max(0.0).floor();
     let y0 = vp.y.max(0.0).floor();

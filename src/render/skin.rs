@@ -81,27 +81,15 @@ pub(crate) struct SkinRenderer {
 impl SkinRenderer {
     pub(crate) fn new(
         device: &wgpu::Device,
-        format: wgpu::TextureFormat,
-        samples: u32,
+        target: super::pipeline::Target,
         camera_layout: &wgpu::BindGroupLayout,
     ) -> SkinRenderer {
+        use super::pipeline::{Stage, depth, render_pipeline, uniform_layout};
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("skin"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/skin.wgsl").into()),
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("skin"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
+        let layout = uniform_layout(device, "skin");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("skin"),
             bind_group_layouts: &[Some(camera_layout), Some(&layout)],
@@ -110,48 +98,26 @@ impl SkinRenderer {
         let attrs = wgpu::vertex_attr_array![
             0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Uint32x4
         ];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("skin"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some("vs_skin"),
-                compilation_options: Default::default(),
+        let pipeline = render_pipeline(
+            device,
+            &pipeline_layout,
+            target,
+            Stage {
+                label: "skin",
+                shader: &shader,
+                vs: "vs_skin",
+                fs: "fs_skin",
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: std::mem::size_of::<SkinVertex>() as u64,
                     step_mode: wgpu::VertexStepMode::Vertex,
                     attributes: &attrs,
                 })],
-            },
-            primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
+                cull: false,
+                depth_stencil: depth(true, wgpu::CompareFunction::Less),
+                blend: None,
             },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: super::DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState {
-                count: samples,
-                ..Default::default()
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some("fs_skin"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         SkinRenderer {
             pipeline,
             layout,

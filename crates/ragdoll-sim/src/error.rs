@@ -2,12 +2,12 @@
 //!
 //! The readers and the methods keep their own error types, which say what went wrong
 //! and where: [`AfError`] is positioned in a file (`FILE:LINE:COL: error: ...`, the
-//! `.af` and `.md5mesh` readers), [`SceneError`] names the body, constraint or setting
-//! a method cannot simulate. [`Error`] wraps both so a caller handles one type; its
-//! `Display` is the wrapped error's message, unchanged.
+//! `.af`, `.md5mesh`, `.md5anim` and `.def` readers), [`SceneError`] names the body,
+//! constraint or setting a method cannot simulate. [`Error`] wraps both so a caller
+//! handles one type; its `Display` is the wrapped error's message, unchanged.
 
+use crate::scene::AfError;
 use crate::scene::SceneError;
-use crate::scene::af::AfError;
 use thiserror::Error;
 
 /// Anything that stops a world from being built — a file that cannot be read or

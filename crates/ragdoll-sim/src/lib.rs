@@ -96,6 +96,7 @@
 //! - [`metrics`]: energy gain, joint gap, limit violation, penetration.
 //! - [`broadphase`]: the overlapping-box pairs both methods collide.
 //! - `lanes`: vectors and quaternions four to an instruction, for both solvers.
+//! - `batches` and `union_find`: islands found and dealt to threads, for both solvers.
 //! - `world` and `error`: [`World`], [`Solver`], [`JointAngles`] and [`Error`], the
 //!   entry point above.
 
@@ -113,6 +114,7 @@ pub mod rigid;
 pub mod scene;
 pub mod snapshot;
 pub mod timings;
+mod union_find;
 mod world;
 
 pub use error::Error;

@@ -2,30 +2,14 @@
 //! those the paper (section 5.1, appendix A) and the PyODE tutorial give.
 
 use ragdoll_sim::glam::{Quat, Vec3};
-use ragdoll_sim::scene::af::{AfOptions, AfScene, load};
+use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::scene::{
     BodyDesc, BodyRef, JointKind, LimitStyle, MassSpec, SceneDesc, Shape, SwingLimit, validate,
 };
-use std::path::PathBuf;
 
-fn scenes_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes")
-}
+mod common;
 
-fn scene_opts(name: &str, opts: AfOptions) -> AfScene {
-    load(&scenes_dir().join(format!("{name}.af")), &opts).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn scene(name: &str, variant: u32) -> SceneDesc {
-    scene_opts(
-        name,
-        AfOptions {
-            variant,
-            ..Default::default()
-        },
-    )
-    .desc
-}
+use common::{shipped_path, shipped_variant as scene};
 
 fn body<'a>(s: &'a SceneDesc, name: &str) -> &'a BodyDesc {
     &s.bodies[s
@@ -67,7 +51,7 @@ fn glam_abs(q: Quat) -> ragdoll_sim::glam::Mat3 {
 #[test]
 fn every_scene_and_variant_loads_validated_above_the_ground_with_masses_in_kg() {
     let mut n = 0;
-    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+    for e in std::fs::read_dir(shipped_path("")).unwrap() {
         let path = e.unwrap().path();
         let first = load(&path, &AfOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         let variants: Vec<u32> = first.desc.variants.iter().map(|v| v.number).collect();
@@ -501,14 +485,7 @@ fn pile_replicates_the_human() {
     let s = scene("pile", 1);
     assert_eq!(s.bodies.len(), 4 * 16);
     assert_eq!(s.constraints.len(), 4 * 15);
-    let big = scene_opts(
-        "pile",
-        AfOptions {
-            count: Some(1000),
-            ..Default::default()
-        },
-    )
-    .desc;
+    let big = common::shipped_pile(1000);
     assert_eq!(big.bodies.len(), 16_000);
     assert_eq!(big.constraints.len(), 15_000);
     let names: std::collections::HashSet<&str> =
@@ -582,7 +559,7 @@ fn parry_shape(s: &Shape) -> Box<dyn parry3d::shape::Shape> {
 /// as in the PyODE tutorial, overlap; both methods skip their contacts.)
 #[test]
 fn no_scene_starts_with_unjointed_bodies_overlapping() {
-    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+    for e in std::fs::read_dir(shipped_path("")).unwrap() {
         let path = e.unwrap().path();
         let s = load(&path, &AfOptions::default()).unwrap().desc;
         let jointed = |a: usize, b: usize| {

@@ -6,7 +6,7 @@
 use ragdoll_sim::scene::SceneDesc;
 use ragdoll_sim::scene::af::{AfOptions, AfScene, load, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Eight joints, Z up, inches. "Finger" (a child of "Hand") comes after "Leg", so
 /// `*Arm` stops before it: the run after a joint ends at the first joint whose parent
@@ -171,9 +171,9 @@ fn without_a_mesh_the_key_is_listed_as_ignored() {
     assert_eq!((i.line, i.col), (3, 2));
 }
 
-fn mod_base() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3")
-}
+mod common;
+
+use common::lab_mod_base as mod_base;
 
 #[test]
 fn every_joint_of_the_mod_humanoid_belongs_to_the_body_its_file_names() {

@@ -27,16 +27,11 @@ use ragdoll_sim::scene::{AngleRange, BodyRef, JointKind, SceneDesc};
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-const ENV: &str = "RAGDOLL_LAB_DOOM3_BASE";
+mod common;
 
+/// The real Doom 3 base folder, or `None` (with a note) when it is not given.
 fn base_dir() -> Option<PathBuf> {
-    match std::env::var_os(ENV) {
-        Some(p) if !p.is_empty() => Some(PathBuf::from(p)),
-        _ => {
-            println!("note: {ENV} is not set; skipping the real Doom 3 animations");
-            None
-        }
-    }
+    common::real_doom3_base("the real Doom 3 animations")
 }
 
 /// A limited hinge between two bodies that joints drive.

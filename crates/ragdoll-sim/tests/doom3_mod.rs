@@ -15,11 +15,10 @@ use ragdoll_sim::scene::af::{AfOptions, AfScene, FigureSource, load_figure};
 use ragdoll_sim::scene::decl::{Doom3Base, Doom3Character};
 use ragdoll_sim::scene::{Pose, scene_mass_props};
 use ragdoll_sim::scene::{md5anim, md5mesh};
-use std::path::PathBuf;
 
-fn base_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3")
-}
+mod common;
+
+use common::lab_mod_base as base_dir;
 
 fn character() -> Doom3Character {
     let base = Doom3Base::open(&base_dir()).unwrap_or_else(|e| panic!("{e}"));

@@ -18,17 +18,11 @@ use ragdoll_sim::scene::decl::Doom3Base;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-const ENV: &str = "RAGDOLL_LAB_DOOM3_BASE";
+mod common;
 
-/// The base folder, or `None` (with a note) when the variable is unset.
+/// The real Doom 3 base folder, or `None` (with a note) when it is not given.
 fn base_dir() -> Option<PathBuf> {
-    match std::env::var_os(ENV) {
-        Some(p) if !p.is_empty() => Some(PathBuf::from(p)),
-        _ => {
-            println!("note: {ENV} is not set; skipping the real Doom 3 figures");
-            None
-        }
-    }
+    common::real_doom3_base("the real Doom 3 figures")
 }
 
 /// Whether a character's error only says the folder lacks something, the entity is not

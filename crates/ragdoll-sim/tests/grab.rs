@@ -10,14 +10,11 @@ use ragdoll_sim::method::Grab;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::SceneDesc;
-use ragdoll_sim::scene::af::{AfOptions, load};
-use std::path::PathBuf;
+
+mod common;
 
 fn human() -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/human.af");
-    load(&path, &AfOptions::default())
-        .expect("human.af loads")
-        .desc
+    common::shipped_scene("human")
 }
 
 fn com(m: &dyn Method, body: usize) -> Vec3 {

@@ -3,67 +3,20 @@
 //! period, a restitution bounce; plus determinism, robustness and bad input. Scenes are
 //! built in code.
 
+mod common;
+
+use common::particle::{self as shared, assert_sane, boxed, chain_scene, particle_bits, scene};
 use ragdoll_sim::Method;
 use ragdoll_sim::glam::{Quat, Vec3};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::scene::*;
 
-fn boxed(name: &str, half: Vec3, pos: Vec3, mass: f32) -> BodyDesc {
-    BodyDesc::new(
-        name,
-        Shape::Box { half_extents: half },
-        Pose::from_position(pos),
-        MassSpec::Mass(mass),
-    )
-}
-
-fn scene(
-    bodies: Vec<BodyDesc>,
-    constraints: Vec<ConstraintDesc>,
-    ground: Option<Ground>,
-) -> SceneDesc {
-    let mut s = SceneDesc {
-        name: "test".into(),
-        bodies,
-        constraints,
-        ..Default::default()
-    };
-    s.settings.ground = ground;
-    s
-}
-
-fn com(w: &ParticleWorld) -> Vec3 {
-    let mut out = Vec::new();
-    w.body_states(&mut out);
-    out[0].com
-}
-
+/// A thrown box follows the parabola: its centre of mass within 0.1 % of the distance
+/// travelled after two seconds.
 #[test]
 fn free_fall_matches_parabola() {
     for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
-        let mut b = boxed(
-            "b",
-            Vec3::new(0.2, 0.1, 0.3),
-            Vec3::new(0.0, 50.0, 0.0),
-            2.0,
-        );
-        b.linear_velocity = Vec3::new(1.0, 3.0, -0.5);
-        b.pose.rotation = Quat::from_rotation_x(0.3);
-        let s = scene(vec![b.clone()], vec![], None);
-        let mut w = ParticleWorld::new(&s, solver).unwrap();
-        let x0 = com(&w);
-        let g = s.settings.gravity;
-        for _ in 0..120 {
-            w.step();
-        }
-        let t = w.time() as f32;
-        let expected = x0 + b.linear_velocity * t + g * (0.5 * t * t);
-        let err = (com(&w) - expected).length();
-        let travelled = (expected - x0).length();
-        assert!(
-            err <= 1e-3 * travelled,
-            "{solver:?}: error {err} m over {travelled} m"
-        );
+        shared::free_fall_matches_parabola(solver, Vec3::ZERO);
     }
 }
 
@@ -104,185 +57,26 @@ fn restitution_bounce_height() {
     }
 }
 
-/// A box on a ground tilted by `deg`, μ = 0.5 (friction angle 26.57°); returns the
-/// distance it moved along the slope in `seconds`.
-fn slide(deg: f32, seconds: f32) -> f32 {
-    let tilt = deg.to_radians();
-    let ground = Ground {
-        tilt,
-        friction: 0.5,
-        ..Default::default()
-    };
-    let n = ground.normal();
-    let half = Vec3::new(0.2, 0.1, 0.2);
-    let mut b = boxed("b", half, n * (half.y + 0.001), 1.0);
-    b.pose.rotation = Quat::from_rotation_z(tilt);
-    b.friction.contact = 0.5;
-    let s = scene(vec![b], vec![], Some(ground));
-    let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
-    let x0 = com(&w);
-    let frames = (seconds / s.settings.timestep).round() as usize;
-    for _ in 0..frames {
-        w.step();
-    }
-    let down = Vec3::new(-tilt.cos(), -tilt.sin(), 0.0);
-    (com(&w) - x0).dot(down)
-}
-
+/// Coulomb: a box (μ = 0.5) stays on a slope below its friction angle and slides above
+/// it at `a = g (sin θ − μ cos θ)`, its implied μ within 5 %.
 #[test]
 fn box_on_slope_sticks_below_friction_angle_and_slides_above() {
-    let still = slide(20.0, 2.0);
-    assert!(still.abs() < 0.01, "moved {still} m at 20° (below 26.6°)");
-    // Above it: slides with a = g (sin θ − μ cos θ). Compared through the friction
-    // coefficient the slide implies, μ_eff = (sin θ − 2 d / (g t²)) / cos θ, within 5 %
-    // of μ: the distance itself amplifies a friction error by (μ cos θ)/(sin θ − μ cos θ)
-    // (3.5× at 35°), so a 3 % friction error reads as a 10 % distance error.
-    let (deg, t) = (35.0f32, 1.0f32);
-    let th = deg.to_radians();
-    let moved = slide(deg, t);
-    let expected = 0.5 * 9.81 * (th.sin() - 0.5 * th.cos()) * t * t;
-    let mu_eff = (th.sin() - 2.0 * moved / (9.81 * t * t)) / th.cos();
-    println!("35°: slid {moved} m (closed form {expected} m), μ_eff {mu_eff}");
-    assert!(moved > 0.5 * expected, "did not slide: {moved} m");
-    assert!(
-        (mu_eff - 0.5).abs() < 0.05 * 0.5,
-        "μ_eff {mu_eff} (slid {moved} m, closed form {expected} m)"
-    );
+    shared::box_on_slope_sticks_below_friction_angle_and_slides_above(ParticleSolver::RigidFrames);
 }
 
+/// A rod hinged to the world at its top end swings with the rigid pendulum's period
+/// `T = 2π √(I_pivot / (m g d))`, within 2 %.
 #[test]
 fn hinge_pendulum_period_matches_rigid_pendulum() {
-    // A rod hinged to the world at its top end, about Z; small amplitude.
-    let half = Vec3::new(0.05, 0.5, 0.05);
-    let m = 1.0;
-    let amp = 5f32.to_radians();
-    let pivot = Vec3::new(0.0, 3.0, 0.0);
-    let rot = Quat::from_rotation_z(amp);
-    let mut b = boxed("rod", half, pivot + rot * Vec3::new(0.0, -half.y, 0.0), m);
-    b.pose.rotation = rot;
-    let c = ConstraintDesc {
-        name: "hinge".into(),
-        body1: BodyId(0),
-        body2: BodyRef::World,
-        kind: JointKind::Hinge {
-            anchor: pivot,
-            axis: Vec3::Z,
-            limit: None,
-        },
-        friction: 0.0,
-    };
-    let s = scene(vec![b], vec![c], None);
-    let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
-    // Rigid pendulum: T = 2π √(I_pivot / (m g d)).
-    let d = half.y;
-    let i_cm = m / 12.0 * ((2.0 * half.x).powi(2) + (2.0 * half.y).powi(2));
-    let expected = 2.0 * std::f32::consts::PI * ((i_cm + m * d * d) / (m * 9.81 * d)).sqrt();
-    // Zero crossings of the horizontal offset, interpolated.
-    let mut crossings = Vec::new();
-    let mut prev = com(&w).x;
-    let dt = s.settings.timestep;
-    for k in 1..=600 {
-        w.step();
-        let x = com(&w).x;
-        if prev > 0.0 && x <= 0.0 || prev < 0.0 && x >= 0.0 {
-            crossings.push((k as f32 - 1.0 + prev / (prev - x)) * dt);
-        }
-        prev = x;
-    }
-    assert!(crossings.len() >= 5, "only {} crossings", crossings.len());
-    let n = crossings.len() - 1;
-    let period = 2.0 * (crossings[n] - crossings[0]) / n as f32;
-    assert!(
-        (period - expected).abs() < 0.02 * expected,
-        "period {period} s, rigid {expected} s"
-    );
+    shared::hinge_pendulum_period_matches_rigid_pendulum(ParticleSolver::RigidFrames);
 }
 
-fn chain_scene() -> SceneDesc {
-    // Three boxes on ball joints hanging from a fixed box, raised sideways, and a
-    // fourth box dropped on them: joints, contacts and the ground all at work.
-    let half = Vec3::new(0.1, 0.25, 0.1);
-    let mut bodies = vec![];
-    let mut top = boxed("top", half, Vec3::new(0.0, 3.0, 0.0), 1.0);
-    top.motion = Motion::Fixed;
-    bodies.push(top);
-    let mut constraints = vec![];
-    for i in 1..4 {
-        let y = 3.0;
-        let x = 0.5 * i as f32;
-        let mut b = boxed(
-            &format!("link{i}"),
-            Vec3::new(0.25, 0.1, 0.1),
-            Vec3::new(x - 0.15, y - 0.25, 0.0),
-            1.0,
-        );
-        b.pose.position.y = y - 0.25;
-        bodies.push(b);
-        constraints.push(ConstraintDesc {
-            name: format!("j{i}"),
-            body1: BodyId(i),
-            body2: BodyRef::Body(BodyId(i - 1)),
-            kind: JointKind::BallAndSocket {
-                anchor: Vec3::new(x - 0.4, y - 0.25, 0.0),
-                swing: None,
-                twist: None,
-                limit_style: LimitStyle::Hard,
-            },
-            friction: 0.0,
-        });
-    }
-    bodies.push(boxed(
-        "dropped",
-        Vec3::splat(0.1),
-        Vec3::new(1.0, 4.0, 0.05),
-        1.0,
-    ));
-    scene(bodies, constraints, Some(Ground::default()))
-}
-
+/// The same scene (a chain hit by a box) gives the same particles bit for bit, run twice.
 #[test]
 fn same_scene_twice_gives_identical_bits() {
     for solver in [ParticleSolver::RigidFrames, ParticleSolver::Paper] {
-        let run = || {
-            let mut w = ParticleWorld::new(&chain_scene(), solver).unwrap();
-            for _ in 0..180 {
-                w.step();
-            }
-            let mut p = Vec::new();
-            w.particle_positions(&mut p);
-            p.iter()
-                .flat_map(|v| v.to_array())
-                .map(f32::to_bits)
-                .collect::<Vec<u32>>()
-        };
+        let run = || particle_bits(&chain_scene(), solver, 180, None);
         assert_eq!(run(), run(), "{solver:?}");
-    }
-}
-
-fn max_speed(w: &ParticleWorld) -> f32 {
-    let mut s = Vec::new();
-    w.body_states(&mut s);
-    s.iter()
-        .map(|b| b.linear_velocity.length())
-        .fold(0.0, f32::max)
-}
-
-/// Runs `seconds` and checks every particle stays finite and no body exceeds `vmax`.
-fn assert_sane(mut s: SceneDesc, solver: ParticleSolver, seconds: f32, vmax: f32, what: &str) {
-    let frames = (seconds / s.settings.timestep).ceil() as usize;
-    s.name = what.into();
-    let mut w = ParticleWorld::new(&s, solver).unwrap();
-    let mut p = Vec::new();
-    for f in 0..frames {
-        w.step();
-        w.particle_positions(&mut p);
-        assert!(
-            p.iter().all(|x| x.is_finite()),
-            "{what} ({solver:?}): NaN at frame {f}"
-        );
-        let v = max_speed(&w);
-        assert!(v <= vmax, "{what} ({solver:?}): speed {v} m/s at frame {f}");
-        assert!(w.sample().energy.is_finite());
     }
 }
 

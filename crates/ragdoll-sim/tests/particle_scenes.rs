@@ -6,109 +6,23 @@
 //! One binary, each scene simulated once per solver (10 s at the scene's timestep):
 //! about two seconds of release-mode CPU in all.
 
-use ragdoll_sim::glam::Vec3;
-use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
-use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::Pose;
-use ragdoll_sim::scene::af::{AfOptions, load};
-use ragdoll_sim::snapshot::{RenderSnapshot, StickRole};
-use ragdoll_sim::{Method, SceneDesc};
-use std::path::PathBuf;
-
-/// The scene table, in the README's order (scene N is `SCENES[N - 1]`).
-const SCENES: [&str; 10] = [
-    "collision",
-    "ball-chain",
-    "hinge-chain",
-    "box-masses",
-    "ball-limits",
-    "hinge-limits",
-    "spider",
-    "human",
-    "capsule-human",
-    "pile",
-];
-
 mod common;
 
-use common::shipped_variant as scene;
+use common::particle::{SCENES, run_scene as run, scene_failures};
+use common::{shipped_pile, shipped_variant as scene};
+use ragdoll_sim::glam::Vec3;
+use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
+use ragdoll_sim::scene::Pose;
+use ragdoll_sim::snapshot::{RenderSnapshot, StickRole};
+use ragdoll_sim::{Method, SceneDesc};
 
-/// What `ragdoll-lab stats --method particle --seconds T` measures, plus the largest
-/// rise of the state's own energy (see `ParticleWorld::state_energy`).
-fn run(s: &SceneDesc, solver: ParticleSolver, seconds: f64) -> (MethodStats, f64, ParticleWorld) {
-    let mut w = ParticleWorld::new(s, solver).unwrap_or_else(|e| panic!("{}: {e}", s.name));
-    let mut rec = MetricsRecorder::new(s).unwrap();
-    let mut state = EnergyRise::default();
-    rec.record(0.0, &w.sample());
-    state.record(w.state_energy());
-    let frames = (seconds / s.settings.timestep as f64).round() as usize;
-    for _ in 0..frames {
-        w.step();
-        rec.record(w.time(), &w.sample());
-        state.record(w.state_energy());
-    }
-    let stats = rec.stats();
-    let state_gain = state.rise() / stats.energy_scale_j;
-    (stats, state_gain, w)
-}
-
+/// The rigid-frames solver on every variant of scenes 1–9 against the scene thresholds,
+/// the state's own energy gain bounded too (`common::particle::scene_failures`).
 #[test]
 fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9_every_variant() {
     let mut failures = Vec::new();
-    for (k, name) in SCENES[..9].iter().enumerate() {
-        let n = k + 1;
-        let variants = scene(name, 1).variants.len().max(1) as u32;
-        for v in 1..=variants {
-            let (st, state_gain, _) = run(&scene(name, v), ParticleSolver::RigidFrames, 10.0);
-            println!(
-                "scene {n} {name} v{v}: energy_gain {:.4} (state {:.4}) final_kinetic {:.2e} penetration {:.4} m joint_gap {:.4} m limit {:.2}° stretch {:.1e} asleep_at {:?}",
-                st.energy_gain,
-                state_gain,
-                st.final_kinetic,
-                st.max_penetration_m,
-                st.max_joint_gap_m,
-                st.max_limit_violation_deg,
-                st.max_bone_stretch.unwrap_or(0.0),
-                st.asleep_at_s
-            );
-            let mut check = |ok: bool, what: String| {
-                if !ok {
-                    failures.push(format!("scene {n} {name} v{v}: {what}"));
-                }
-            };
-            check(st.finite, "not finite".into());
-            check(
-                st.energy_gain <= 0.02,
-                format!("energy_gain {}", st.energy_gain),
-            );
-            check(
-                state_gain <= 0.02,
-                format!("state energy gain {state_gain}"),
-            );
-            check(
-                st.max_penetration_m <= 0.01,
-                format!("max_penetration_m {}", st.max_penetration_m),
-            );
-            check(
-                st.max_joint_gap_m <= 0.005,
-                format!("max_joint_gap_m {}", st.max_joint_gap_m),
-            );
-            check(
-                st.max_limit_violation_deg <= 3.0,
-                format!("max_limit_violation_deg {}", st.max_limit_violation_deg),
-            );
-            check(
-                st.max_bone_stretch.is_some_and(|s| s <= 0.01),
-                format!("max_bone_stretch {:?}", st.max_bone_stretch),
-            );
-            if n == 7 || n == 8 {
-                check(
-                    st.final_kinetic <= 1e-3,
-                    format!("final_kinetic {}", st.final_kinetic),
-                );
-                check(st.asleep_at_s.is_some(), "never asleep".into());
-            }
-        }
+    for n in 1..=9 {
+        failures.extend(scene_failures(ParticleSolver::RigidFrames, n, None, true));
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
@@ -124,12 +38,7 @@ fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9_every_variant() {
 fn resting_piles_stop_creeping_and_sleep_sooner() {
     let mut times = Vec::new();
     for humans in [4, 8, 14, 26] {
-        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/pile.af");
-        let opts = AfOptions {
-            count: Some(humans),
-            ..Default::default()
-        };
-        let s = load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc;
+        let s = shipped_pile(humans);
         let (st, _, _) = run(&s, ParticleSolver::RigidFrames, 6.0);
         times.push(st.asleep_at_s.unwrap_or(f64::INFINITY));
     }

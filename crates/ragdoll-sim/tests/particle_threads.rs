@@ -14,20 +14,13 @@
 use ragdoll_sim::SceneDesc;
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Grab, Method};
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// The pile scene (scene 10) with `count` humans.
-fn pile(count: u32) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/pile.af");
-    let opts = AfOptions {
-        count: Some(count),
-        ..Default::default()
-    };
-    load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc
-}
+mod common;
+
+use common::shipped_pile as pile;
 
 /// Steps `frames` frames, in a pool of `threads` threads or (`None`) in rayon's global
 /// pool, holding `grab` throughout, and returns every particle position.

@@ -10,9 +10,6 @@
 use ragdoll_sim::Method;
 use ragdoll_sim::metrics::{MethodStats, MetricsRecorder};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::SceneDesc;
-use ragdoll_sim::scene::af::{AfOptions, load};
-use std::path::PathBuf;
 
 const SCENES: [(&str, u32); 13] = [
     ("collision", 1),
@@ -41,19 +38,9 @@ const SCENES: [(&str, u32); 13] = [
 /// chaotic.
 const KNOWN_GAPS: [(&str, u32, &str, f64); 1] = [("human", 1, "max_penetration_m", 0.0160)];
 
-fn scene(name: &str, variant: u32) -> SceneDesc {
-    let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../assets/scenes/{name}.af"));
-    load(
-        &path,
-        &AfOptions {
-            variant,
-            ..Default::default()
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"))
-    .desc
-}
+mod common;
+
+use common::shipped_variant as scene;
 
 /// Runs a scene for 10 s; also checks scene 4's "nothing sinks, nothing is launched".
 fn run(name: &str, variant: u32) -> MethodStats {

@@ -13,21 +13,14 @@
 use ragdoll_sim::method::BodyState;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
-use std::path::PathBuf;
 
 const FIGURES: [&str; 3] = ["spider", "human", "capsule-human"];
 const MAX_SPEED: f32 = 15.0;
 
-fn scene(name: &str) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../assets/scenes")
-        .join(format!("{name}.af"));
-    load(&path, &AfOptions::default())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .desc
-}
+mod common;
+
+use common::shipped_scene as scene;
 
 /// The settings tried, with the simulated time each runs (s): the small timestep and
 /// the many iterations are the expensive ones, and show their trouble early.

@@ -5,19 +5,16 @@
 
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
-use std::path::PathBuf;
 
 /// The spider (scene 7): a body and eight legs dropped onto the floor, asleep within
 /// 2.6 s in both methods with the scene's own settings. (The human is not used: with no
 /// joint or air friction in its file, when it comes to rest depends on how one chaotic
 /// landing leaves a limb swinging.)
+mod common;
+
 fn spider() -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/spider.af");
-    load(&path, &AfOptions::default())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .desc
+    common::shipped_scene("spider")
 }
 
 fn methods(scene: &SceneDesc) -> Vec<Box<dyn Method>> {

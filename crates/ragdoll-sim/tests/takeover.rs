@@ -10,11 +10,10 @@ use ragdoll_sim::scene::af::{AfOptions, AfScene, load_character};
 use ragdoll_sim::scene::decl::{Doom3Base, Doom3Character};
 use ragdoll_sim::scene::takeover::{Takeover, TakeoverError};
 use ragdoll_sim::scene::{SceneDesc, md5anim, md5mesh, scene_mass_props};
-use std::path::PathBuf;
 
-fn base_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3")
-}
+mod common;
+
+use common::lab_mod_base as base_dir;
 
 fn character() -> Doom3Character {
     let base = Doom3Base::open(&base_dir()).unwrap_or_else(|e| panic!("{e}"));

@@ -5,30 +5,10 @@
 use ragdoll_sim::glam::{Quat, Vec3};
 use ragdoll_sim::scene::*;
 use ragdoll_sim::{Error, Solver, World};
-use std::path::PathBuf;
 
-fn scene_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../assets/scenes/{name}"))
-}
+mod common;
 
-/// A scene without gravity or ground unless given.
-fn empty_scene(
-    bodies: Vec<BodyDesc>,
-    constraints: Vec<ConstraintDesc>,
-    gravity: Vec3,
-) -> SceneDesc {
-    SceneDesc {
-        name: "test".into(),
-        bodies,
-        constraints,
-        settings: Settings {
-            gravity,
-            ground: None,
-            ..Settings::default()
-        },
-        ..SceneDesc::default()
-    }
-}
+use common::{free_scene as empty_scene, shipped_path as scene_path};
 
 fn slab(name: &str, pose: Pose) -> BodyDesc {
     BodyDesc::new(

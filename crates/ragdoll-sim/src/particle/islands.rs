@@ -8,39 +8,20 @@
 //! loop meets its contacts and joints in the same relative order. So each batch of
 //! islands is gathered into dense arrays of its own (bones renumbered, contacts and
 //! joints kept in world order, a manifold's points still consecutive), stepped by the
-//! very code that steps the whole world (`rigid_frames::run_substeps`), and scattered back:
+//! very code that steps the whole world (`rigid_frames::run_substeps`, handed in as
+//! `substeps` so this file does not depend on the solver), and scattered back:
 //! the serial result bit for bit, on any number of threads.
-//!
-//! The union-find here is also sleeping's.
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
 use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
-use super::joint_lanes::Lockstep;
+use super::joint_lanes::{Entry, Lockstep};
 use super::joints::JointSet;
-use super::rigid_frames::{self, Part};
+use crate::method::Grab;
 use crate::scene::Settings;
+use crate::union_find::UnionFind;
 use glam::Vec3A;
 use rayon::prelude::*;
-
-/// The root of `i`'s set, halving the path on the way.
-pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let p = parent[parent[i as usize] as usize];
-        parent[i as usize] = p;
-        i = p;
-    }
-    i
-}
-
-/// Joins the sets of `a` and `b`; the lower index stays the root.
-pub(super) fn union(parent: &mut [u32], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a as u32), find(parent, b as u32));
-    if ra != rb {
-        let (lo, hi) = (ra.min(rb), ra.max(rb));
-        parent[hi as usize] = lo;
-    }
-}
 
 /// Batches per thread: a few, so that rayon's work stealing evens out islands of
 /// unequal cost, but not so many that gathering dominates small islands.
@@ -93,12 +74,12 @@ impl Plan {
         // the 352-byte bones (most of the island search on a 1000-human pile).
         let is_static: Vec<bool> = bones.iter().map(Bone::is_static).collect();
         let moving = |s: Side| s.filter(|&i| !is_static[i]);
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut sets = UnionFind::new(n);
         let links = w.links.iter().map(|l| l.sides());
         let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a), m.b));
         for (a, b) in links.chain(touching) {
             if let (Some(a), Some(b)) = (moving(a), moving(b)) {
-                union(&mut parent, a, b);
+                sets.union(a, b);
             }
         }
         // Each moving bone's island, named by its root; a constraint's is that of its
@@ -108,7 +89,7 @@ impl Plan {
                 if is_static[i] {
                     NONE
                 } else {
-                    find(&mut parent, i as u32)
+                    sets.find(i) as u32
                 }
             })
             .collect();
@@ -360,11 +341,34 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[&Batch]) {
         });
 }
 
+/// What the substeps between two collision detections read and write: the world's
+/// own arrays, or a batch of islands gathered into arrays of its own ([`Batch`]). Every
+/// index — a contact's bones, a joint's sides — is into these.
+///
+/// There are no particle arrays: a bone's four particles sit rigidly in its frame at
+/// the end of every substep, at `world(rest_k)` with velocity `lin_vel + ω × (R rest_k)`
+/// (`Bone::corner`, `Bone::corner_velocity`), so they are evaluated where a substep
+/// needs them instead of being stored three times over (positions, previous positions,
+/// velocities: 144 B a bone, and the traffic of writing them every substep).
+pub(super) struct Part<'a> {
+    pub bones: &'a mut [Bone],
+    /// Contact manifolds as detected, and their points (`Manifold::range`).
+    pub manifolds: &'a [Manifold],
+    pub points: &'a mut [ContactPoint],
+    /// Its joints in the world's order, with their sides in `bones`
+    /// ([`JointSet::entries`]), and the joint pass over them.
+    pub joints: &'a [Entry<'a>],
+    pub lockstep: &'a Lockstep,
+    /// The mouse grab; it acts only where its bone is (see `grab_improved`).
+    pub grab: Option<Grab>,
+}
+
 /// A batch stepped in a detection chunk of a frame and the joint pass over its
 /// joints, kept for the next chunk ([`Batch::gather`]).
 pub(super) type Kept = (Batch, Lockstep);
 
-/// Runs `count` substeps of length `h`, each of the plan's batches on its own rayon task.
+/// Runs `count` substeps of length `h` (`substeps`, the solver's kernel over a [`Part`]),
+/// each of the plan's batches on its own rayon task.
 /// `kept` holds the batches of the frame's last chunk and their joint passes: the
 /// batch at the same place here is gathered into the kept one (its bones not copied
 /// again if they are the same bones) and reuses its pass if its joints are the same
@@ -376,6 +380,7 @@ pub(super) fn run_substeps(
     h: f32,
     s: &Settings,
     kept: &mut Vec<Kept>,
+    substeps: impl Fn(&mut Part, u32, f32, &Settings) + Sync,
 ) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
@@ -418,7 +423,7 @@ pub(super) fn run_substeps(
                 lockstep: &lockstep,
                 grab: world.grab,
             };
-            rigid_frames::run_substeps(&mut part, count, h, s);
+            substeps(&mut part, count, h, s);
             (batch, lockstep)
         })
         .collect();
@@ -439,7 +444,7 @@ mod tests {
     /// as it did when only the bones' indices were compared), on any number of threads.
     #[test]
     fn a_bone_that_woke_between_chunks_is_copied_again() {
-        let text = include_str!("islands_wake_chain.af");
+        let text = include_str!("../../tests/data/islands_wake_chain.af");
         let path = std::path::Path::new("islands_wake_chain.af");
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()

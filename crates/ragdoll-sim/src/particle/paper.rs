@@ -101,15 +101,34 @@ pub(crate) struct PaperState {
     pub cones: Vec<ConeLimit>,
 }
 
-/// Builds the paper's particles, bones and limits. Returns the bones (frames at rest)
-/// and the state.
+/// Builds the paper's particles, bones and limits: the joints' shared particles
+/// first ([`joint_particles`]), then each bone's tetrahedron of four particles
+/// ([`tetrahedron`], [`add_bone`]), then what the paper has no shared particles for —
+/// fixed and slider joints tied by sticks — and the limits ([`ties_and_limits`]).
+/// Pushes the bones (frames at rest) onto `w` and returns the state.
 pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) -> PaperState {
+    let mut st = PaperState::default();
+    let (joint_points, joint_particles) = joint_particles(w, scene);
+    for (i, body) in scene.bodies.iter().enumerate() {
+        let size = scene.bodies[i].shape.local_half_extents().length() * 2.0;
+        let (chosen, ids, satellites) = tetrahedron(body, size, &joint_points[i]);
+        add_bone(w, &mut st, scene, i, masses[i], &chosen, &ids, &satellites);
+    }
+    ties_and_limits(w, &mut st, scene, &joint_particles);
+    st
+}
+
+/// A joint's points as particles, one global particle each, shared by the bones it
+/// joins: a ball or universal joint's anchor, a hinge's two points on its axis (half
+/// the smaller bone's extent along it either side). Returns, per body, the joint points
+/// on it with their particles, and per constraint its particles.
+#[allow(clippy::type_complexity)]
+fn joint_particles(
+    w: &mut ParticleWorld,
+    scene: &SceneDesc,
+) -> (Vec<Vec<(Vec3, u32)>>, Vec<Vec<u32>>) {
     let dt = scene.settings.timestep;
     let g = scene.settings.gravity;
-    let mut st = PaperState::default();
-    let poses: Vec<_> = scene.bodies.iter().map(|b| b.pose).collect();
-    let size_of = |i: usize| scene.bodies[i].shape.local_half_extents().length() * 2.0;
-    // Joint points, one global particle each.
     let mut joint_points: Vec<Vec<(Vec3, u32)>> = vec![Vec::new(); scene.bodies.len()];
     let mut joint_particles: Vec<Vec<u32>> = Vec::new();
     for c in &scene.constraints {
@@ -150,108 +169,149 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
         }
         joint_particles.push(ids);
     }
-    // Each bone's tetrahedron.
-    for (i, body) in scene.bodies.iter().enumerate() {
-        let size = size_of(i);
-        let mut chosen: Vec<Vec3> = Vec::new();
-        let mut ids: Vec<u32> = Vec::new();
-        let mut satellites: Vec<u32> = Vec::new();
-        if let Some(explicit) = body.particles {
-            for p in explicit {
-                let wp = body.pose.transform_point(p);
-                chosen.push(wp);
-                let shared = joint_points[i]
-                    .iter()
-                    .find(|(q, _)| q.distance(wp) < 1e-3 * size.max(1e-3));
-                ids.push(match shared {
-                    Some(&(_, id)) => id,
-                    None => u32::MAX,
-                });
-            }
-            for &(q, id) in &joint_points[i] {
-                if !ids.contains(&id) {
-                    let _ = q;
-                    satellites.push(id);
-                }
-            }
-        } else {
-            for &(q, id) in &joint_points[i] {
-                if chosen.len() < 4 && independent(&chosen, q, size) {
-                    chosen.push(q);
-                    ids.push(id);
-                } else {
-                    satellites.push(id);
-                }
-            }
-            let cands: Vec<Vec3> = paper_candidates(&body.shape)
+    (joint_points, joint_particles)
+}
+
+/// The four points of `body`'s tetrahedron (world space; `size` its diagonal): its
+/// explicit particles, or its joint points while they stay independent, then the
+/// candidates of its shape farthest apart. With them, the particle of each point that
+/// is a joint's (`u32::MAX`: a new particle), and the joint particles left over
+/// (satellites, tied to the four by sticks).
+fn tetrahedron(
+    body: &crate::scene::BodyDesc,
+    size: f32,
+    joint_points: &[(Vec3, u32)],
+) -> (Vec<Vec3>, Vec<u32>, Vec<u32>) {
+    let mut chosen: Vec<Vec3> = Vec::new();
+    let mut ids: Vec<u32> = Vec::new();
+    let mut satellites: Vec<u32> = Vec::new();
+    if let Some(explicit) = body.particles {
+        for p in explicit {
+            let wp = body.pose.transform_point(p);
+            chosen.push(wp);
+            let shared = joint_points
                 .iter()
-                .map(|c| body.pose.transform_point(*c))
-                .collect();
-            fill_far_apart(&mut chosen, &cands, size);
-            // A degenerate leftover cannot happen with eight box corners, but be safe.
-            let mut k = 0;
-            while chosen.len() < 4 {
-                let axis = [Vec3::X, Vec3::Y, Vec3::Z][k % 3] * (0.1 * size * (1 + k / 3) as f32);
-                let p = body.pose.position + axis;
-                if independent(&chosen, p, size) || k > 20 {
-                    chosen.push(p);
-                }
-                k += 1;
-            }
-            ids.resize(4, u32::MAX);
-        }
-        let movable = !body.is_fixed();
-        let v0 = body.linear_velocity;
-        let mut particles = [0u32; 4];
-        for k in 0..4 {
-            particles[k] = if ids[k] == u32::MAX {
-                let v = v0 + body.angular_velocity.cross(chosen[k] - body.pose.position);
-                w.particles.push(chosen[k], v, g, dt, 0.0, movable)
-            } else {
-                ids[k]
-            };
-            if movable {
-                w.particles.mass[particles[k] as usize] += masses[i] * 0.25;
-            } else {
-                w.particles.inv_mass[particles[k] as usize] = 0.0;
-            }
-        }
-        let x = &w.particles.x;
-        let pos: [Vec3; 4] = particles.map(|p| x[p as usize]);
-        let (rot, _) = gram_schmidt(pos[1] - pos[0], pos[2] - pos[0]);
-        let frame = crate::scene::Pose {
-            position: pos[0],
-            rotation: rot,
-        };
-        let inv = crate::scene::Pose {
-            position: -(rot.inverse() * pos[0]),
-            rotation: rot.inverse(),
-        };
-        let mut bone = w.make_bone(i, &scene.bodies[i], masses[i]);
-        bone.particles = particles;
-        bone.rest = pos.map(|p| frame.inverse_transform_point(p));
-        bone.stick_rest = EDGES.map(|(a, b)| pos[a].distance(pos[b]));
-        bone.com = pos[0].into();
-        bone.rot = rot;
-        bone.shape_in_bone = inv.mul_pose(&poses[i]);
-        for (k, &(a, b)) in EDGES.iter().enumerate() {
-            st.sticks.push(Stick {
-                a: particles[a],
-                b: particles[b],
-                rest: bone.stick_rest[k],
+                .find(|(q, _)| q.distance(wp) < 1e-3 * size.max(1e-3));
+            ids.push(match shared {
+                Some(&(_, id)) => id,
+                None => u32::MAX,
             });
         }
-        for s in satellites {
-            for &p in &particles {
-                let rest = x[s as usize].distance(x[p as usize]);
-                if rest > 1e-6 {
-                    st.sticks.push(Stick { a: s, b: p, rest });
-                }
+        for &(q, id) in joint_points {
+            if !ids.contains(&id) {
+                let _ = q;
+                satellites.push(id);
             }
         }
-        w.bones.push(bone);
+    } else {
+        for &(q, id) in joint_points {
+            if chosen.len() < 4 && independent(&chosen, q, size) {
+                chosen.push(q);
+                ids.push(id);
+            } else {
+                satellites.push(id);
+            }
+        }
+        let cands: Vec<Vec3> = paper_candidates(&body.shape)
+            .iter()
+            .map(|c| body.pose.transform_point(*c))
+            .collect();
+        fill_far_apart(&mut chosen, &cands, size);
+        // A degenerate leftover cannot happen with eight box corners, but be safe.
+        let mut k = 0;
+        while chosen.len() < 4 {
+            let axis = [Vec3::X, Vec3::Y, Vec3::Z][k % 3] * (0.1 * size * (1 + k / 3) as f32);
+            let p = body.pose.position + axis;
+            if independent(&chosen, p, size) || k > 20 {
+                chosen.push(p);
+            }
+            k += 1;
+        }
+        ids.resize(4, u32::MAX);
     }
-    // Joints the paper has no sharing for; and the limits.
+    (chosen, ids, satellites)
+}
+
+/// Bone `i` of `scene` (mass `mass`) on the particles at `chosen` (new ones where
+/// `ids` has `u32::MAX`): its frame at rest by Gram–Schmidt on the first three, its six
+/// sticks, and sticks from each satellite to its four particles.
+#[allow(clippy::too_many_arguments)]
+fn add_bone(
+    w: &mut ParticleWorld,
+    st: &mut PaperState,
+    scene: &SceneDesc,
+    i: usize,
+    mass: f32,
+    chosen: &[Vec3],
+    ids: &[u32],
+    satellites: &[u32],
+) {
+    let dt = scene.settings.timestep;
+    let g = scene.settings.gravity;
+    let body = &scene.bodies[i];
+    let movable = !body.is_fixed();
+    let v0 = body.linear_velocity;
+    let mut particles = [0u32; 4];
+    for k in 0..4 {
+        particles[k] = if ids[k] == u32::MAX {
+            let v = v0 + body.angular_velocity.cross(chosen[k] - body.pose.position);
+            w.particles.push(chosen[k], v, g, dt, 0.0, movable)
+        } else {
+            ids[k]
+        };
+        if movable {
+            w.particles.mass[particles[k] as usize] += mass * 0.25;
+        } else {
+            w.particles.inv_mass[particles[k] as usize] = 0.0;
+        }
+    }
+    let x = &w.particles.x;
+    let pos: [Vec3; 4] = particles.map(|p| x[p as usize]);
+    let (rot, _) = gram_schmidt(pos[1] - pos[0], pos[2] - pos[0]);
+    let frame = crate::scene::Pose {
+        position: pos[0],
+        rotation: rot,
+    };
+    let inv = crate::scene::Pose {
+        position: -(rot.inverse() * pos[0]),
+        rotation: rot.inverse(),
+    };
+    let mut bone = w.make_bone(i, &scene.bodies[i], mass);
+    bone.particles = particles;
+    bone.rest = pos.map(|p| frame.inverse_transform_point(p));
+    bone.stick_rest = EDGES.map(|(a, b)| pos[a].distance(pos[b]));
+    bone.com = pos[0].into();
+    bone.rot = rot;
+    bone.shape_in_bone = inv.mul_pose(&body.pose);
+    for (k, &(a, b)) in EDGES.iter().enumerate() {
+        st.sticks.push(Stick {
+            a: particles[a],
+            b: particles[b],
+            rest: bone.stick_rest[k],
+        });
+    }
+    for &s in satellites {
+        for &p in &particles {
+            let rest = x[s as usize].distance(x[p as usize]);
+            if rest > 1e-6 {
+                st.sticks.push(Stick { a: s, b: p, rest });
+            }
+        }
+    }
+    w.bones.push(bone);
+}
+
+/// Joints the paper has no shared particles for — a fixed or slider joint ties every
+/// particle of one bone to every particle of the other (or to a fixed particle where
+/// it is, for the world) — and the hinge and cone limits on the joints' particles.
+fn ties_and_limits(
+    w: &mut ParticleWorld,
+    st: &mut PaperState,
+    scene: &SceneDesc,
+    joint_particles: &[Vec<u32>],
+) {
+    let dt = scene.settings.timestep;
+    let g = scene.settings.gravity;
     for (ci, c) in scene.constraints.iter().enumerate() {
         let b1 = c.body1.index();
         let b2 = c.body2.body().map(|b| b.index());
@@ -291,7 +351,6 @@ pub(crate) fn build(w: &mut ParticleWorld, scene: &SceneDesc, masses: &[f32]) ->
             _ => {}
         }
     }
-    st
 }
 
 fn frame_rot(w: &ParticleWorld, bone: Option<usize>) -> Quat {

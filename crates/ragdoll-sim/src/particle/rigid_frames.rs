@@ -32,11 +32,11 @@ use super::contacts::{
 use super::friction::{
     BLOCK, point_velocity, solve_friction, solve_normal, solve_normals, solve_velocities,
 };
-use super::joint_lanes::{Entry, Lockstep};
+use super::islands::{self, Part};
+use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
-use super::{ParticleWorld, islands, sleeping};
+use super::{ParticleWorld, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
-use crate::method::Grab;
 use crate::scene::{Ground, Settings};
 use crate::timings::{PhaseClock, PhaseTimes};
 use glam::{Quat, Vec3, Vec3A};
@@ -378,28 +378,6 @@ pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
     (s.substeps.max(1) * s.iterations.max(1)).min(1000)
 }
 
-/// What the substeps between two collision detections read and write: the world's
-/// own arrays, or a batch of islands gathered into arrays of its own (`islands`). Every
-/// index — a contact's bones, a joint's sides — is into these.
-///
-/// There are no particle arrays: a bone's four particles sit rigidly in its frame at
-/// the end of every substep, at `world(rest_k)` with velocity `lin_vel + ω × (R rest_k)`
-/// (`Bone::corner`, `Bone::corner_velocity`), so they are evaluated where a substep
-/// needs them instead of being stored three times over (positions, previous positions,
-/// velocities: 144 B a bone, and the traffic of writing them every substep).
-pub(super) struct Part<'a> {
-    pub bones: &'a mut [Bone],
-    /// Contact manifolds as detected, and their points (`Manifold::range`).
-    pub manifolds: &'a [Manifold],
-    pub points: &'a mut [ContactPoint],
-    /// Its joints in the world's order, with their sides in `bones`
-    /// ([`JointSet::entries`]), and the joint pass over them.
-    pub joints: &'a [Entry<'a>],
-    pub lockstep: &'a Lockstep,
-    /// The mouse grab; it acts only where its bone is (see `grab_improved`).
-    pub grab: Option<Grab>,
-}
-
 /// Runs `count` substeps of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
     // How far an old overlap may be pushed out in a substep (`friction::solve_normals`).
@@ -593,7 +571,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         clock.lap(&mut times, "detection");
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
-            Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept),
+            Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept, run_substeps),
             None => {
                 // The kept batches' copies of the bones stepped here are stale now.
                 kept.clear();

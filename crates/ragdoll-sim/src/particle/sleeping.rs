@@ -12,9 +12,9 @@
 
 use super::bone::Bone;
 use super::contacts::{BONES_PER_TASK, Manifold};
-use super::islands::{find, union};
 use super::joints::Link;
 use crate::scene::SleepSettings;
+use crate::union_find::UnionFind;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -76,7 +76,7 @@ pub(crate) fn update(
     if let Some(b) = held.and_then(|i| bones.get_mut(i)) {
         b.wake();
     }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut sets = UnionFind::new(n);
     // Dense, for the links below, which ask it of bones all over the array.
     let is_dynamic: Vec<bool> = bones.iter().map(|b| !b.fixed).collect();
     let dynamic = |i: usize| is_dynamic[i];
@@ -85,7 +85,7 @@ pub(crate) fn update(
             && dynamic(a)
             && dynamic(b)
         {
-            union(&mut parent, a, b);
+            sets.union(a, b);
         }
     }
     for c in manifolds {
@@ -93,13 +93,13 @@ pub(crate) fn update(
             && dynamic(c.a)
             && dynamic(b)
         {
-            union(&mut parent, c.a, b);
+            sets.union(c.a, b);
         }
     }
     let mut min_time = vec![f32::INFINITY; n];
     for (i, b) in bones.iter().enumerate() {
         if !b.fixed {
-            let r = find(&mut parent, i as u32) as usize;
+            let r = sets.find(i);
             min_time[r] = min_time[r].min(b.sleep_time.max(b.still_time));
         }
     }
@@ -109,7 +109,7 @@ pub(crate) fn update(
         if b.fixed {
             continue;
         }
-        let r = find(&mut parent, i as u32) as usize;
+        let r = sets.find(i);
         let sleep = forced || (allowed && min_time[r] >= s.time);
         if sleep && !b.asleep {
             newly_asleep.push(i);

@@ -14,12 +14,13 @@
 
 use super::body::BodyStates;
 use crate::scene::SleepSettings;
+use crate::union_find::UnionFind;
 use glam::{Quat, Vec3, Vec3A};
 
-/// Sleep bookkeeping per body plus the union–find arrays.
+/// Sleep bookkeeping per body plus the union–find of this step's links.
 #[derive(Clone, Debug, Default)]
 pub struct Islands {
-    parent: Vec<u32>,
+    links: UnionFind,
     /// Per body: asleep.
     pub asleep: Vec<bool>,
     /// Per body: seconds it has been still.
@@ -36,7 +37,7 @@ impl Islands {
     /// Sleep state for `n` bodies, all awake.
     pub fn new(s: &BodyStates, n: usize) -> Islands {
         Islands {
-            parent: (0..n as u32).collect(),
+            links: UnionFind::new(n),
             asleep: vec![false; n],
             still_time: vec![0.0; n],
             rest_com: s.com[..n].to_vec(),
@@ -50,7 +51,8 @@ impl Islands {
 
     /// Adds a body (a projectile), awake.
     pub fn push(&mut self, s: &BodyStates, i: usize) {
-        self.parent.push(i as u32);
+        debug_assert_eq!(i, self.links.len(), "bodies are pushed in order");
+        self.links.push();
         self.asleep.push(false);
         self.still_time.push(0.0);
         self.rest_com.push(s.com[i]);
@@ -61,48 +63,33 @@ impl Islands {
         self.island_wake.push(false);
     }
 
-    fn find(&mut self, mut i: u32) -> u32 {
-        while self.parent[i as usize] != i {
-            let p = self.parent[i as usize];
-            self.parent[i as usize] = self.parent[p as usize];
-            i = p;
-        }
-        i
-    }
-
     /// The representative of `i`'s island (valid until the next link).
     pub fn root(&mut self, i: usize) -> usize {
-        self.find(i as u32) as usize
+        self.links.find(i)
     }
 
     /// Starts a new union–find round.
     pub fn reset_links(&mut self) {
-        for (i, p) in self.parent.iter_mut().enumerate() {
-            *p = i as u32;
-        }
+        self.links.reset();
     }
 
     /// Joins the islands of `a` and `b` (both dynamic).
     pub fn link(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a as u32), self.find(b as u32));
-        if ra != rb {
-            // Smaller root wins: the result does not depend on link order's history.
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            self.parent[hi as usize] = lo;
-        }
+        // Smaller root wins: the result does not depend on link order's history.
+        self.links.union(a, b);
     }
 
     /// Marks `i`'s island to be woken by [`Islands::apply_wakes`].
     pub fn request_wake(&mut self, i: usize) {
-        let r = self.find(i as u32) as usize;
+        let r = self.links.find(i);
         self.island_wake[r] = true;
     }
 
     /// Wakes every island marked by [`Islands::request_wake`]; returns whether any woke.
     pub fn apply_wakes(&mut self) -> bool {
         let mut any = false;
-        for i in 0..self.parent.len() {
-            let r = self.find(i as u32) as usize;
+        for i in 0..self.links.len() {
+            let r = self.links.find(i);
             if self.island_wake[r] && self.asleep[i] {
                 self.asleep[i] = false;
                 self.still_time[i] = 0.0;
@@ -123,7 +110,7 @@ impl Islands {
         dt: f32,
         t: f32,
     ) -> bool {
-        let n = self.parent.len();
+        let n = self.links.len();
         for i in 0..n {
             if !dynamic[i] || self.asleep[i] {
                 continue;
@@ -167,7 +154,7 @@ impl Islands {
             .for_each(|m| *m = f32::INFINITY);
         for i in 0..n {
             if dynamic[i] && !self.asleep[i] {
-                let r = self.find(i as u32) as usize;
+                let r = self.links.find(i);
                 self.island_min_still[r] = self.island_min_still[r].min(self.still_time[i]);
             }
         }
@@ -176,7 +163,7 @@ impl Islands {
             if !dynamic[i] || self.asleep[i] {
                 continue;
             }
-            let r = self.find(i as u32) as usize;
+            let r = self.links.find(i);
             if forced || self.island_min_still[r] >= cfg.time {
                 self.asleep[i] = true;
                 s.lin_vel[i] = Vec3A::ZERO;

@@ -21,9 +21,8 @@
 //! Only the declarations asked for are tokenized, so an unrelated declaration the
 //! shared lexer cannot read does not stop a lookup.
 
-use super::af::AfError;
-use super::af::lexer::{Pos, Tok, Token, tokenize_from};
-use super::md5mesh::read_text;
+use super::file_error::{AfError, read_text};
+use super::lexer::{Pos, Tok, Token, tokenize_from};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 

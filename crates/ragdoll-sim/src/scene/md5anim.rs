@@ -17,9 +17,9 @@
 //! R_w = R_p R_l, t_w = R_p t_l + t_p.
 
 use super::Pose;
-use super::af::AfError;
-use super::af::lexer::{Cursor, Tok, tokenize};
-use super::md5mesh::{MAX_COUNT, Md5Skeleton, Reader, file_quat, read_text};
+use super::file_error::{AfError, read_text};
+use super::lexer::{Cursor, Tok, tokenize};
+use super::md5mesh::{MAX_COUNT, Md5Skeleton, Reader, file_quat};
 use glam::Vec3;
 use std::path::Path;
 

@@ -35,8 +35,8 @@
 //! `(x, y, z, −w)`, which is what [`file_quat`] returns.
 
 use super::Pose;
-use super::af::AfError;
-use super::af::lexer::{Cursor, Pos, Tok, tokenize};
+use super::file_error::{AfError, read_text};
+use super::lexer::{Cursor, Pos, Tok, tokenize};
 use glam::{Quat, Vec2, Vec3};
 use std::path::Path;
 
@@ -169,21 +169,6 @@ pub fn load(path: &Path) -> Result<Md5Mesh, AfError> {
     let file = path.display().to_string();
     let text = read_text(path, "mesh")?;
     parse(&text, &file)
-}
-
-/// Reads a text file for one of the Doom 3 readers; `what` names it in the error.
-pub(crate) fn read_text(path: &Path, what: &str) -> Result<String, AfError> {
-    let bytes = std::fs::read(path).map_err(|e| AfError {
-        file: path.display().to_string(),
-        line: 1,
-        col: 1,
-        message: format!("cannot read the {what}: {e}"),
-    })?;
-    // idLexer reads bytes; text outside UTF-8 is taken as Latin-1 rather than refused.
-    Ok(match String::from_utf8(bytes) {
-        Ok(s) => s,
-        Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
-    })
 }
 
 /// Parses md5mesh text; `file` names it in errors.

@@ -2,6 +2,9 @@
 //!
 //! - [`desc`]: `SceneDesc` and everything in it, plain data.
 //! - [`mass`]: mass properties from shapes, shared by both methods.
+//! - `lexer` and `file_error`: the tokens of Doom 3's text formats with their positions,
+//!   and [`AfError`], the positioned error, shared by the four readers below (which
+//!   depend on these two and not on each other's internals).
 //! - [`af`]: the Doom 3 articulated-figure reader with our extensions.
 //! - [`md5mesh`]: `.md5mesh` skeletons (the bind pose `joint("name")` reads) and meshes.
 //! - [`md5anim`]: `.md5anim` animations and their frames' joint poses.
@@ -17,6 +20,8 @@ pub mod af;
 pub mod collider;
 pub mod decl;
 pub mod desc;
+mod file_error;
+pub(crate) mod lexer;
 pub mod mass;
 pub mod md5anim;
 pub mod md5mesh;
@@ -29,14 +34,15 @@ mod validate;
 
 pub use collider::{BodyCollider, Collider};
 pub use desc::*;
+pub use file_error::AfError;
 pub use mass::{MassProps, collider, mass_props, scene_mass_props};
 pub use pyramid::pyramid_sides;
 pub use validate::validate;
 
 use thiserror::Error;
 
-/// Why a `SceneDesc` cannot be simulated. The `.af` reader has its own positioned
-/// error type; this one is for descriptions built in code or after reading.
+/// Why a `SceneDesc` cannot be simulated. The file readers have their own positioned
+/// error type, [`AfError`]; this one is for descriptions built in code or after reading.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SceneError {
     /// A body's shape or mass is unusable.

@@ -1,14 +1,17 @@
-//! Scene builders and measurements shared by the closed-form suite: the solvers under
-//! test, boxes, joints, and energies computed from the states a method reports.
+//! What the test files share: the solvers under test, scene builders (boxes, joints),
+//! the shipped scenes' loader, energies computed from the states a method reports; the
+//! particle solvers' shared checks (`particle`) and the readers' fuzzing mutations
+//! (`mutation`).
 
 #![allow(dead_code)]
 
 pub mod mutation;
+pub mod particle;
 
 use ragdoll_sim::glam::{Mat3, Vec3};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
-use ragdoll_sim::scene::af::{AfOptions, load};
+use ragdoll_sim::scene::af::{AfOptions, AfScene, load};
 use ragdoll_sim::scene::*;
 use ragdoll_sim::{BodyState, Method};
 use std::path::PathBuf;
@@ -67,6 +70,26 @@ pub fn scene(bodies: Vec<BodyDesc>, ground: Option<Ground>) -> SceneDesc {
         bodies,
         settings: Settings {
             ground,
+            ..Settings::default()
+        },
+        ..SceneDesc::default()
+    }
+}
+
+/// A scene of `bodies` and `constraints` without ground and under `gravity`, the
+/// other settings default.
+pub fn free_scene(
+    bodies: Vec<BodyDesc>,
+    constraints: Vec<ConstraintDesc>,
+    gravity: Vec3,
+) -> SceneDesc {
+    SceneDesc {
+        name: "free".into(),
+        bodies,
+        constraints,
+        settings: Settings {
+            gravity,
+            ground: None,
             ..Settings::default()
         },
         ..SceneDesc::default()
@@ -152,12 +175,52 @@ pub fn shipped_scene(name: &str) -> SceneDesc {
 
 /// A scene shipped in assets/scenes, in one of its variants (`AfOptions::variant`).
 pub fn shipped_variant(name: &str, variant: u32) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../assets/scenes")
-        .join(format!("{name}.af"));
     let opts = AfOptions {
         variant,
         ..Default::default()
     };
-    load(&path, &opts).unwrap_or_else(|e| panic!("{e}")).desc
+    shipped_with(name, &opts).desc
+}
+
+/// The pile scene (assets/scenes/pile.af) with `count` humans.
+pub fn shipped_pile(count: u32) -> SceneDesc {
+    let opts = AfOptions {
+        count: Some(count),
+        ..Default::default()
+    };
+    shipped_with("pile", &opts).desc
+}
+
+/// The path of `file` (with its extension) in assets/scenes.
+pub fn shipped_path(file: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/scenes")
+        .join(file)
+}
+
+/// The scene file `name` of assets/scenes read with `opts`: the one loader of the
+/// tests that read shipped scenes; a file that does not load fails the test with its
+/// `FILE:LINE:COL` message.
+pub fn shipped_with(name: &str, opts: &AfOptions) -> AfScene {
+    load(&shipped_path(&format!("{name}.af")), opts).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Our own Doom 3 test mod (assets/doom3, made by scripts/make_doom3_mod.py).
+pub fn lab_mod_base() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3")
+}
+
+/// The variable naming a real Doom 3 base folder for the tests that read id's files.
+pub const DOOM3_BASE_ENV: &str = "RAGDOLL_LAB_DOOM3_BASE";
+
+/// The real Doom 3 base folder named by [`DOOM3_BASE_ENV`], or `None` when it is unset,
+/// after a note that `what` is skipped.
+pub fn real_doom3_base(what: &str) -> Option<PathBuf> {
+    match std::env::var_os(DOOM3_BASE_ENV) {
+        Some(p) if !p.is_empty() => Some(PathBuf::from(p)),
+        _ => {
+            println!("note: {DOOM3_BASE_ENV} is not set; skipping {what}");
+            None
+        }
+    }
 }

@@ -14,6 +14,7 @@ use super::contacts::Contact;
 use super::joints::Anchor;
 use super::particles::{PER_BONE, XParticles};
 use crate::scene::SleepSettings;
+use crate::union_find::UnionFind;
 use glam::{Quat, Vec3};
 
 /// Each bone's rest timers.
@@ -27,23 +28,6 @@ pub(crate) struct Rest {
     pub anchor: Vec3,
     /// The orientation the no-move turn is measured from.
     pub turn: Quat,
-}
-
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let up = parent[parent[i as usize] as usize];
-        parent[i as usize] = up;
-        i = up;
-    }
-    i
-}
-
-fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        let (lo, hi) = (ra.min(rb), ra.max(rb));
-        parent[hi as usize] = lo;
-    }
 }
 
 /// Updates the timers over a frame of `dt` ending at `time` and puts islands to sleep
@@ -86,14 +70,14 @@ pub(crate) fn update(
             r.still = 0.0;
         }
     }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut sets = UnionFind::new(n);
     let dynamic = |bones: &[Bone], i: usize| !bones[i].fixed;
     for l in links {
         if let (Some(a), Some(b)) = l.sides()
             && dynamic(bones, a)
             && dynamic(bones, b)
         {
-            union(&mut parent, a as u32, b as u32);
+            sets.union(a, b);
         }
     }
     for c in contacts {
@@ -101,7 +85,7 @@ pub(crate) fn update(
             && dynamic(bones, a as usize)
             && dynamic(bones, b as usize)
         {
-            union(&mut parent, a, b);
+            sets.union(a as usize, b as usize);
         }
     }
     // An island rests as long as its least rested bone.
@@ -110,7 +94,7 @@ pub(crate) fn update(
         if bones[i].fixed {
             continue;
         }
-        let root = find(&mut parent, i as u32) as usize;
+        let root = sets.find(i);
         let r = rest[i].slow.max(rest[i].still);
         island_rest[root] = island_rest[root].min(r);
     }
@@ -120,7 +104,7 @@ pub(crate) fn update(
         if bones[i].fixed {
             continue;
         }
-        let root = find(&mut parent, i as u32) as usize;
+        let root = sets.find(i);
         let asleep = allowed && (forced || island_rest[root] >= s.time);
         if asleep != bones[i].asleep {
             bones[i].asleep = asleep;

@@ -5,10 +5,10 @@
 use super::body::read_body;
 use super::constraint::read_constraint;
 use super::ctx::{Conv, Ctx, Defaults, R, angles_to_quat, unknown_key};
-use super::lexer::Pos;
 use super::parser::{Block, Entry, Value};
 use super::place::replicate_figure;
 use super::{AfError, AfOptions, AfScene, FigureSource};
+use crate::scene::lexer::Pos;
 use crate::scene::md5mesh::Md5Skeleton;
 use crate::scene::rig::{JointMod, Rig};
 use crate::scene::{

@@ -1,14 +1,38 @@
 //! Constraint blocks: the six Doom 3 types, their limits, and our limit extensions.
 
 use super::ctx::{Ctx, Defaults, R, unknown_key};
-use super::lexer::Pos;
 use super::parser::{Block, Entry, Value};
+use crate::scene::lexer::Pos;
 use crate::scene::{
     AngleRange, BodyId, BodyRef, ConstraintDesc, JointKind, LimitStyle, SwingLimit, TwistLimit,
 };
 use glam::Vec3;
 use std::collections::HashMap;
 
+/// The keys of a constraint block as read, before they are checked against its type.
+struct Keys {
+    body1: Option<BodyRef>,
+    body2: Option<BodyRef>,
+    anchor: Option<Vec3>,
+    anchor1: Option<Vec3>,
+    anchor2: Option<Vec3>,
+    axis: Option<Vec3>,
+    shafts: Option<(Vec3, Vec3)>,
+    axes: Option<(Vec3, Vec3)>,
+    /// The swing limit and where it was written (a universal joint's needs `shafts`).
+    swing: Option<(SwingLimit, Pos)>,
+    twist: Option<TwistLimit>,
+    range: Option<AngleRange>,
+    ranges: Option<[AngleRange; 2]>,
+    soft: LimitStyle,
+    friction: f32,
+    /// stretch, compress, damping, restLength, minLength, maxLength.
+    spring: [f32; 6],
+}
+
+/// A constraint block of type `kind` (one of Doom 3's six) named `name`, its bodies
+/// looked up in `ids`: every key read and checked against the type, then the joint
+/// built from them.
 pub(super) fn read_constraint(
     ctx: &mut Ctx,
     b: &Block,
@@ -17,59 +41,27 @@ pub(super) fn read_constraint(
     ids: &HashMap<&str, BodyId>,
     d: &Defaults,
 ) -> R<ConstraintDesc> {
-    let mut body1 = None;
-    let mut body2 = None;
-    let mut anchor = None;
-    let mut anchor1 = None;
-    let mut anchor2 = None;
-    let mut axis = None;
-    let mut shafts: Option<(Vec3, Vec3)> = None;
-    let mut axes: Option<(Vec3, Vec3)> = None;
-    let mut swing = None;
-    let mut twist = None;
-    let mut range = None;
-    let mut ranges = None;
-    let mut soft = LimitStyle::Hard;
-    let mut friction = d.constraint_friction;
-    let mut spring = [0.0f32; 6]; // stretch, compress, damping, restLength, minLength, maxLength
-    let scale = ctx.conv.scale;
-    let is = |k: &str| kind == k;
-    let body_ref = |ctx: &Ctx, e: &Entry, allow_world: bool| -> R<BodyRef> {
-        ctx.arity(e, 1..=1, "a quoted body name")?;
-        let n = ctx.string(&e.values[0], &format!("`{}`", e.key))?;
-        if n.eq_ignore_ascii_case("world") {
-            return if allow_world {
-                Ok(BodyRef::World)
-            } else {
-                Err(ctx.err(
-                    e.values[0].pos(),
-                    "body1 cannot be the world; swap body1 and body2",
-                ))
-            };
-        }
-        ids.get(n).map(|id| BodyRef::Body(*id)).ok_or_else(|| {
-            ctx.err(
-                e.values[0].pos(),
-                format!(
-                    "unknown body \"{n}\" in `{}`; no `body \"{n}\" {{ ... }}` is defined",
-                    e.key
-                ),
-            )
-        })
+    let mut keys = Keys {
+        body1: None,
+        body2: None,
+        anchor: None,
+        anchor1: None,
+        anchor2: None,
+        axis: None,
+        shafts: None,
+        axes: None,
+        swing: None,
+        twist: None,
+        range: None,
+        ranges: None,
+        soft: LimitStyle::Hard,
+        friction: d.constraint_friction,
+        spring: [0.0; 6],
     };
     for e in &b.entries {
         let key = e.key.to_ascii_lowercase();
-        let applies = match key.as_str() {
-            "body1" | "body2" | "friction" => true,
-            "anchor" => !is("spring") && !is("slider") && !is("fixed"),
-            "anchor1" | "anchor2" | "stretch" | "compress" | "damping" | "restlength"
-            | "minlength" | "maxlength" => is("spring"),
-            "axis" => is("hinge") || is("slider"),
-            "limit" | "range" => is("hinge"),
-            "shafts" | "axes" | "ranges" => is("universalJoint"),
-            "conelimit" | "pyramidlimit" => is("ballAndSocketJoint") || is("universalJoint"),
-            "twistlimit" | "softlimit" => is("ballAndSocketJoint"),
-            _ => {
+        match key_applies(kind, &key) {
+            None => {
                 return Err(unknown_key(
                     ctx,
                     e,
@@ -77,146 +69,19 @@ pub(super) fn read_constraint(
                     "body1, body2, anchor, anchor1, anchor2, axis, shafts, limit, conelimit, pyramidlimit, friction, stretch, compress, damping, restLength, minLength, maxLength; ours: range, ranges, axes, twistLimit, softLimit",
                 ));
             }
-        };
-        if !applies {
-            return Err(ctx.err(e.pos, format!("`{}` does not apply to a {kind}", e.key)));
-        }
-        match key.as_str() {
-            "body1" => body1 = Some(body_ref(ctx, e, false)?),
-            "body2" => body2 = Some(body_ref(ctx, e, true)?),
-            "friction" => friction = ctx.nonneg(e)?,
-            "anchor" | "anchor1" | "anchor2" => {
-                ctx.arity(e, 1..=1, "a vector")?;
-                let p = ctx.point(&e.values[0])?;
-                match key.as_str() {
-                    "anchor" => anchor = Some(p),
-                    "anchor1" => anchor1 = Some(p),
-                    _ => anchor2 = Some(p),
-                }
+            Some(false) => {
+                return Err(ctx.err(e.pos, format!("`{}` does not apply to a {kind}", e.key)));
             }
-            "stretch" => spring[0] = ctx.nonneg(e)?,
-            "compress" => spring[1] = ctx.nonneg(e)?,
-            "damping" => spring[2] = ctx.nonneg(e)?,
-            "restlength" => spring[3] = ctx.nonneg(e)? * scale,
-            "minlength" => spring[4] = ctx.nonneg(e)? * scale,
-            "maxlength" => spring[5] = ctx.nonneg(e)? * scale,
-            "axis" => {
-                ctx.arity(e, 1..=1, "a vector")?;
-                axis = Some(ctx.dir(&e.values[0])?);
-            }
-            "shafts" | "axes" => {
-                ctx.arity(e, 2..=2, "two vectors")?;
-                let pair = (ctx.dir(&e.values[0])?, ctx.dir(&e.values[1])?);
-                if key == "shafts" {
-                    shafts = Some(pair)
-                } else {
-                    axes = Some(pair)
-                }
-            }
-            "limit" => {
-                ctx.arity(e, 3..=3, "centre, width and shaft angles in degrees")?;
-                let (c, w, s) = (ctx.arg(e, 0)?, ctx.arg(e, 1)?, ctx.arg(e, 2)?);
-                if w < 0.0 {
-                    return Err(ctx.err(
-                        e.values[1].pos(),
-                        format!("the limit's width must not be negative; found {w}"),
-                    ));
-                }
-                range = Some(hinge_limit_range(c, w, s));
-            }
-            "range" => {
-                ctx.arity(e, 2..=2, "min and max angles in degrees")?;
-                range = Some(angle_range(ctx, &e.values[0], &e.values[1])?);
-            }
-            "ranges" => {
-                ctx.arity(e, 4..=4, "min1, max1, min2, max2 in degrees")?;
-                ranges = Some([
-                    angle_range(ctx, &e.values[0], &e.values[1])?,
-                    angle_range(ctx, &e.values[2], &e.values[3])?,
-                ]);
-            }
-            "conelimit" => {
-                let ball = is("ballAndSocketJoint");
-                ctx.arity(
-                    e,
-                    if ball { 3..=3 } else { 2..=2 },
-                    if ball {
-                        "( axis ), angle, ( shaft )"
-                    } else {
-                        "( axis ), angle"
-                    },
-                )?;
-                let ax = ctx.dir(&e.values[0])?;
-                let angle = cone_angle(ctx, &e.values[1])?;
-                let shaft = if ball {
-                    ctx.dir(&e.values[2])?
-                } else {
-                    Vec3::ZERO
-                };
-                swing = Some((
-                    SwingLimit::Cone {
-                        axis: ax,
-                        half_angle: angle * 0.5,
-                        shaft,
-                    },
-                    e.pos,
-                ));
-            }
-            "pyramidlimit" => {
-                let ball = is("ballAndSocketJoint");
-                ctx.arity(
-                    e,
-                    if ball { 5..=5 } else { 4..=4 },
-                    if ball {
-                        "( axis ), angle1, angle2, angle3, ( shaft )"
-                    } else {
-                        "( axis ), angle1, angle2, angle3"
-                    },
-                )?;
-                let ax = ctx.dir(&e.values[0])?;
-                let a1 = cone_angle(ctx, &e.values[1])?;
-                let a2 = cone_angle(ctx, &e.values[2])?;
-                let roll = ctx.deg(&e.values[3], "the pyramid's rotation")?;
-                let shaft = if ball {
-                    ctx.dir(&e.values[4])?
-                } else {
-                    Vec3::ZERO
-                };
-                swing = Some((
-                    SwingLimit::Pyramid {
-                        axis: ax,
-                        half_angle1: a1 * 0.5,
-                        half_angle2: a2 * 0.5,
-                        roll,
-                        shaft,
-                    },
-                    e.pos,
-                ));
-            }
-            "twistlimit" => {
-                ctx.arity(e, 3..=3, "( axis ), min, max in degrees")?;
-                let ax = ctx.dir(&e.values[0])?;
-                let r = angle_range(ctx, &e.values[1], &e.values[2])?;
-                twist = Some(TwistLimit {
-                    axis: ax,
-                    min: r.min,
-                    max: r.max,
-                });
-            }
-            "softlimit" => {
-                soft = LimitStyle::Soft {
-                    torque: ctx.nonneg(e)?,
-                }
-            }
-            _ => unreachable!("filtered by `applies`"),
+            Some(true) => read_key(ctx, &mut keys, e, &key, kind, ids)?,
         }
     }
     let missing = |what: &str| ctx.err(b.pos, format!("{kind} \"{name}\" is missing `{what}`"));
-    let body1 = body1
+    let body1 = keys
+        .body1
         .ok_or_else(|| missing("body1"))?
         .body()
         .expect("body1 is never the world");
-    let body2 = body2.ok_or_else(|| ctx.err(b.pos, format!("{kind} \"{name}\" is missing `body2` (write body2 \"world\" to attach it to the world)")))?;
+    let body2 = keys.body2.ok_or_else(|| ctx.err(b.pos, format!("{kind} \"{name}\" is missing `body2` (write body2 \"world\" to attach it to the world)")))?;
     if body2 == BodyRef::Body(body1) {
         return Err(ctx.err(
             b.pos,
@@ -228,92 +93,293 @@ pub(super) fn read_constraint(
             ),
         ));
     }
-    let kind = match kind {
-        "ballAndSocketJoint" => JointKind::BallAndSocket {
-            anchor: anchor.ok_or_else(|| missing("anchor"))?,
-            swing: swing.map(|s| s.0),
-            twist,
-            limit_style: soft,
-        },
-        "universalJoint" => {
-            // Doom 3's shafts run along the bones; the joint removes twist about them.
-            // We store the cross's two rotation axes, each perpendicular to its shaft
-            // and to each other (docs/af-format.md); `axes` gives them directly.
-            let (a1, a2) = match (axes, shafts) {
-                (Some(a), _) => a,
-                (None, Some((s1, s2))) => {
-                    let a2 = s2.any_orthonormal_vector();
-                    let a1 = s1
-                        .cross(a2)
-                        .try_normalize()
-                        .unwrap_or_else(|| s1.any_orthonormal_vector());
-                    (a1, a2)
-                }
-                (None, None) => return Err(missing("shafts")),
-            };
-            let swing = match swing {
-                Some((
-                    SwingLimit::Cone {
-                        axis, half_angle, ..
-                    },
-                    pos,
-                )) => Some(SwingLimit::Cone {
-                    axis,
-                    half_angle,
-                    shaft: shaft1(ctx, shafts, pos)?,
-                }),
-                Some((
-                    SwingLimit::Pyramid {
-                        axis,
-                        half_angle1,
-                        half_angle2,
-                        roll,
-                        ..
-                    },
-                    pos,
-                )) => Some(SwingLimit::Pyramid {
-                    axis,
-                    half_angle1,
-                    half_angle2,
-                    roll,
-                    shaft: shaft1(ctx, shafts, pos)?,
-                }),
-                None => None,
-            };
-            JointKind::Universal {
-                anchor: anchor.ok_or_else(|| missing("anchor"))?,
-                shaft1: a1,
-                shaft2: a2,
-                swing,
-                axis_ranges: ranges,
-            }
-        }
-        "hinge" => JointKind::Hinge {
-            anchor: anchor.ok_or_else(|| missing("anchor"))?,
-            axis: axis.ok_or_else(|| missing("axis"))?,
-            limit: range,
-        },
-        "slider" => JointKind::Slider {
-            axis: axis.ok_or_else(|| missing("axis"))?,
-        },
-        "fixed" => JointKind::Fixed,
-        _ => JointKind::Spring {
-            anchor1: anchor1.ok_or_else(|| missing("anchor1"))?,
-            anchor2: anchor2.ok_or_else(|| missing("anchor2"))?,
-            stretch: spring[0],
-            compress: spring[1],
-            damping: spring[2],
-            rest_length: spring[3],
-            min_length: spring[4],
-            max_length: spring[5],
-        },
-    };
+    let friction = keys.friction;
     Ok(ConstraintDesc {
         name: name.to_string(),
         body1,
         body2,
-        kind,
+        kind: joint_kind(ctx, kind, keys, &missing)?,
         friction,
+    })
+}
+
+/// Whether the lower-cased `key` applies to a constraint of type `kind`; `None` for a
+/// key no constraint has.
+fn key_applies(kind: &str, key: &str) -> Option<bool> {
+    let is = |k: &str| kind == k;
+    Some(match key {
+        "body1" | "body2" | "friction" => true,
+        "anchor" => !is("spring") && !is("slider") && !is("fixed"),
+        "anchor1" | "anchor2" | "stretch" | "compress" | "damping" | "restlength" | "minlength"
+        | "maxlength" => is("spring"),
+        "axis" => is("hinge") || is("slider"),
+        "limit" | "range" => is("hinge"),
+        "shafts" | "axes" | "ranges" => is("universalJoint"),
+        "conelimit" | "pyramidlimit" => is("ballAndSocketJoint") || is("universalJoint"),
+        "twistlimit" | "softlimit" => is("ballAndSocketJoint"),
+        _ => return None,
+    })
+}
+
+/// Reads entry `e` (its lower-cased key `key`, which applies to `kind`) into `keys`.
+fn read_key(
+    ctx: &mut Ctx,
+    keys: &mut Keys,
+    e: &Entry,
+    key: &str,
+    kind: &str,
+    ids: &HashMap<&str, BodyId>,
+) -> R<()> {
+    let scale = ctx.conv.scale;
+    let ball = kind == "ballAndSocketJoint";
+    match key {
+        "body1" => keys.body1 = Some(body_ref(ctx, e, ids, false)?),
+        "body2" => keys.body2 = Some(body_ref(ctx, e, ids, true)?),
+        "friction" => keys.friction = ctx.nonneg(e)?,
+        "anchor" | "anchor1" | "anchor2" => {
+            ctx.arity(e, 1..=1, "a vector")?;
+            let p = ctx.point(&e.values[0])?;
+            match key {
+                "anchor" => keys.anchor = Some(p),
+                "anchor1" => keys.anchor1 = Some(p),
+                _ => keys.anchor2 = Some(p),
+            }
+        }
+        "stretch" => keys.spring[0] = ctx.nonneg(e)?,
+        "compress" => keys.spring[1] = ctx.nonneg(e)?,
+        "damping" => keys.spring[2] = ctx.nonneg(e)?,
+        "restlength" => keys.spring[3] = ctx.nonneg(e)? * scale,
+        "minlength" => keys.spring[4] = ctx.nonneg(e)? * scale,
+        "maxlength" => keys.spring[5] = ctx.nonneg(e)? * scale,
+        "axis" => {
+            ctx.arity(e, 1..=1, "a vector")?;
+            keys.axis = Some(ctx.dir(&e.values[0])?);
+        }
+        "shafts" | "axes" => {
+            ctx.arity(e, 2..=2, "two vectors")?;
+            let pair = (ctx.dir(&e.values[0])?, ctx.dir(&e.values[1])?);
+            if key == "shafts" {
+                keys.shafts = Some(pair)
+            } else {
+                keys.axes = Some(pair)
+            }
+        }
+        "limit" => {
+            ctx.arity(e, 3..=3, "centre, width and shaft angles in degrees")?;
+            let (c, w, s) = (ctx.arg(e, 0)?, ctx.arg(e, 1)?, ctx.arg(e, 2)?);
+            if w < 0.0 {
+                return Err(ctx.err(
+                    e.values[1].pos(),
+                    format!("the limit's width must not be negative; found {w}"),
+                ));
+            }
+            keys.range = Some(hinge_limit_range(c, w, s));
+        }
+        "range" => {
+            ctx.arity(e, 2..=2, "min and max angles in degrees")?;
+            keys.range = Some(angle_range(ctx, &e.values[0], &e.values[1])?);
+        }
+        "ranges" => {
+            ctx.arity(e, 4..=4, "min1, max1, min2, max2 in degrees")?;
+            keys.ranges = Some([
+                angle_range(ctx, &e.values[0], &e.values[1])?,
+                angle_range(ctx, &e.values[2], &e.values[3])?,
+            ]);
+        }
+        "conelimit" => keys.swing = Some((cone_limit(ctx, e, ball)?, e.pos)),
+        "pyramidlimit" => keys.swing = Some((pyramid_limit(ctx, e, ball)?, e.pos)),
+        "twistlimit" => {
+            ctx.arity(e, 3..=3, "( axis ), min, max in degrees")?;
+            let ax = ctx.dir(&e.values[0])?;
+            let r = angle_range(ctx, &e.values[1], &e.values[2])?;
+            keys.twist = Some(TwistLimit {
+                axis: ax,
+                min: r.min,
+                max: r.max,
+            });
+        }
+        "softlimit" => {
+            keys.soft = LimitStyle::Soft {
+                torque: ctx.nonneg(e)?,
+            }
+        }
+        _ => unreachable!("filtered by `key_applies`"),
+    }
+    Ok(())
+}
+
+/// The body a `body1` / `body2` entry names, looked up in `ids`; `world` only where
+/// `allow_world` (body2).
+fn body_ref(ctx: &Ctx, e: &Entry, ids: &HashMap<&str, BodyId>, allow_world: bool) -> R<BodyRef> {
+    ctx.arity(e, 1..=1, "a quoted body name")?;
+    let n = ctx.string(&e.values[0], &format!("`{}`", e.key))?;
+    if n.eq_ignore_ascii_case("world") {
+        return if allow_world {
+            Ok(BodyRef::World)
+        } else {
+            Err(ctx.err(
+                e.values[0].pos(),
+                "body1 cannot be the world; swap body1 and body2",
+            ))
+        };
+    }
+    ids.get(n).map(|id| BodyRef::Body(*id)).ok_or_else(|| {
+        ctx.err(
+            e.values[0].pos(),
+            format!(
+                "unknown body \"{n}\" in `{}`; no `body \"{n}\" {{ ... }}` is defined",
+                e.key
+            ),
+        )
+    })
+}
+
+/// `coneLimit ( axis ), angle[, ( shaft )]` (the shaft on a ball joint only; a
+/// universal joint's is its first shaft, filled in by [`universal`]).
+fn cone_limit(ctx: &mut Ctx, e: &Entry, ball: bool) -> R<SwingLimit> {
+    ctx.arity(
+        e,
+        if ball { 3..=3 } else { 2..=2 },
+        if ball {
+            "( axis ), angle, ( shaft )"
+        } else {
+            "( axis ), angle"
+        },
+    )?;
+    let ax = ctx.dir(&e.values[0])?;
+    let angle = cone_angle(ctx, &e.values[1])?;
+    let shaft = if ball {
+        ctx.dir(&e.values[2])?
+    } else {
+        Vec3::ZERO
+    };
+    Ok(SwingLimit::Cone {
+        axis: ax,
+        half_angle: angle * 0.5,
+        shaft,
+    })
+}
+
+/// `pyramidLimit ( axis ), angle1, angle2, angle3[, ( shaft )]`, as [`cone_limit`].
+fn pyramid_limit(ctx: &mut Ctx, e: &Entry, ball: bool) -> R<SwingLimit> {
+    ctx.arity(
+        e,
+        if ball { 5..=5 } else { 4..=4 },
+        if ball {
+            "( axis ), angle1, angle2, angle3, ( shaft )"
+        } else {
+            "( axis ), angle1, angle2, angle3"
+        },
+    )?;
+    let ax = ctx.dir(&e.values[0])?;
+    let a1 = cone_angle(ctx, &e.values[1])?;
+    let a2 = cone_angle(ctx, &e.values[2])?;
+    let roll = ctx.deg(&e.values[3], "the pyramid's rotation")?;
+    let shaft = if ball {
+        ctx.dir(&e.values[4])?
+    } else {
+        Vec3::ZERO
+    };
+    Ok(SwingLimit::Pyramid {
+        axis: ax,
+        half_angle1: a1 * 0.5,
+        half_angle2: a2 * 0.5,
+        roll,
+        shaft,
+    })
+}
+
+/// The joint of type `kind` from its keys; `missing` is the error for a required key
+/// not given.
+fn joint_kind(
+    ctx: &Ctx,
+    kind: &str,
+    keys: Keys,
+    missing: &dyn Fn(&str) -> super::AfError,
+) -> R<JointKind> {
+    Ok(match kind {
+        "ballAndSocketJoint" => JointKind::BallAndSocket {
+            anchor: keys.anchor.ok_or_else(|| missing("anchor"))?,
+            swing: keys.swing.map(|s| s.0),
+            twist: keys.twist,
+            limit_style: keys.soft,
+        },
+        "universalJoint" => universal(ctx, keys, missing)?,
+        "hinge" => JointKind::Hinge {
+            anchor: keys.anchor.ok_or_else(|| missing("anchor"))?,
+            axis: keys.axis.ok_or_else(|| missing("axis"))?,
+            limit: keys.range,
+        },
+        "slider" => JointKind::Slider {
+            axis: keys.axis.ok_or_else(|| missing("axis"))?,
+        },
+        "fixed" => JointKind::Fixed,
+        _ => JointKind::Spring {
+            anchor1: keys.anchor1.ok_or_else(|| missing("anchor1"))?,
+            anchor2: keys.anchor2.ok_or_else(|| missing("anchor2"))?,
+            stretch: keys.spring[0],
+            compress: keys.spring[1],
+            damping: keys.spring[2],
+            rest_length: keys.spring[3],
+            min_length: keys.spring[4],
+            max_length: keys.spring[5],
+        },
+    })
+}
+
+/// A universal joint. Doom 3's shafts run along the bones; the joint removes twist
+/// about them. We store the cross's two rotation axes, each perpendicular to its shaft
+/// and to each other (docs/af-format.md); `axes` gives them directly. A cone or
+/// pyramid limit bounds the first shaft.
+fn universal(ctx: &Ctx, keys: Keys, missing: &dyn Fn(&str) -> super::AfError) -> R<JointKind> {
+    let shafts = keys.shafts;
+    let (a1, a2) = match (keys.axes, shafts) {
+        (Some(a), _) => a,
+        (None, Some((s1, s2))) => {
+            let a2 = s2.any_orthonormal_vector();
+            let a1 = s1
+                .cross(a2)
+                .try_normalize()
+                .unwrap_or_else(|| s1.any_orthonormal_vector());
+            (a1, a2)
+        }
+        (None, None) => return Err(missing("shafts")),
+    };
+    let swing = match keys.swing {
+        Some((
+            SwingLimit::Cone {
+                axis, half_angle, ..
+            },
+            pos,
+        )) => Some(SwingLimit::Cone {
+            axis,
+            half_angle,
+            shaft: shaft1(ctx, shafts, pos)?,
+        }),
+        Some((
+            SwingLimit::Pyramid {
+                axis,
+                half_angle1,
+                half_angle2,
+                roll,
+                ..
+            },
+            pos,
+        )) => Some(SwingLimit::Pyramid {
+            axis,
+            half_angle1,
+            half_angle2,
+            roll,
+            shaft: shaft1(ctx, shafts, pos)?,
+        }),
+        None => None,
+    };
+    Ok(JointKind::Universal {
+        anchor: keys.anchor.ok_or_else(|| missing("anchor"))?,
+        shaft1: a1,
+        shaft2: a2,
+        swing,
+        axis_ranges: keys.ranges,
     })
 }
 

@@ -18,9 +18,9 @@
 use super::Ignored;
 use super::build::canonical;
 use super::ctx::{Ctx, R};
-use super::lexer::Pos;
 use super::parser::{Block, Value};
 use crate::scene::SceneDesc;
+use crate::scene::lexer::Pos;
 use crate::scene::md5mesh::Md5Skeleton;
 
 /// Doom 3's `containedJoints` when a body does not say.

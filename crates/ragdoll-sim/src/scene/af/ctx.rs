@@ -1,11 +1,11 @@
 //! Reading context: the file's units and axes, the lazily loaded mesh, the four vector
 //! forms, typed value access with positioned errors, and the list of ignored keys.
 
-use super::lexer::Pos;
 use super::parser::{Entry, Value};
 use super::{AfError, AfOptions, FigureSource, Ignored};
 use crate::scene::Friction;
 use crate::scene::decl::Doom3Base;
+use crate::scene::lexer::Pos;
 use crate::scene::md5anim;
 use crate::scene::md5mesh::{self, Md5Skeleton};
 use glam::{Mat3, Quat, Vec3};

@@ -8,7 +8,6 @@
 //! explicit particles, a figure transform and a grid of copies. `docs/af-format.md` is
 //! the user's reference; this module is the implementation:
 //!
-//! - `lexer`: characters to positioned tokens.
 //! - `parser`: tokens to blocks of `key value, ...` entries, all positions kept.
 //! - `ctx`: units and axes, the four vector forms against the `.md5mesh`, typed values
 //!   with positioned errors, the ignored-key list.
@@ -27,14 +26,15 @@ mod build;
 mod constraint;
 mod contained;
 mod ctx;
-pub(crate) mod lexer;
 mod models;
 mod parser;
 mod place;
 
+pub use crate::scene::AfError;
 use crate::scene::SceneDesc;
 use crate::scene::decl::Doom3Character;
-use std::fmt;
+use crate::scene::file_error::read_text;
+use crate::scene::lexer;
 use std::path::{Path, PathBuf};
 
 /// What to build from a file.
@@ -101,57 +101,6 @@ pub struct AfScene {
     pub rig: Option<crate::scene::rig::Rig>,
 }
 
-/// The first mistake in a file: where, and what was expected.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct AfError {
-    /// The file as named to the reader.
-    pub file: String,
-    /// 1-based line.
-    pub line: u32,
-    /// 1-based column.
-    pub col: u32,
-    /// What is wrong; says what was expected and what was found where that helps.
-    pub message: String,
-}
-
-impl AfError {
-    /// An error at `pos` of `file`. Control characters in the message (a stray byte
-    /// quoted from the file, a newline) are escaped so the error stays one visible line.
-    pub(crate) fn at(file: &str, pos: lexer::Pos, message: String) -> AfError {
-        AfError {
-            file: file.to_string(),
-            line: pos.line,
-            col: pos.col,
-            message: escape_controls(&message),
-        }
-    }
-}
-
-/// `s` with every control character written as Rust escapes it (`\n`, `\u{1}`).
-pub(crate) fn escape_controls(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_debug().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
-}
-
-impl fmt::Display for AfError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{}:{}:{}: error: {}",
-            self.file, self.line, self.col, self.message
-        )
-    }
-}
-
-impl std::error::Error for AfError {}
-
 /// Reads `.af` text. `file` names it in messages and anchors a relative `mesh` path.
 pub fn parse(text: &str, file: &Path, opts: &AfOptions) -> Result<AfScene, AfError> {
     parse_figure(text, file, opts, &FigureSource::default())
@@ -176,7 +125,7 @@ pub fn load_figure(
     opts: &AfOptions,
     source: &FigureSource,
 ) -> Result<AfScene, AfError> {
-    let text = crate::scene::md5mesh::read_text(path, "file")?;
+    let text = read_text(path, "file")?;
     parse_figure(&text, path, opts, source)
 }
 

@@ -16,7 +16,7 @@
 //! module only keeps every value with its position for the error messages.
 
 use super::AfError;
-use super::lexer::{Cursor, Pos, Tok, Token};
+use crate::scene::lexer::{Cursor, Pos, Tok, Token};
 
 /// A value after a key, with where it starts.
 #[derive(Clone, Debug, PartialEq)]
@@ -303,8 +303,8 @@ impl<'a> Parser<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::lexer::tokenize;
     use super::*;
+    use crate::scene::lexer::tokenize;
 
     fn parse_str(s: &str) -> Result<Vec<Block>, AfError> {
         parse(&tokenize(s, "t.af")?, "t.af")

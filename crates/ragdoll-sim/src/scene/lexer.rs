@@ -7,7 +7,7 @@
 //! `.def` files), and the punctuation `{ } ( ) ,`. Newlines carry no meaning. A UTF-8
 //! byte-order mark at the start is skipped (idLexer reads it as whitespace).
 
-use super::AfError;
+use super::file_error::AfError;
 
 /// Where a token starts: 1-based line and column (columns count characters).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
