@@ -182,7 +182,7 @@ pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.active = false;
-        let depth = (c.b.point(p) - c.a.point(p)).dot(c.n);
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n);
         c.floor = (depth + push_speed * h).min(0.0);
     }
 }
@@ -215,8 +215,7 @@ pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, thresho
 /// One pass over the contacts (module doc).
 pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
     for c in contacts.iter_mut() {
-        let (pa, pb) = (c.a.point(p), c.b.point(p));
-        let depth = (pb - pa).dot(c.n) - c.floor;
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) - c.floor;
         if depth >= 0.0 {
             continue;
         }
@@ -227,8 +226,9 @@ pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
             continue;
         }
         // Relative motion of the points over the substep, its tangential part.
-        let (pa, pb) = (c.a.point(p), c.b.point(p));
-        let moved = (pa - c.a.prev_point(p)) - (pb - c.b.prev_point(p));
+        let moved = ((c.a.point64(p) - c.a.prev_point64(p))
+            - (c.b.point64(p) - c.b.prev_point64(p)))
+        .as_vec3();
         let slip = moved - c.n * c.n.dot(moved);
         let s = slip.length();
         if s < 1e-12 {

@@ -6,10 +6,10 @@
 //! 2. read each bone's frame from its particles (`frame::read`);
 //! 3. [`PASSES`] passes of: the angular parts of the joints and the limits, turning
 //!    particles (`joints::solve_angular`); the joints' points, moving each bone's
-//!    particles rigidly (`joints::solve_point`); contacts and friction on barycentric
-//!    weights (`contacts::solve`); the sticks (`sticks`) and, last, each bone's
-//!    particles projected onto their matched rigid pose (`shape_match`), the sticks
-//!    solved to convergence with momentum kept;
+//!    particles along the point's gradient at the substep's start
+//!    (`joints::solve_point`); contacts and friction on barycentric weights
+//!    (`contacts::solve`); and, last, each bone's six sticks, solved exactly by their
+//!    SHAKE projection (`shape_match`), momentum kept;
 //! 4. the grab, a soft point, and the projection again if it pulled;
 //! 5. velocities from the displacements, `v = (x − x_prev)/h`, the scene's air
 //!    friction (linear on the bone's mean velocity, angular on the rest), and the
@@ -24,7 +24,7 @@ use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
-use super::{XpbdState, contacts, frame, friction, shape_match, sleeping, sticks};
+use super::{XpbdState, contacts, frame, friction, shape_match, sleeping};
 use crate::method::Grab;
 
 /// Gauss–Seidel passes per substep over the joints' angles and limits, their points,
@@ -42,7 +42,7 @@ pub(crate) const DETECTIONS_PER_FRAME: u32 = 4;
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
     for (i, b) in w.bones.iter_mut().enumerate() {
         if st.particles.moves(i) {
-            frame::read(b, &st.particles.bone(i));
+            frame::read(b, &st.particles.bone64(i));
         }
     }
 }
@@ -58,7 +58,7 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
     let a = Anchor::Bone(i as u32, frame::weights(&st.rest_inv[i], b.rest[0], local));
     let omega = std::f32::consts::TAU * 5.0;
     let compliance = 1.0 / (b.mass.max(1e-3) * omega * omega);
-    let d = g.target - a.point(&st.particles);
+    let d = (g.target.as_dvec3() - a.point64(&st.particles)).as_vec3();
     pull(
         &mut st.particles,
         &a,
@@ -109,12 +109,17 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             w.settings.max_push_out_speed,
             h,
         );
+        // The frames at the substep's start, where the particles are rigid: the
+        // gradients of the joints' points are taken there (`joints::pull_rigid`).
+        for b in w.bones.iter_mut() {
+            b.prev_rot = b.rot;
+        }
         let p = &mut st.particles;
         for k in 0..p.len() {
             p.x_prev[k] = p.x[k];
             if p.w[k] > 0.0 {
                 p.v[k] += g * h;
-                p.x[k] += p.v[k] * h;
+                p.x[k] += p.v[k].as_dvec3() * h as f64;
             }
         }
         read_frames(w, st);
@@ -126,7 +131,6 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 solve_point(&mut st.particles, &mut w.bones, j, ends, h);
             }
             contacts::solve(&mut st.contacts, &mut st.particles);
-            sticks::solve(&st.sticks, &mut st.particles);
             shape_match::project(&mut st.particles, &mut w.bones);
         }
         if let Some(gr) = w.grab {
@@ -159,20 +163,16 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
 /// Step 5: `v = (x − x_prev)/h` (as below), then air friction, then joint friction.
 fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
     let p = &mut st.particles;
-    let inv_h = 1.0 / h;
+    let inv_h = 1.0 / h as f64;
     for (i, b) in w.bones.iter().enumerate() {
         let f = PER_BONE * i;
         if p.w[f] == 0.0 {
             continue;
         }
-        // `v = (x − x_prev)/h`, written as the predicted velocity plus the constraints'
-        // share, `v + (x − (x_prev + v h))/h`: the prediction `x_prev + v h` rounds to
-        // the bits step 1 wrote, so free motion keeps its velocity exactly. A difference
-        // of positions 50 m from the origin rounds to f32's grid (4e-6 m there), a
-        // bias of up to 2e-3 m/s a substep: a free fall gained 12 % of gravity.
+        // `v = (x − x_prev)/h` in f64: free motion, `x = x_prev + v h`, gives back its
+        // velocity to f32's last bit.
         for k in f..f + PER_BONE {
-            let predicted = p.x_prev[k] + p.v[k] * h;
-            p.v[k] += (p.x[k] - predicted) * inv_h;
+            p.v[k] = ((p.x[k] - p.x_prev[k]) * inv_h).as_vec3();
         }
         let (lin, ang) = b.air;
         if lin > 0.0 || ang > 0.0 {
