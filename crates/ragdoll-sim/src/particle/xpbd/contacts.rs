@@ -212,9 +212,14 @@ pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, thresho
     }
 }
 
-/// One pass over the contacts (module doc).
-pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
-    for c in contacts.iter_mut() {
+/// One pass over the contacts (module doc), in order or, every other pass, backwards:
+/// symmetric Gauss–Seidel. In one order the first corner of a face takes the whole push
+/// and the others what is left, a turn the next pass does not take back; a box hitting
+/// a wall at 50 m/s left it spinning at 0.57 rad/s, 0.31 with the order alternated.
+pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles, backwards: bool) {
+    let n = contacts.len();
+    for k in 0..n {
+        let c = &mut contacts[if backwards { n - 1 - k } else { k }];
         let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) - c.floor;
         if depth >= 0.0 {
             continue;

@@ -123,14 +123,14 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             }
         }
         read_frames(w, st);
-        for _ in 0..PASSES {
+        for pass in 0..PASSES {
             for j in &w.joints {
                 solve_angular(&mut st.particles, &mut w.bones, j, h);
             }
             for (j, ends) in w.joints.iter().zip(&st.anchors) {
                 solve_point(&mut st.particles, &mut w.bones, j, ends, h);
             }
-            contacts::solve(&mut st.contacts, &mut st.particles);
+            contacts::solve(&mut st.contacts, &mut st.particles, pass % 2 == 1);
             shape_match::project(&mut st.particles, &mut w.bones);
         }
         if let Some(gr) = w.grab {
