@@ -21,7 +21,7 @@
 use super::super::bone::Bone;
 use super::frame;
 use super::particles::{PER_BONE, XParticles};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Moves every moving bone's particles onto their projected rigid pose (module doc),
 /// and reads its frame there.
@@ -43,5 +43,44 @@ pub(crate) fn project(p: &mut XParticles, bones: &mut [Bone]) {
             *xk += dk - mean;
         }
         frame::read(b, &p.bone64(i));
+    }
+}
+
+/// The sticks at the velocity level (RATTLE, Andersen 1983): bone `i`'s particle
+/// velocities projected onto the rigid ones, `v_k = v̄ + ω × r_k` with `v̄` their mean
+/// and `ω = I⁻¹ Σ m r_k × (v_k − v̄)`, the mass-weighted closest rigid velocities.
+/// A stick `|x_a − x_b| = l` holds only if `(v_a − v_b) · (x_a − x_b) = 0`; the six
+/// of a bone hold together exactly for the rigid velocities. The projection keeps
+/// linear and angular momentum and takes only the non-rigid part's energy. Without
+/// it a velocity change on barycentric weights (a contact's velocity pass) left a
+/// stretching velocity whose mean the position projection then carried on: a box
+/// pushed out of the ground at 3 m/s left it at 2.25 m/s.
+pub(crate) fn project_velocities(p: &mut XParticles, i: usize) {
+    if !p.moves(i) {
+        return;
+    }
+    // In f64, with the inertia of the particles themselves: the projection then gives
+    // back rigid velocities unchanged. With the bone's f32 inertia, 4e-7 apart from the
+    // particles', each projection turned a spin by that much, and a box spinning for
+    // 10 s lost 1-7 % of |L|.
+    let f = PER_BONE * i;
+    let c = p.centre(i);
+    let r: [DVec3; 4] = std::array::from_fn(|k| p.x[f + k] - c);
+    let v: [DVec3; 4] = std::array::from_fn(|k| p.v[f + k].as_dvec3());
+    let mean = (v[0] + v[1] + v[2] + v[3]) * 0.25;
+    let mut l = DVec3::ZERO;
+    let mut inertia = DMat3::ZERO;
+    for k in 0..PER_BONE {
+        l += r[k].cross(v[k] - mean);
+        inertia += DMat3::from_diagonal(DVec3::splat(r[k].length_squared()))
+            - DMat3::from_cols(r[k] * r[k].x, r[k] * r[k].y, r[k] * r[k].z);
+    }
+    let det = inertia.determinant();
+    if !det.is_finite() || det.abs() <= 1e-300 {
+        return;
+    }
+    let om = inertia.inverse() * l;
+    for (vk, rk) in p.v[f..f + PER_BONE].iter_mut().zip(r) {
+        *vk = (mean + om.cross(rk)).as_vec3();
     }
 }
