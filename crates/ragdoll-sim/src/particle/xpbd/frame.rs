@@ -205,4 +205,32 @@ mod tests {
         let got = extract_rotation(&a, guess);
         assert!(got.dot(q).abs() > 1.0 - 1e-5, "{got} vs {q}");
     }
+
+    /// The sticks' projection of a configuration that is already a rigid turn of the
+    /// arms gives that turn back; of a stretched one, moves that exert no torque about
+    /// the arms and sum to zero (forces along the old sticks).
+    #[test]
+    fn match_turn_projects_along_the_old_sticks() {
+        let arms = [
+            DVec3::new(0.03, 0.06, 0.12),
+            DVec3::new(0.03, -0.06, -0.12),
+            DVec3::new(-0.03, 0.06, -0.12),
+            DVec3::new(-0.03, -0.06, 0.12),
+        ];
+        let turn = DQuat::from_scaled_axis(DVec3::new(0.002, -0.003, 0.004));
+        let rigid = arms.map(|a| turn * a);
+        let got = match_turn(&rigid, &arms);
+        assert!(got.dot(turn).abs() > 1.0 - 1e-12, "{got} vs {turn}");
+        // Stretched: each point pushed out along its arm and sideways.
+        let p: [DVec3; 4] =
+            std::array::from_fn(|k| rigid[k] * 1.01 + DVec3::new(0.0, 0.001 * k as f64, -0.0005));
+        let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+        let p = p.map(|x| x - c);
+        let q = match_turn(&p, &arms);
+        let moves: [DVec3; 4] = std::array::from_fn(|k| q * arms[k] - p[k]);
+        let torque: DVec3 = (0..4).map(|k| arms[k].cross(moves[k])).sum();
+        let sum: DVec3 = moves.iter().sum();
+        assert!(torque.length() < 1e-12, "torque {torque}");
+        assert!(sum.length() < 1e-12, "net move {sum}");
+    }
 }
