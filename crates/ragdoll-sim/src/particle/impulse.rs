@@ -215,7 +215,11 @@ mod tests {
             ParticleSolver::Xpbd => {
                 let st = w.xpbd.as_ref().expect("an xpbd world has its state");
                 for k in 0..st.particles.len() {
-                    add(st.particles.mass[k], st.particles.x[k], st.particles.v[k]);
+                    add(
+                        st.particles.mass[k],
+                        st.particles.x[k].as_vec3(),
+                        st.particles.v[k],
+                    );
                 }
             }
             ParticleSolver::Paper => {

@@ -219,7 +219,7 @@ impl ParticleWorld {
         let rigid = |x: Vec3| v.linear + v.angular.cross(x - com);
         if let Some(st) = self.xpbd.as_mut() {
             for p in PER_BONE * i..PER_BONE * (i + 1) {
-                st.particles.v[p] = rigid(st.particles.x[p]);
+                st.particles.v[p] = rigid(st.particles.x[p].as_vec3());
             }
         }
         if self.solver == super::ParticleSolver::Paper {

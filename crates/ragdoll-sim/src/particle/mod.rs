@@ -679,7 +679,7 @@ impl Method for ParticleWorld {
             ParticleSolver::Paper => out.extend_from_slice(&self.particles.x),
             ParticleSolver::Xpbd => {
                 if let Some(st) = &self.xpbd {
-                    out.extend_from_slice(&st.particles.x)
+                    out.extend(st.particles.x.iter().map(|x| x.as_vec3()))
                 }
             }
         }

@@ -87,8 +87,8 @@ impl ParticleWorld {
             let f = PER_BONE * i;
             for k in 0..PER_BONE {
                 let x = frame.transform_point(b.rest[k]);
-                st.particles.x[f + k] = x;
-                st.particles.x_prev[f + k] = x;
+                st.particles.x[f + k] = x.as_dvec3();
+                st.particles.x_prev[f + k] = x.as_dvec3();
                 st.particles.v[f + k] = rigid(x);
             }
             b.lin_vel = Vec3A::from(velocity.linear);

@@ -10,18 +10,22 @@
 //!
 //! **Response** (every substep): the non-penetration constraint
 //! `C = (p_b − p_a) · n ≥ 0` (or, for a penetration the substep starts with, no deeper
-//! than it less the push-out speed, `begin_substep`) on the attached points, a point correction
-//! (`joints::pull`) when violated; then Coulomb friction in position form (Müller et
-//! al. 2020, section 3.5, applied as a cone): the points' relative tangential motion
-//! over the substep is undone as far as `μ Δλ_n` allows, which holds a static contact
-//! and slides a moving one at the kinetic rate `μ g cos θ` on a slope.
+//! than it less the push-out speed, `begin_substep`) on the attached points, a point
+//! correction on their barycentric weights with the substep's total push clamped,
+//! `λ_n ≥ 0` (a push that later corrections made too large is taken back, so a contact
+//! meets its bound instead of passing it: a box started 25 cm in the ground rose at
+//! 3.5 m/s against a push-out speed of 3); then Coulomb friction in position form
+//! (Müller et al. 2020, section 3.5, applied as a cone on the substep's totals,
+//! `|λ_t| ≤ μ λ_n`): the points' relative tangential motion over the substep is undone
+//! as far as the cone allows, which holds a static contact and slides a moving one at
+//! the kinetic rate `μ g cos θ` on a slope.
 
 use super::super::bone::Bone;
 use super::super::contacts::{
     Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, shape_pair,
 };
 use super::frame::weights;
-use super::joints::{Anchor, pull};
+use super::joints::Anchor;
 use super::particles::XParticles;
 use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::Settings;
@@ -45,6 +49,10 @@ pub(crate) struct Contact {
     pub vn_before: f32,
     /// Whether the contact pushed during the substep.
     pub active: bool,
+    /// Its normal push so far this substep, `λ_n ≥ 0` (m·kg).
+    pub lambda: f32,
+    /// Its friction so far this substep, a tangential `λ_t` with `|λ_t| ≤ μ λ_n`.
+    pub lambda_t: Vec3,
     /// The least separation the substep must reach (m, ≤ 0): 0, or for a contact
     /// that started the substep in penetration its depth less `max_push_out_speed · h`.
     pub floor: f32,
@@ -131,6 +139,8 @@ pub(crate) fn detect(
                     restitution,
                     vn_before: 0.0,
                     active: false,
+                    lambda: 0.0,
+                    lambda_t: Vec3::ZERO,
                     floor: 0.0,
                 });
             },
@@ -159,6 +169,8 @@ pub(crate) fn detect(
                         restitution,
                         vn_before: 0.0,
                         active: false,
+                        lambda: 0.0,
+                        lambda_t: Vec3::ZERO,
                         floor: 0.0,
                     });
                 },
@@ -182,7 +194,9 @@ pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.active = false;
-        let depth = (c.b.point(p) - c.a.point(p)).dot(c.n);
+        c.lambda = 0.0;
+        c.lambda_t = Vec3::ZERO;
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n);
         c.floor = (depth + push_speed * h).min(0.0);
     }
 }
@@ -191,10 +205,21 @@ pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed
 /// (section 3.6, eq. 34). A contact that pushed leaves with the normal velocity
 /// Newton's law of restitution gives, `v_n = max(−e ṽ_n, 0)` with `ṽ_n` its approach
 /// before the substep (`e = 0` below `threshold`), set by a velocity change of its
-/// points on the same barycentric weights. Without it the push-out of a position
-/// correction would stay in the velocities as energy the contact never had.
-pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, threshold: f32) {
-    for c in contacts.iter().filter(|c| c.active) {
+/// points on the same barycentric weights, in order or (`backwards`) in reverse.
+/// Without it the push-out of a position correction would stay in the velocities as
+/// energy the contact never had.
+pub(crate) fn solve_velocities(
+    contacts: &[Contact],
+    p: &mut XParticles,
+    threshold: f32,
+    backwards: bool,
+) {
+    let n = contacts.len();
+    for k in 0..n {
+        let c = &contacts[if backwards { n - 1 - k } else { k }];
+        if !c.active {
+            continue;
+        }
         let e = if -c.vn_before > threshold {
             c.restitution
         } else {
@@ -212,34 +237,50 @@ pub(crate) fn solve_velocities(contacts: &[Contact], p: &mut XParticles, thresho
     }
 }
 
-/// One pass over the contacts (module doc).
-pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles) {
-    for c in contacts.iter_mut() {
-        let (pa, pb) = (c.a.point(p), c.b.point(p));
-        let depth = (pb - pa).dot(c.n) - c.floor;
-        if depth >= 0.0 {
+/// One pass over the contacts (module doc), in order or, every other pass, backwards:
+/// symmetric Gauss–Seidel. In one order the first corner of a face takes the whole push
+/// and the others what is left, a turn the next pass does not take back; a box hitting
+/// a wall at 50 m/s left it spinning at 0.57 rad/s, 0.31 with the order alternated.
+pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles, backwards: bool) {
+    let n = contacts.len();
+    for k in 0..n {
+        let c = &mut contacts[if backwards { n - 1 - k } else { k }];
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) - c.floor;
+        if depth >= 0.0 && c.lambda <= 0.0 {
             continue;
         }
-        // Push `a` back along −n and `b` along n until the points meet along n.
-        let dl = pull(p, &c.a, &c.b, c.n * depth, 0.0);
-        c.active = true;
-        if dl <= 0.0 || c.mu <= 0.0 {
-            continue;
-        }
-        // Relative motion of the points over the substep, its tangential part.
-        let (pa, pb) = (c.a.point(p), c.b.point(p));
-        let moved = (pa - c.a.prev_point(p)) - (pb - c.b.prev_point(p));
-        let slip = moved - c.n * c.n.dot(moved);
-        let s = slip.length();
-        if s < 1e-12 {
-            continue;
-        }
+        // Push `a` back along −n and `b` along n until the points meet along n; or,
+        // where later corrections pushed them past that, take back as much of this
+        // substep's push as it takes to meet it, never pulling (`λ_n ≥ 0`).
         let w = c.a.inv_mass(p) + c.b.inv_mass(p);
         if w <= 0.0 {
             continue;
         }
-        // Undo the slip (Δλ_t = s / w) as far as the cone `Δλ_t ≤ μ Δλ_n` allows.
-        let take = (c.mu * dl * w).min(s);
-        pull(p, &c.a, &c.b, -slip * (take / s), 0.0);
+        let total = (c.lambda - depth / w).max(0.0);
+        let dl = total - c.lambda;
+        c.lambda = total;
+        c.a.shift(p, -c.n * dl);
+        c.b.shift(p, c.n * dl);
+        c.active = total > 0.0;
+        if c.mu <= 0.0 || (total <= 0.0 && c.lambda_t == Vec3::ZERO) {
+            continue;
+        }
+        // Relative motion of the points over the substep, its tangential part.
+        let moved = ((c.a.point64(p) - c.a.prev_point64(p))
+            - (c.b.point64(p) - c.b.prev_point64(p)))
+        .as_vec3();
+        let slip = moved - c.n * c.n.dot(moved);
+        // Undo the slip (`Δλ_t = −slip / w`, moving `a` back along it) as far as the cone `|λ_t| ≤ μ λ_n` allows,
+        // on the substep's totals: where the normal push is taken back, so is the
+        // friction it carried.
+        let mut t = c.lambda_t - slip / w;
+        let cap = c.mu * total;
+        if t.length_squared() > cap * cap {
+            t *= cap / t.length();
+        }
+        let dt = t - c.lambda_t;
+        c.lambda_t = t;
+        c.a.shift(p, dt);
+        c.b.shift(p, -dt);
     }
 }

@@ -15,12 +15,12 @@
 
 use super::super::joints::Joint;
 use super::particles::{PER_BONE, XParticles};
-use glam::{Mat3, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 
 /// A bone's rigid spin as its particles carry it.
 struct Spin {
     /// Particle centre `c`.
-    center: Vec3,
+    center: DVec3,
     /// World inverse inertia about `c`.
     inv_inertia: Mat3,
     /// Angular velocity `I⁻¹ L`.
@@ -40,12 +40,12 @@ fn spin(p: &XParticles, i: Option<usize>) -> Option<Spin> {
     if m_total <= 0.0 {
         return None;
     }
-    let center = ks.clone().map(|k| p.x[k] * p.mass[k]).sum::<Vec3>() / m_total;
+    let center = ks.clone().map(|k| p.x[k] * p.mass[k] as f64).sum::<DVec3>() / m_total as f64;
     let v_c = ks.clone().map(|k| p.v[k] * p.mass[k]).sum::<Vec3>() / m_total;
     let mut inertia = Mat3::ZERO;
     let mut l = Vec3::ZERO;
     for k in ks {
-        let r = p.x[k] - center;
+        let r = (p.x[k] - center).as_vec3();
         let m = p.mass[k];
         inertia +=
             (Mat3::IDENTITY * r.length_squared() - Mat3::from_cols(r * r.x, r * r.y, r * r.z)) * m;
@@ -66,7 +66,7 @@ fn spin(p: &XParticles, i: Option<usize>) -> Option<Spin> {
 /// Turns bone `i`'s particles by `dw` about their centre (module doc).
 fn turn(p: &mut XParticles, i: usize, s: &Spin, dw: Vec3) {
     for k in PER_BONE * i..PER_BONE * (i + 1) {
-        p.v[k] += dw.cross(p.x[k] - s.center);
+        p.v[k] += dw.cross((p.x[k] - s.center).as_vec3());
     }
 }
 

@@ -16,7 +16,7 @@ pub(crate) fn energy(w: &ParticleWorld, st: &XpbdState) -> (f64, f64) {
     for k in 0..p.len() {
         if p.mass[k] > 0.0 {
             kinetic += 0.5 * p.mass[k] as f64 * p.v[k].length_squared() as f64;
-            potential += potential_energy(&w.settings, p.mass[k], p.x[k]);
+            potential += potential_energy(&w.settings, p.mass[k], p.x[k].as_vec3());
         }
     }
     (kinetic, potential)
@@ -31,11 +31,11 @@ pub(crate) fn body_states(w: &ParticleWorld, st: &XpbdState, out: &mut Vec<BodyS
     for (i, b) in w.bones.iter().enumerate() {
         let pose = b.shape_pose();
         let f = PER_BONE * i;
-        let x = p.bone(i);
-        let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
+        let c = p.centre(i);
+        let x = p.bone64(i).map(|xk| (xk - c).as_vec3());
         let v = (p.v[f] + p.v[f + 1] + p.v[f + 2] + p.v[f + 3]) * 0.25;
         let l: Vec3 = (0..PER_BONE)
-            .map(|k| (x[k] - c).cross(p.v[f + k] - v) * (b.mass * 0.25))
+            .map(|k| x[k].cross(p.v[f + k] - v) * (b.mass * 0.25))
             .sum();
         let r = Mat3::from_quat(b.rot);
         let inv_i = r * Mat3::from_diagonal(Vec3::from(b.inv_inertia_local)) * r.transpose();

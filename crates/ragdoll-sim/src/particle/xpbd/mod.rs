@@ -4,11 +4,11 @@
 //! Each particle has its own position and velocity (`particles`). A bone is four
 //! particles placed by exact particulation (`placement`, the paper's future work of
 //! section 5.4: they reproduce the bone's mass, centre of mass and inertia tensor), held
-//! by six sticks (`sticks`), solved to convergence at the end of each substep by a
-//! shape-matching projection onto the best-fitting rigid pose (`shape_match`, Müller et
-//! al. 2005). Joints couple points that are fixed affine combinations of
-//! their bones' particles, and hinge axes and limits are angles of the frames the
-//! particles imply, corrected by turning the particles (`joints`). Contacts come from
+//! by the six sticks of their tetrahedron, solved together and exactly in each pass by
+//! SHAKE, forces along the sticks as they were at the substep's start (`shape_match`).
+//! Joints couple points that are fixed affine combinations of their bones' particles,
+//! and hinge axes and limits are angles of the frames the particles imply, corrected by
+//! moving the particles along those constraints' gradients (`joints`). Contacts come from
 //! a broad phase and parry3d's narrow phase on those frames and push particles with
 //! barycentric weights (`contacts`). The bone frame is read from the particles by shape
 //! matching (`frame`) — for drawing, collision shapes, limits and metrics — and never
@@ -25,14 +25,12 @@ pub(crate) mod particles;
 pub(crate) mod shape_match;
 pub(crate) mod sleeping;
 pub(crate) mod step;
-pub(crate) mod sticks;
 
-use super::bone::{Bone, EDGES};
+use super::bone::Bone;
 use super::joints::Joint;
 use glam::{Mat3, Vec3};
 use joints::Anchor;
 use particles::XParticles;
-use sticks::Stick;
 
 /// The solver's own state, beside the world's bones (whose frames it writes) and joints.
 #[derive(Default)]
@@ -41,8 +39,6 @@ pub(crate) struct XpbdState {
     pub particles: XParticles,
     /// Per bone, `D⁻¹` of its rest tetrahedron (`frame::weights`).
     pub rest_inv: Vec<Mat3>,
-    /// Six per bone, index pairs with rest lengths.
-    pub sticks: Vec<Stick>,
     /// Per joint, its point on each side.
     pub anchors: Vec<[Anchor; 2]>,
     /// The contacts of the current detection.
@@ -55,7 +51,7 @@ pub(crate) struct XpbdState {
 
 impl XpbdState {
     /// Adds bone `i`'s particles, at rest positions in its frame moving with its initial
-    /// velocities, and its sticks.
+    /// velocities.
     pub fn add_bone(&mut self, i: usize, b: &Bone) {
         debug_assert_eq!(self.rest_inv.len(), i);
         let x = std::array::from_fn(|k| Vec3::from(b.world(b.rest[k])));
@@ -64,14 +60,6 @@ impl XpbdState {
         let vel = x.map(|xk: Vec3| v + om.cross(xk - c));
         self.particles.push_bone(x, vel, b.mass * 0.25, !b.fixed);
         self.rest_inv.push(frame::rest_inverse(&b.rest));
-        let f = (4 * i) as u32;
-        for (k, &(a, bb)) in EDGES.iter().enumerate() {
-            self.sticks.push(Stick {
-                a: f + a as u32,
-                b: f + bb as u32,
-                rest: b.stick_rest[k],
-            });
-        }
         self.rest.push(sleeping::Rest {
             anchor: c,
             ..Default::default()

@@ -3,8 +3,15 @@
 //! Bone `i` owns particles `4i .. 4i + 4` (its particulation, `placement`), so a bone's
 //! particles are found without a lookup and lie side by side in memory. Each particle
 //! has its own position and velocity; nothing about a bone's motion is stored elsewhere.
+//!
+//! Positions are f64: a substep of `h` moves a particle by `v h`, 0.4 mm at 0.5 m/s and
+//! 1200 substeps a second, and f32's grid is 1.2e-7 m at 1 m from the origin and 4e-6 m
+//! at 50 m, a rounding of 3e-4 to 1e-2 of each move. The velocities `(x − x_prev)/h`
+//! took that rounding every substep, biased enough to drain 4 % of a spinning box's
+//! angular momentum in 10 s. Velocities and the corrections, differences of positions,
+//! stay f32.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// Particles per bone.
 pub(crate) const PER_BONE: usize = 4;
@@ -13,9 +20,10 @@ pub(crate) const PER_BONE: usize = 4;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct XParticles {
     /// Positions now.
-    pub x: Vec<Vec3>,
-    /// Positions at the start of the current substep (velocity update, friction).
-    pub x_prev: Vec<Vec3>,
+    pub x: Vec<DVec3>,
+    /// Positions at the start of the current substep (velocity update, friction, the
+    /// arms of the sticks' projection).
+    pub x_prev: Vec<DVec3>,
     /// Velocities. Integration is `v += g h; x += v h` (symplectic Euler), then
     /// `v = (x − x_prev)/h` after the constraints (Macklin et al. 2019, algorithm 1).
     pub v: Vec<Vec3>,
@@ -37,8 +45,8 @@ impl XParticles {
             0.0
         };
         for k in 0..PER_BONE {
-            self.x.push(x[k]);
-            self.x_prev.push(x[k]);
+            self.x.push(x[k].as_dvec3());
+            self.x_prev.push(x[k].as_dvec3());
             self.v.push(if movable { v[k] } else { Vec3::ZERO });
             self.mass.push(if movable { mass } else { 0.0 });
             self.inv_mass.push(inv);
@@ -51,11 +59,43 @@ impl XParticles {
         self.x.len()
     }
 
-    /// Bone `i`'s four positions.
+    /// Bone `i`'s four positions, rounded to f32 (drawing).
     #[inline]
     pub fn bone(&self, i: usize) -> [Vec3; 4] {
+        self.bone64(i).map(|x| x.as_vec3())
+    }
+
+    /// Bone `i`'s four positions.
+    #[inline]
+    pub fn bone64(&self, i: usize) -> [DVec3; 4] {
         let f = PER_BONE * i;
         [self.x[f], self.x[f + 1], self.x[f + 2], self.x[f + 3]]
+    }
+
+    /// Bone `i`'s four positions at the start of the substep.
+    #[inline]
+    pub fn bone_prev(&self, i: usize) -> [DVec3; 4] {
+        let f = PER_BONE * i;
+        [
+            self.x_prev[f],
+            self.x_prev[f + 1],
+            self.x_prev[f + 2],
+            self.x_prev[f + 3],
+        ]
+    }
+
+    /// The centre of bone `i`'s particles at the start of the substep.
+    #[inline]
+    pub fn centre_prev(&self, i: usize) -> DVec3 {
+        let x = self.bone_prev(i);
+        (x[0] + x[1] + x[2] + x[3]) * 0.25
+    }
+
+    /// The centre of bone `i`'s particles (equal masses).
+    #[inline]
+    pub fn centre(&self, i: usize) -> DVec3 {
+        let x = self.bone64(i);
+        (x[0] + x[1] + x[2] + x[3]) * 0.25
     }
 
     /// Whether bone `i` takes corrections (movable and awake).

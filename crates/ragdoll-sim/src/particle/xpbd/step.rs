@@ -6,15 +6,17 @@
 //! 2. read each bone's frame from its particles (`frame::read`);
 //! 3. [`PASSES`] passes of: the angular parts of the joints and the limits, turning
 //!    particles (`joints::solve_angular`); the joints' points, moving each bone's
-//!    particles rigidly (`joints::solve_point`); contacts and friction on barycentric
-//!    weights (`contacts::solve`); the sticks (`sticks`) and, last, each bone's
-//!    particles projected onto their matched rigid pose (`shape_match`), the sticks
-//!    solved to convergence with momentum kept;
+//!    particles along the point's gradient at the substep's start
+//!    (`joints::solve_point`); contacts and friction on barycentric weights
+//!    (`contacts::solve`); and, last, each bone's six sticks, solved exactly by their
+//!    SHAKE projection (`shape_match`), momentum kept;
 //! 4. the grab, a soft point, and the projection again if it pulled;
-//! 5. velocities from the displacements, `v = (x − x_prev)/h`, the scene's air
-//!    friction (linear on the bone's mean velocity, angular on the rest), and the
-//!    joints' friction, a capped angular impulse keeping linear momentum (`friction`);
-//! 6. the contacts' velocity pass: restitution, and no push-out kept as velocity.
+//! 5. velocities from the displacements, `v = (x − x_prev)/h`, projected onto the
+//!    rigid ones (the sticks at the velocity level, RATTLE), the scene's air friction
+//!    (linear on the bone's mean velocity, angular on the rest), and the joints'
+//!    friction, a capped angular impulse keeping linear momentum (`friction`);
+//! 6. [`VELOCITY_PASSES`] passes of the contacts' velocity step (restitution, and no
+//!    push-out kept as velocity), each followed by the velocity-level sticks.
 //!
 //! Then the frames are read once more (drawing, metrics, the next detection) and the
 //! sleep islands updated. Every step is a projection or a dissipative velocity change;
@@ -24,16 +26,25 @@ use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
-use super::{XpbdState, contacts, frame, friction, shape_match, sleeping, sticks};
+use super::{XpbdState, contacts, frame, friction, shape_match, sleeping};
 use crate::method::Grab;
 
 /// Gauss–Seidel passes per substep over the joints' angles and limits, their points,
-/// the contacts and the shape matching. A contact moves particles by barycentric
+/// the contacts and the sticks' projection. A contact moves particles by barycentric
 /// weights, which deforms the tetrahedron; the projection then moves the bone rigidly
-/// by only part of the correction, so the passes converge geometrically. Measured on
-/// the humans (scenes 8 and 9, 10 s) with 16: penetration 11.7 and 5.8 mm, limits
-/// within 0.6°, energy within 0.1 %, stretch below 1e-5.
+/// by only part of the correction, so the passes converge geometrically. The angular
+/// parts take their gradients at the current frames, the points at the substep's
+/// start, and the two converge together only slowly: with 12 passes a door started
+/// 10° outside its limit gains 7 % of its energy scale coming back (bound 2 %), with 8
+/// a 5° pendulum loses 16 % of its swing in 10 s. With 16, on the humans (scenes 8 and
+/// 9, 10 s): penetration 6.8 and 6.6 mm, limits within 0.3°, stretch below 1e-5.
 pub(crate) const PASSES: u32 = 16;
+
+/// Symmetric Gauss–Seidel passes of the contacts' velocity step (6), each followed by
+/// the sticks at the velocity level (`shape_match::project_velocities`). The corners
+/// of a face share their particles; one pass left a box pushed out of the ground rising
+/// at 2.1 m/s after it was out, four leave 0.77 m/s (its push-out speed is 3 m/s).
+pub(crate) const VELOCITY_PASSES: u32 = 4;
 
 /// Collision detections per frame: each covers the substeps until the next.
 pub(crate) const DETECTIONS_PER_FRAME: u32 = 4;
@@ -42,7 +53,7 @@ pub(crate) const DETECTIONS_PER_FRAME: u32 = 4;
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
     for (i, b) in w.bones.iter_mut().enumerate() {
         if st.particles.moves(i) {
-            frame::read(b, &st.particles.bone(i));
+            frame::read(b, &st.particles.bone64(i));
         }
     }
 }
@@ -58,7 +69,7 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
     let a = Anchor::Bone(i as u32, frame::weights(&st.rest_inv[i], b.rest[0], local));
     let omega = std::f32::consts::TAU * 5.0;
     let compliance = 1.0 / (b.mass.max(1e-3) * omega * omega);
-    let d = g.target - a.point(&st.particles);
+    let d = (g.target.as_dvec3() - a.point64(&st.particles)).as_vec3();
     pull(
         &mut st.particles,
         &a,
@@ -109,24 +120,28 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             w.settings.max_push_out_speed,
             h,
         );
+        // The frames at the substep's start, where the particles are rigid: the
+        // gradients of the joints' points are taken there (`joints::pull_rigid`).
+        for b in w.bones.iter_mut() {
+            b.prev_rot = b.rot;
+        }
         let p = &mut st.particles;
         for k in 0..p.len() {
             p.x_prev[k] = p.x[k];
             if p.w[k] > 0.0 {
                 p.v[k] += g * h;
-                p.x[k] += p.v[k] * h;
+                p.x[k] += p.v[k].as_dvec3() * h as f64;
             }
         }
         read_frames(w, st);
-        for _ in 0..PASSES {
+        for pass in 0..PASSES {
             for j in &w.joints {
                 solve_angular(&mut st.particles, &mut w.bones, j, h);
             }
             for (j, ends) in w.joints.iter().zip(&st.anchors) {
                 solve_point(&mut st.particles, &mut w.bones, j, ends, h);
             }
-            contacts::solve(&mut st.contacts, &mut st.particles);
-            sticks::solve(&st.sticks, &mut st.particles);
+            contacts::solve(&mut st.contacts, &mut st.particles, pass % 2 == 1);
             shape_match::project(&mut st.particles, &mut w.bones);
         }
         if let Some(gr) = w.grab {
@@ -136,11 +151,17 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             shape_match::project(&mut st.particles, &mut w.bones);
         }
         update_velocities(w, st, h);
-        contacts::solve_velocities(
-            &st.contacts,
-            &mut st.particles,
-            w.settings.restitution_threshold,
-        );
+        for vp in 0..VELOCITY_PASSES {
+            contacts::solve_velocities(
+                &st.contacts,
+                &mut st.particles,
+                w.settings.restitution_threshold,
+                vp % 2 == 1,
+            );
+            for i in 0..w.bones.len() {
+                shape_match::project_velocities(&mut st.particles, i);
+            }
+        }
     }
     read_frames(w, st);
     sleeping::update(
@@ -159,21 +180,18 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
 /// Step 5: `v = (x − x_prev)/h` (as below), then air friction, then joint friction.
 fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
     let p = &mut st.particles;
-    let inv_h = 1.0 / h;
+    let inv_h = 1.0 / h as f64;
     for (i, b) in w.bones.iter().enumerate() {
         let f = PER_BONE * i;
         if p.w[f] == 0.0 {
             continue;
         }
-        // `v = (x − x_prev)/h`, written as the predicted velocity plus the constraints'
-        // share, `v + (x − (x_prev + v h))/h`: the prediction `x_prev + v h` rounds to
-        // the bits step 1 wrote, so free motion keeps its velocity exactly. A difference
-        // of positions 50 m from the origin rounds to f32's grid (4e-6 m there), a
-        // bias of up to 2e-3 m/s a substep: a free fall gained 12 % of gravity.
+        // `v = (x − x_prev)/h` in f64: free motion, `x = x_prev + v h`, gives back its
+        // velocity to f32's last bit.
         for k in f..f + PER_BONE {
-            let predicted = p.x_prev[k] + p.v[k] * h;
-            p.v[k] += (p.x[k] - predicted) * inv_h;
+            p.v[k] = ((p.x[k] - p.x_prev[k]) * inv_h).as_vec3();
         }
+        shape_match::project_velocities(p, i);
         let (lin, ang) = b.air;
         if lin > 0.0 || ang > 0.0 {
             let c = (p.v[f] + p.v[f + 1] + p.v[f + 2] + p.v[f + 3]) * 0.25;
