@@ -332,14 +332,19 @@ impl ParticleWorld {
         }
     }
 
-    /// The pairs of bodies that overlap in the rest pose: they never collide with each
-    /// other.
+    /// The pairs of bones of one figure that overlap in the rest pose: they never collide
+    /// with each other (a figure built that way means them to pass through each other).
+    /// Bodies of different figures that start inside each other do collide and are
+    /// pushed apart, as the multibody method does.
     fn rest_overlaps(&self) -> Vec<(usize, usize)> {
         let margin = vec![0.0; self.bones.len()];
         let mut pairs = Vec::new();
         broad_all(&self.bones, &margin, &mut pairs);
         let mut manifolds = Vec::new();
         pairs.retain(|&(i, j)| {
+            if self.bones[i].figure != self.bones[j].figure {
+                return false;
+            }
             let mut overlap = false;
             contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
                 overlap |= d < -1e-3
