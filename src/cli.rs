@@ -231,4 +231,7 @@ pub struct BenchArgs {
     /// solvers, not sleep policies (scale and rain; the paper's tests never sleep).
     #[arg(long)]
     pub no_sleep: bool,
+    /// The particle solver the scale and rain tables time beside the multibody.
+    #[arg(long, value_enum, default_value_t)]
+    pub particle_solver: ParticleSolverArg,
 }

@@ -45,6 +45,8 @@ pub enum Flavor {
     ParticlePaper,
     /// Our particle method (the default solver).
     ParticleRigidFrames,
+    /// The particle method's XPBD solver on particles (`--particle-solver xpbd`).
+    ParticleXpbd,
     /// The impulse-based multibody method.
     Multibody,
 }
@@ -62,6 +64,7 @@ impl Flavor {
         match self {
             Flavor::ParticlePaper => "particle_paper",
             Flavor::ParticleRigidFrames => "particle_rigid_frames",
+            Flavor::ParticleXpbd => "particle_xpbd",
             Flavor::Multibody => "multibody",
         }
     }
@@ -73,7 +76,17 @@ impl Flavor {
             Flavor::ParticleRigidFrames => {
                 methods::build_particle(scene, ParticleSolverArg::RigidFrames)
             }
+            Flavor::ParticleXpbd => methods::build_particle(scene, ParticleSolverArg::Xpbd),
             Flavor::Multibody => methods::build_multibody(scene),
+        }
+    }
+
+    /// The particle flavour of a `--particle-solver` choice.
+    pub fn particle(solver: ParticleSolverArg) -> Flavor {
+        match solver {
+            ParticleSolverArg::Paper => Flavor::ParticlePaper,
+            ParticleSolverArg::RigidFrames => Flavor::ParticleRigidFrames,
+            ParticleSolverArg::Xpbd => Flavor::ParticleXpbd,
         }
     }
 }
@@ -297,6 +310,7 @@ pub struct Report {
 
 /// `ragdoll-lab bench ...`.
 pub fn run(args: BenchArgs) -> Result<(), AppError> {
+    let particle = Flavor::particle(args.particle_solver);
     let size = if args.quick { Size::Quick } else { Size::Full };
     let only = RowFilter::new(args.only);
     let report = match args.kind {
@@ -304,8 +318,8 @@ pub fn run(args: BenchArgs) -> Result<(), AppError> {
         BenchKind::Timestep => timestep::run(size, &only)?,
         BenchKind::Bones => bones::run(size, &only)?,
         BenchKind::Iterations => iterations::run(size, &only)?,
-        BenchKind::Scale => scale::run(size, &only, args.no_sleep)?,
-        BenchKind::Rain => rain::run(size, args.no_sleep)?,
+        BenchKind::Scale => scale::run(size, &only, args.no_sleep, particle)?,
+        BenchKind::Rain => rain::run(size, args.no_sleep, particle)?,
     };
     if args.json {
         println!("{}", report.json);

@@ -252,7 +252,7 @@ pub fn run_ours(flavor: Flavor, scene: &SceneDesc, frames: usize) -> Result<Rain
 }
 
 /// Runs the rain table; `no_sleep` turns sleeping off in both methods.
-pub fn run(size: Size, no_sleep: bool) -> Result<Report, AppError> {
+pub fn run(size: Size, no_sleep: bool, particle: Flavor) -> Result<Report, AppError> {
     let frames = match size {
         Size::Full => FRAMES,
         Size::Quick => frames_before_landing() + 2 * DROP_EVERY,
@@ -291,7 +291,7 @@ pub fn run(size: Size, no_sleep: bool) -> Result<Report, AppError> {
     );
     let mut rows = Vec::new();
     for threads in thread_counts() {
-        for flavor in [Flavor::ParticleRigidFrames, Flavor::Multibody] {
+        for flavor in [particle, Flavor::Multibody] {
             if threads > 1 && !runs_in_parallel(flavor) {
                 continue;
             }

@@ -25,13 +25,9 @@ pub const FRAMES: usize = 600;
 /// Frame length (s).
 pub const FRAME_DT: f32 = 1.0 / 60.0;
 
-/// The two methods the scale table compares: the particle method in its default
-/// (improved) mode and the multibody method.
-pub const FLAVORS: [Flavor; 2] = [Flavor::ParticleRigidFrames, Flavor::Multibody];
-
 /// Whether `flavor` spreads one simulation's step over several threads: both methods
 /// step their islands on the rayon pool they are stepped in (`rigid::parallel`,
-/// `particle::islands`); the paper's particle solver stays serial.
+/// `particle::islands`); the paper's and the XPBD particle solvers stay serial.
 pub fn runs_in_parallel(flavor: Flavor) -> bool {
     matches!(flavor, Flavor::Multibody | Flavor::ParticleRigidFrames)
 }
@@ -117,8 +113,15 @@ pub fn measure(
     })
 }
 
-/// Runs the scale table; `no_sleep` turns sleeping off in both methods.
-pub fn run(size: Size, only: &RowFilter, no_sleep: bool) -> Result<Report, AppError> {
+/// Runs the scale table: the particle solver `particle` and the multibody method;
+/// `no_sleep` turns sleeping off in both.
+pub fn run(
+    size: Size,
+    only: &RowFilter,
+    no_sleep: bool,
+    particle: Flavor,
+) -> Result<Report, AppError> {
+    let flavors = [particle, Flavor::Multibody];
     let (humans, frames): (&[u32], usize) = match size {
         Size::Full => (&HUMANS, FRAMES),
         Size::Quick => (&[1, 2], 5),
@@ -148,7 +151,7 @@ pub fn run(size: Size, only: &RowFilter, no_sleep: bool) -> Result<Report, AppEr
         let bones = scene.dynamic_body_count();
         for threads in thread_counts() {
             let mut costs = [None; 2];
-            for (slot, flavor) in costs.iter_mut().zip(FLAVORS) {
+            for (slot, flavor) in costs.iter_mut().zip(flavors) {
                 if threads > 1 && !runs_in_parallel(flavor) {
                     continue;
                 }
@@ -158,7 +161,7 @@ pub fn run(size: Size, only: &RowFilter, no_sleep: bool) -> Result<Report, AppEr
                 ));
                 *slot = Some(measure_on(threads, flavor, &scene, frames)?);
             }
-            for (cost, flavor) in costs.iter().zip(FLAVORS) {
+            for (cost, flavor) in costs.iter().zip(flavors) {
                 let ms = |x: f64| format!("{x:.2}");
                 let Some(c) = cost else {
                     let mut cells = vec![n.to_string(), bones.to_string(), threads.to_string()];
@@ -211,7 +214,7 @@ pub fn run(size: Size, only: &RowFilter, no_sleep: bool) -> Result<Report, AppEr
             }));
         }
     }
-    if FLAVORS.iter().any(|&f| !runs_in_parallel(f)) {
+    if flavors.iter().any(|&f| !runs_in_parallel(f)) {
         table.note("\"one thread\": the method does not run a step on several threads, so there is no separate figure.");
     }
     table.note(
@@ -224,6 +227,7 @@ pub fn run(size: Size, only: &RowFilter, no_sleep: bool) -> Result<Report, AppEr
             "frames": frames,
             "frame_dt": FRAME_DT,
             "sleep": !no_sleep,
+            "particle_solver": particle.key(),
             "rows": rows,
         }),
         text: table.render(),
