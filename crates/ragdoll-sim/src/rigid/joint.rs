@@ -112,6 +112,9 @@ pub struct PointPart {
     pub impulse: Vec3A,
     /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
     pub direct: bool,
+    /// In a tree of this solve (`direct` unless the tree's factorisation failed): the
+    /// tree reads the rows here.
+    pub(super) in_tree: bool,
     /// The rows at `prepare`.
     pub(super) rows: PointRows<f32>,
 }
@@ -191,7 +194,8 @@ impl PointPart {
         let mut v = Velocities::of(s, f.a, f.b);
         let mut impulse = one(self.impulse);
         let soft = Soft::new(ctx, use_bias);
-        self.rows.solve(&mut v, masses(f, s), &mut impulse, &soft);
+        self.rows
+            .solve(&mut v, masses(f, s), &mut impulse, &soft, true);
         v.store(s, f.a, f.b);
         self.impulse = impulse.lane(0).into();
     }

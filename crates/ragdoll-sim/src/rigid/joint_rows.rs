@@ -232,7 +232,8 @@ impl<R: Real> PointRows<R> {
         v.wb = V3::select(on, v.wb + self.turn_b * p, v.wb);
     }
 
-    /// One soft Gauss–Seidel update of the block:
+    /// One soft Gauss–Seidel update of the block in the lanes `on` (within
+    /// [`PointRows::on`]):
     /// `p = −s_m K⁻¹ (Ċ + β C) − s_i P` with `Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`.
     #[inline]
     pub fn solve(
@@ -241,12 +242,13 @@ impl<R: Real> PointRows<R> {
         inv_mass: [R; 2],
         impulse: &mut V3<R>,
         soft: &Soft<R>,
+        on: R::Mask,
     ) {
         let cdot = (v.vb + v.wb.cross(self.rb)) - (v.va + v.wa.cross(self.ra));
         let p = (self.k_inv * (cdot + self.c * soft.bias_rate)) * -soft.mass_scale
             - *impulse * soft.impulse_scale;
-        *impulse = V3::select(self.on, *impulse + p, *impulse);
-        self.apply(v, inv_mass, p, self.on);
+        *impulse = V3::select(on, *impulse + p, *impulse);
+        self.apply(v, inv_mass, p, on);
     }
 }
 

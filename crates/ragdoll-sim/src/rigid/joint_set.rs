@@ -66,9 +66,8 @@ pub struct JointSet {
     /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), built with the
     /// set; `None` (and in the arrays gathered for one island) solves each joint alone.
     pub lanes: Option<JointLanes>,
-    /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes, which
-    /// solve every ball joint's and hinge's point rows, stand aside (set by
-    /// `JointTrees::build` before the substeps).
+    /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes leave
+    /// those rows to the trees (set by `JointTrees::build` before the substeps).
     pub direct: bool,
 }
 
@@ -298,14 +297,15 @@ impl JointSet {
     }
 
     /// Warm start of joints touching an awake body, type by type in the solve order.
-    pub fn warm_start(&self, s: &mut BodyStates, awake: &[bool]) {
+    pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
-        match self.lanes.as_ref().filter(|_| balls) {
-            Some(l) => l.warm_start_balls(s),
+        let trees = self.direct;
+        match self.lanes.as_mut().filter(|_| balls) {
+            Some(l) => l.warm_start_balls(s, &mut self.ball, trees),
             None => warm_start_each(&self.ball, s, awake),
         }
-        match self.lanes.as_ref().filter(|_| hinges) {
-            Some(l) => l.warm_start_hinges(s),
+        match self.lanes.as_mut().filter(|_| hinges) {
+            Some(l) => l.warm_start_hinges(s, &mut self.hinge, trees),
             None => warm_start_each(&self.hinge, s, awake),
         }
         warm_start_each(&self.universal, s, awake);
@@ -317,12 +317,13 @@ impl JointSet {
     /// One iteration over joints touching an awake body, type by type.
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
         let (balls, hinges) = self.in_lanes();
+        let trees = self.direct;
         match self.lanes.as_mut().filter(|_| balls) {
-            Some(l) => l.solve_balls(s, ctx, use_bias),
+            Some(l) => l.solve_balls(s, &mut self.ball, trees, ctx, use_bias),
             None => solve_each(&mut self.ball, s, awake, ctx, use_bias),
         }
         match self.lanes.as_mut().filter(|_| hinges) {
-            Some(l) => l.solve_hinges(s, ctx, use_bias),
+            Some(l) => l.solve_hinges(s, &mut self.hinge, trees, ctx, use_bias),
             None => solve_each(&mut self.hinge, s, awake, ctx, use_bias),
         }
         solve_each(&mut self.universal, s, awake, ctx, use_bias);
@@ -338,7 +339,7 @@ impl JointSet {
         if let Some(lanes) = self
             .lanes
             .as_ref()
-            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
+            .filter(|l| l.fits(&self.ball, &self.hinge))
         {
             lanes.finish(&mut self.ball, &mut self.hinge);
         }
@@ -349,7 +350,7 @@ impl JointSet {
     fn in_lanes(&self) -> (bool, bool) {
         self.lanes
             .as_ref()
-            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
+            .filter(|l| l.fits(&self.ball, &self.hinge))
             .map_or((false, false), |l| (l.has_balls(), l.has_hinges()))
     }
 

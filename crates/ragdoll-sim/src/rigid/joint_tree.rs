@@ -171,6 +171,7 @@ impl JointTrees {
                 }
             };
             point.direct = false;
+            point.in_tree = false;
             let (ma, mb) = (moving(f.a), moving(f.b));
             let accept = match (ma, mb) {
                 (true, true) => {
@@ -226,7 +227,9 @@ impl JointTrees {
         chosen.retain(|&(r, a, b)| {
             let root = sets.find(if a != NO_PARENT { a } else { b });
             let keep = lopsided[root];
-            point_of_mut(joints, r).direct = keep;
+            let point = point_of_mut(joints, r);
+            point.direct = keep;
+            point.in_tree = keep;
             keep
         });
         joints.direct = !chosen.is_empty();
