@@ -252,6 +252,23 @@ impl<R: Real> PointRows<R> {
     }
 }
 
+impl PointRows<wide::f32x4> {
+    /// Lane `k`, as one joint's rows.
+    pub fn lane(&self, k: usize) -> PointRows<f32> {
+        let v = |x: V3<wide::f32x4>| V3::<f32>::from_fn(|_| x.lane(k));
+        let m = |x: M3<wide::f32x4>| M3::<f32>::from_fn(|_| x.lane(k));
+        PointRows {
+            ra: v(self.ra),
+            rb: v(self.rb),
+            c: v(self.c),
+            turn_a: m(self.turn_a),
+            turn_b: m(self.turn_b),
+            k_inv: m(self.k_inv),
+            on: self.on.as_array()[k].to_bits() != 0,
+        }
+    }
+}
+
 /// Keeps a direction fixed in a aligned with one fixed in b: two rows about the
 /// directions `u`, `v` perpendicular to it (the hinge's rotational part; a 0° cone).
 /// `C = P (d_b × d_a)`, `Ċ ≈ P (ω_a − ω_b)` with P the projection off `d_a`; the 2×2

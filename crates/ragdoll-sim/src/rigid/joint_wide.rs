@@ -314,12 +314,12 @@ impl PointX4 {
         }
     }
 
-    /// Runs `f` on the joints of the lanes in a tree: the tree reads the rows in the
-    /// joints, which the one-by-one code prepares with the lanes' bits.
-    fn each_in_tree<J: Pointed>(&self, l: &Lanes, joints: &mut [J], mut f: impl FnMut(&mut J)) {
+    /// Copies the rows of the lanes in a tree to their joints: the tree reads them
+    /// there, and they are the rows the one-by-one code prepares (the same code).
+    fn hand_rows_to_trees<J: Pointed>(&self, l: &Lanes, joints: &mut [J]) {
         if self.in_tree.any() {
             for k in (0..LANES).filter(|&k| is_set(self.in_tree, k)) {
-                f(&mut joints[l.joint(k)]);
+                joints[l.joint(k)].point_mut().rows = self.rows.lane(k);
             }
         }
     }
@@ -327,25 +327,11 @@ impl PointX4 {
 
 /// A joint type the lanes bundle: it has a point constraint.
 trait Pointed {
-    fn frame(&self) -> &JointFrame;
     fn point(&self) -> &PointPart;
     fn point_mut(&mut self) -> &mut PointPart;
-    /// The point rows' preparation one by one.
-    fn prepare_point(&mut self, s: &BodyStates) {
-        let f = *self.frame();
-        self.point_mut().prepare(&f, s);
-    }
-    /// The point rows' weighing one by one.
-    fn weigh_point(&mut self, s: &BodyStates) {
-        let f = *self.frame();
-        self.point_mut().weigh(&f, s);
-    }
 }
 
 impl Pointed for BallJoint {
-    fn frame(&self) -> &JointFrame {
-        &self.frame
-    }
     fn point(&self) -> &PointPart {
         &self.point
     }
@@ -355,9 +341,6 @@ impl Pointed for BallJoint {
 }
 
 impl Pointed for HingeJoint {
-    fn frame(&self) -> &JointFrame {
-        &self.frame
-    }
     fn point(&self) -> &PointPart {
         &self.point
     }
@@ -641,8 +624,7 @@ impl JointLanes {
             b.point.direct = mask(|k| is_set(b.lanes.live, k) && j(k).point.direct);
             b.point.in_tree = mask(|k| is_set(b.lanes.live, k) && j(k).point.in_tree);
             b.point.prepare(&b.lanes, &p);
-            b.point
-                .each_in_tree(&b.lanes, balls, |j| j.prepare_point(s));
+            b.point.hand_rows_to_trees(&b.lanes, balls);
         }
         for h in &mut self.hinges {
             let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
@@ -658,8 +640,7 @@ impl JointLanes {
             h.point.direct = mask(|k| is_set(h.lanes.live, k) && j(k).point.direct);
             h.point.in_tree = mask(|k| is_set(h.lanes.live, k) && j(k).point.in_tree);
             h.point.prepare(&h.lanes, &p);
-            h.point
-                .each_in_tree(&h.lanes, hinges, |j| j.prepare_point(s));
+            h.point.hand_rows_to_trees(&h.lanes, hinges);
             h.align.prepare(&h.lanes, &p);
         }
         self.update_limits(balls, hinges, s);
@@ -677,13 +658,13 @@ impl JointLanes {
             b.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = b.lanes.inertia;
             b.point.weigh(&b.lanes, ia, ib);
-            b.point.each_in_tree(&b.lanes, balls, |j| j.weigh_point(s));
+            b.point.hand_rows_to_trees(&b.lanes, balls);
         }
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             h.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = h.lanes.inertia;
             h.point.weigh(&h.lanes, ia, ib);
-            h.point.each_in_tree(&h.lanes, hinges, |j| j.weigh_point(s));
+            h.point.hand_rows_to_trees(&h.lanes, hinges);
             h.align.weigh(&h.lanes, ia, ib);
         }
         self.update_limits(balls, hinges, s);
@@ -785,13 +766,14 @@ impl JointLanes {
     ) {
         let soft = Soft::new(ctx, use_bias);
         for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
-            if trees {
+            // The trees are factored (and `direct` may change) only before the warm
+            // start and between the relax passes.
+            if trees && !use_bias {
                 b.point.sync_direct(&b.lanes, balls);
             }
             if !use_bias {
                 b.point.prepare(&b.lanes, &b.lanes.bodies(s));
-                b.point
-                    .each_in_tree(&b.lanes, balls, |j| j.prepare_point(s));
+                b.point.hand_rows_to_trees(&b.lanes, balls);
             }
             b.lanes.update_velocities(s, |v| {
                 b.cone.solve(v, &soft);
@@ -813,15 +795,14 @@ impl JointLanes {
     ) {
         let soft = Soft::new(ctx, use_bias);
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
-            if trees {
+            if trees && !use_bias {
                 h.point.sync_direct(&h.lanes, hinges);
             }
             if !use_bias {
                 let p = h.lanes.bodies(s);
                 h.align.prepare(&h.lanes, &p);
                 h.point.prepare(&h.lanes, &p);
-                h.point
-                    .each_in_tree(&h.lanes, hinges, |j| j.prepare_point(s));
+                h.point.hand_rows_to_trees(&h.lanes, hinges);
             }
             h.lanes.update_velocities(s, |v| {
                 h.limit[0].solve(v, &soft);
