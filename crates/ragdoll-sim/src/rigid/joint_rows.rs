@@ -17,7 +17,7 @@
 use super::body::BodyStates;
 use super::soft::{Softness, StepContext};
 use crate::lanes::{M3, Q, Real, V3};
-use glam::{Mat3, Vec3};
+use glam::Vec3;
 
 /// The soft coefficients of a pass in lanes: the joint softness in the biased
 /// iterations, [`Softness::RIGID`] in the relax pass.
@@ -57,7 +57,11 @@ impl Velocities<f32> {
     /// The velocities of bodies `a` and `b`.
     #[inline]
     pub fn of(s: &BodyStates, a: usize, b: usize) -> Velocities<f32> {
-        let v = |x: glam::Vec3A| V3::<f32>::from_fn(|_| Vec3::from(x));
+        let v = |x: glam::Vec3A| V3 {
+            x: x.x,
+            y: x.y,
+            z: x.z,
+        };
         Velocities {
             va: v(s.lin_vel[a]),
             wa: v(s.ang_vel[a]),
@@ -97,11 +101,24 @@ impl Pose<f32> {
     /// The pose and inertias of bodies `a` and `b` now.
     #[inline]
     pub fn of(s: &BodyStates, a: usize, b: usize) -> Pose<f32> {
+        let v = |x: Vec3| V3 {
+            x: x.x,
+            y: x.y,
+            z: x.z,
+        };
+        let q = |q: glam::Quat| Q {
+            v: V3 {
+                x: q.x,
+                y: q.y,
+                z: q.z,
+            },
+            w: q.w,
+        };
         Pose {
-            rot_a: Q::from_fn(|_| s.rot[a]),
-            rot_b: Q::from_fn(|_| s.rot[b]),
-            com_a: V3::from_fn(|_| s.com[a]),
-            com_b: V3::from_fn(|_| s.com[b]),
+            rot_a: q(s.rot[a]),
+            rot_b: q(s.rot[b]),
+            com_a: v(s.com[a]),
+            com_b: v(s.com[b]),
             ia: inertia(s, a),
             ib: inertia(s, b),
         }
@@ -111,7 +128,15 @@ impl Pose<f32> {
 /// The world inverse inertia of body `i`.
 #[inline]
 pub(crate) fn inertia(s: &BodyStates, i: usize) -> M3<f32> {
-    M3::from_fn(|_| Mat3::from(s.inv_inertia[i]))
+    let m = &s.inv_inertia[i];
+    let v = |c: glam::Vec3A| V3 {
+        x: c.x,
+        y: c.y,
+        z: c.z,
+    };
+    M3 {
+        cols: [v(m.x_axis), v(m.y_axis), v(m.z_axis)],
+    }
 }
 
 /// A point's response to an impulse on a body of inverse mass `m` and world inverse

@@ -6,7 +6,7 @@ use super::body::{BodyInfo, BodyStates};
 use super::fixed::FixedJoint;
 use super::hinge::HingeJoint;
 use super::joint::{
-    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind,
+    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, JointSolve, PointPart, RowKind,
 };
 use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
@@ -16,37 +16,6 @@ use super::spring::SpringJoint;
 use super::universal::UniversalJoint;
 use crate::scene::{BodyRef, ConstraintDesc, JointKind, LimitStyle};
 use crate::snapshot::{JointInstance, LimitShape};
-
-/// What the solver asks of every joint type.
-pub trait JointSolve {
-    /// Bodies and anchor.
-    fn frame(&self) -> &JointFrame;
-    /// Evaluates the rows (anchors, errors, effective masses, limit rows) on the current
-    /// pose and inertias, at a step's first substep (later substeps call
-    /// [`JointSolve::prepare_after_relax`]).
-    fn prepare(&mut self, s: &BodyStates);
-    /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
-    /// has moved since, only the inertias were refreshed): the point and alignment rows,
-    /// which that pass prepared on this pose, only re-weigh their turns and effective
-    /// masses with the new inertias (the same bits as preparing them anew, for less).
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.prepare(s);
-    }
-    /// Re-applies the accumulated impulses.
-    fn warm_start(&self, s: &mut BodyStates);
-    /// One Gauss–Seidel update; `use_bias` false in the relax pass.
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
-    /// One position-projection update (see [`super::project`]); joints without a
-    /// rigid part (springs) keep the default, which does nothing.
-    fn project(&self, _s: &mut BodyStates) {}
-    /// Distance between the anchor as seen from each body (m).
-    fn gap(&self, s: &BodyStates) -> f32 {
-        let (pa, pb) = self.frame().anchors(s);
-        pa.distance(pb)
-    }
-    /// Excess of a limited angle beyond its hard limit (rad); soft limits do not count.
-    fn limit_violation(&self, s: &BodyStates) -> f32;
-}
 
 /// Every joint, by type.
 #[derive(Clone, Debug, Default)]
