@@ -233,6 +233,7 @@ impl JointTrees {
             keep
         });
         joints.direct = !chosen.is_empty();
+        joints.tree_points = chosen.len();
         if chosen.is_empty() {
             return trees;
         }
