@@ -2,8 +2,7 @@
 //! limit (Doom 3 cone or pyramid) and twist limit, hard or soft (PyODE's flex and twist).
 
 use super::body::BodyStates;
-use super::joint::{FrictionMotor, JointFrame, PointPart};
-use super::joint_set::JointSolve;
+use super::joint::{FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::limits::{AngleLimit, Swing};
 use super::soft::StepContext;
 

@@ -1,8 +1,7 @@
 //! Fixed joint: no relative motion (PyODE's spine). The anchor is body1's centre of mass.
 
 use super::body::BodyStates;
-use super::joint::{AngularLock3, JointFrame, PointPart};
-use super::joint_set::JointSolve;
+use super::joint::{AngularLock3, JointFrame, JointSolve, PointPart};
 use super::soft::StepContext;
 
 /// A fixed joint.

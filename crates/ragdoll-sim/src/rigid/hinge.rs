@@ -3,8 +3,7 @@
 //! hinge stops).
 
 use super::body::BodyStates;
-use super::joint::{AlignPart, FrictionMotor, JointFrame, PointPart};
-use super::joint_set::JointSolve;
+use super::joint::{AlignPart, FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::limits::{AngleGauge, AngleLimit};
 use super::soft::StepContext;
 

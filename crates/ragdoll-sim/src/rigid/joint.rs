@@ -93,6 +93,37 @@ impl JointFrame {
     }
 }
 
+/// What the solver asks of every joint type.
+pub trait JointSolve {
+    /// Bodies and anchor.
+    fn frame(&self) -> &JointFrame;
+    /// Evaluates the rows (anchors, errors, effective masses, limit rows) on the current
+    /// pose and inertias, at a step's first substep (later substeps call
+    /// [`JointSolve::prepare_after_relax`]).
+    fn prepare(&mut self, s: &BodyStates);
+    /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
+    /// has moved since, only the inertias were refreshed): the point and alignment rows,
+    /// which that pass prepared on this pose, only re-weigh their turns and effective
+    /// masses with the new inertias (the same bits as preparing them anew, for less).
+    fn prepare_after_relax(&mut self, s: &BodyStates) {
+        self.prepare(s);
+    }
+    /// Re-applies the accumulated impulses.
+    fn warm_start(&self, s: &mut BodyStates);
+    /// One Gauss–Seidel update; `use_bias` false in the relax pass.
+    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
+    /// One position-projection update (see [`super::project`]); joints without a
+    /// rigid part (springs) keep the default, which does nothing.
+    fn project(&self, _s: &mut BodyStates) {}
+    /// Distance between the anchor as seen from each body (m).
+    fn gap(&self, s: &BodyStates) -> f32 {
+        let (pa, pb) = self.frame().anchors(s);
+        pa.distance(pb)
+    }
+    /// Excess of a limited angle beyond its hard limit (rad); soft limits do not count.
+    fn limit_violation(&self, s: &BodyStates) -> f32;
+}
+
 /// Soft coefficients for a bilateral row: the joint softness while solving, rigid
 /// without feedback in the relax pass.
 #[inline]
@@ -112,6 +143,9 @@ pub struct PointPart {
     pub impulse: Vec3A,
     /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
     pub direct: bool,
+    /// In a tree of this solve (`direct` unless the tree's factorisation failed): the
+    /// tree reads the rows here.
+    pub(super) in_tree: bool,
     /// The rows at `prepare`.
     pub(super) rows: PointRows<f32>,
 }
@@ -191,7 +225,8 @@ impl PointPart {
         let mut v = Velocities::of(s, f.a, f.b);
         let mut impulse = one(self.impulse);
         let soft = Soft::new(ctx, use_bias);
-        self.rows.solve(&mut v, masses(f, s), &mut impulse, &soft);
+        self.rows
+            .solve(&mut v, masses(f, s), &mut impulse, &soft, true);
         v.store(s, f.a, f.b);
         self.impulse = impulse.lane(0).into();
     }

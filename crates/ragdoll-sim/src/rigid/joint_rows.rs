@@ -17,7 +17,7 @@
 use super::body::BodyStates;
 use super::soft::{Softness, StepContext};
 use crate::lanes::{M3, Q, Real, V3};
-use glam::{Mat3, Vec3};
+use glam::Vec3;
 
 /// The soft coefficients of a pass in lanes: the joint softness in the biased
 /// iterations, [`Softness::RIGID`] in the relax pass.
@@ -57,7 +57,11 @@ impl Velocities<f32> {
     /// The velocities of bodies `a` and `b`.
     #[inline]
     pub fn of(s: &BodyStates, a: usize, b: usize) -> Velocities<f32> {
-        let v = |x: glam::Vec3A| V3::<f32>::from_fn(|_| Vec3::from(x));
+        let v = |x: glam::Vec3A| V3 {
+            x: x.x,
+            y: x.y,
+            z: x.z,
+        };
         Velocities {
             va: v(s.lin_vel[a]),
             wa: v(s.ang_vel[a]),
@@ -97,11 +101,24 @@ impl Pose<f32> {
     /// The pose and inertias of bodies `a` and `b` now.
     #[inline]
     pub fn of(s: &BodyStates, a: usize, b: usize) -> Pose<f32> {
+        let v = |x: Vec3| V3 {
+            x: x.x,
+            y: x.y,
+            z: x.z,
+        };
+        let q = |q: glam::Quat| Q {
+            v: V3 {
+                x: q.x,
+                y: q.y,
+                z: q.z,
+            },
+            w: q.w,
+        };
         Pose {
-            rot_a: Q::from_fn(|_| s.rot[a]),
-            rot_b: Q::from_fn(|_| s.rot[b]),
-            com_a: V3::from_fn(|_| s.com[a]),
-            com_b: V3::from_fn(|_| s.com[b]),
+            rot_a: q(s.rot[a]),
+            rot_b: q(s.rot[b]),
+            com_a: v(s.com[a]),
+            com_b: v(s.com[b]),
             ia: inertia(s, a),
             ib: inertia(s, b),
         }
@@ -111,7 +128,15 @@ impl Pose<f32> {
 /// The world inverse inertia of body `i`.
 #[inline]
 pub(crate) fn inertia(s: &BodyStates, i: usize) -> M3<f32> {
-    M3::from_fn(|_| Mat3::from(s.inv_inertia[i]))
+    let m = &s.inv_inertia[i];
+    let v = |c: glam::Vec3A| V3 {
+        x: c.x,
+        y: c.y,
+        z: c.z,
+    };
+    M3 {
+        cols: [v(m.x_axis), v(m.y_axis), v(m.z_axis)],
+    }
 }
 
 /// A point's response to an impulse on a body of inverse mass `m` and world inverse
@@ -232,7 +257,8 @@ impl<R: Real> PointRows<R> {
         v.wb = V3::select(on, v.wb + self.turn_b * p, v.wb);
     }
 
-    /// One soft Gauss–Seidel update of the block:
+    /// One soft Gauss–Seidel update of the block in the lanes `on` (within
+    /// [`PointRows::on`]):
     /// `p = −s_m K⁻¹ (Ċ + β C) − s_i P` with `Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`.
     #[inline]
     pub fn solve(
@@ -241,12 +267,30 @@ impl<R: Real> PointRows<R> {
         inv_mass: [R; 2],
         impulse: &mut V3<R>,
         soft: &Soft<R>,
+        on: R::Mask,
     ) {
         let cdot = (v.vb + v.wb.cross(self.rb)) - (v.va + v.wa.cross(self.ra));
         let p = (self.k_inv * (cdot + self.c * soft.bias_rate)) * -soft.mass_scale
             - *impulse * soft.impulse_scale;
-        *impulse = V3::select(self.on, *impulse + p, *impulse);
-        self.apply(v, inv_mass, p, self.on);
+        *impulse = V3::select(on, *impulse + p, *impulse);
+        self.apply(v, inv_mass, p, on);
+    }
+}
+
+impl PointRows<wide::f32x4> {
+    /// Lane `k`, as one joint's rows.
+    pub fn lane(&self, k: usize) -> PointRows<f32> {
+        let v = |x: V3<wide::f32x4>| V3::<f32>::from_fn(|_| x.lane(k));
+        let m = |x: M3<wide::f32x4>| M3::<f32>::from_fn(|_| x.lane(k));
+        PointRows {
+            ra: v(self.ra),
+            rb: v(self.rb),
+            c: v(self.c),
+            turn_a: m(self.turn_a),
+            turn_b: m(self.turn_b),
+            k_inv: m(self.k_inv),
+            on: self.on.as_array()[k].to_bits() != 0,
+        }
     }
 }
 

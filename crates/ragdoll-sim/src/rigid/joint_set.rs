@@ -6,7 +6,7 @@ use super::body::{BodyInfo, BodyStates};
 use super::fixed::FixedJoint;
 use super::hinge::HingeJoint;
 use super::joint::{
-    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, PointPart, RowKind,
+    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, JointSolve, PointPart, RowKind,
 };
 use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
@@ -16,37 +16,6 @@ use super::spring::SpringJoint;
 use super::universal::UniversalJoint;
 use crate::scene::{BodyRef, ConstraintDesc, JointKind, LimitStyle};
 use crate::snapshot::{JointInstance, LimitShape};
-
-/// What the solver asks of every joint type.
-pub trait JointSolve {
-    /// Bodies and anchor.
-    fn frame(&self) -> &JointFrame;
-    /// Evaluates the rows (anchors, errors, effective masses, limit rows) on the current
-    /// pose and inertias, at a step's first substep (later substeps call
-    /// [`JointSolve::prepare_after_relax`]).
-    fn prepare(&mut self, s: &BodyStates);
-    /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
-    /// has moved since, only the inertias were refreshed): the point and alignment rows,
-    /// which that pass prepared on this pose, only re-weigh their turns and effective
-    /// masses with the new inertias (the same bits as preparing them anew, for less).
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.prepare(s);
-    }
-    /// Re-applies the accumulated impulses.
-    fn warm_start(&self, s: &mut BodyStates);
-    /// One Gauss–Seidel update; `use_bias` false in the relax pass.
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
-    /// One position-projection update (see [`super::project`]); joints without a
-    /// rigid part (springs) keep the default, which does nothing.
-    fn project(&self, _s: &mut BodyStates) {}
-    /// Distance between the anchor as seen from each body (m).
-    fn gap(&self, s: &BodyStates) -> f32 {
-        let (pa, pb) = self.frame().anchors(s);
-        pa.distance(pb)
-    }
-    /// Excess of a limited angle beyond its hard limit (rad); soft limits do not count.
-    fn limit_violation(&self, s: &BodyStates) -> f32;
-}
 
 /// Every joint, by type.
 #[derive(Clone, Debug, Default)]
@@ -66,10 +35,11 @@ pub struct JointSet {
     /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), built with the
     /// set; `None` (and in the arrays gathered for one island) solves each joint alone.
     pub lanes: Option<JointLanes>,
-    /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes, which
-    /// solve every ball joint's and hinge's point rows, stand aside (set by
-    /// `JointTrees::build` before the substeps).
+    /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes leave
+    /// those rows to the trees (set by `JointTrees::build` before the substeps).
     pub direct: bool,
+    /// How many joints' point rows the trees of this solve hold (set with `direct`).
+    pub tree_points: usize,
 }
 
 /// Runs `$body` with `$j` bound to every joint, mutably (fields, not the solve trait).
@@ -298,14 +268,15 @@ impl JointSet {
     }
 
     /// Warm start of joints touching an awake body, type by type in the solve order.
-    pub fn warm_start(&self, s: &mut BodyStates, awake: &[bool]) {
+    pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
-        match self.lanes.as_ref().filter(|_| balls) {
-            Some(l) => l.warm_start_balls(s),
+        let trees = self.direct;
+        match self.lanes.as_mut().filter(|_| balls) {
+            Some(l) => l.warm_start_balls(s, &mut self.ball, trees),
             None => warm_start_each(&self.ball, s, awake),
         }
-        match self.lanes.as_ref().filter(|_| hinges) {
-            Some(l) => l.warm_start_hinges(s),
+        match self.lanes.as_mut().filter(|_| hinges) {
+            Some(l) => l.warm_start_hinges(s, &mut self.hinge, trees),
             None => warm_start_each(&self.hinge, s, awake),
         }
         warm_start_each(&self.universal, s, awake);
@@ -317,12 +288,13 @@ impl JointSet {
     /// One iteration over joints touching an awake body, type by type.
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
         let (balls, hinges) = self.in_lanes();
+        let trees = self.direct;
         match self.lanes.as_mut().filter(|_| balls) {
-            Some(l) => l.solve_balls(s, ctx, use_bias),
+            Some(l) => l.solve_balls(s, &mut self.ball, trees, ctx, use_bias),
             None => solve_each(&mut self.ball, s, awake, ctx, use_bias),
         }
         match self.lanes.as_mut().filter(|_| hinges) {
-            Some(l) => l.solve_hinges(s, ctx, use_bias),
+            Some(l) => l.solve_hinges(s, &mut self.hinge, trees, ctx, use_bias),
             None => solve_each(&mut self.hinge, s, awake, ctx, use_bias),
         }
         solve_each(&mut self.universal, s, awake, ctx, use_bias);
@@ -338,10 +310,19 @@ impl JointSet {
         if let Some(lanes) = self
             .lanes
             .as_ref()
-            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
+            .filter(|l| l.fits(&self.ball, &self.hinge) && !self.trees_own_most())
         {
             lanes.finish(&mut self.ball, &mut self.hinge);
         }
+    }
+
+    /// Whether the trees of this solve hold the point rows of most ball joints and
+    /// hinges (a pile of figures each with a heavy limb): the lanes then stand aside,
+    /// since the rows left to them (limits, alignments) do not pay for gathering and
+    /// scattering their bundles' bodies (measured on the pile of humans: 270 figures
+    /// ran about a quarter slower with the lanes around their trees).
+    pub(super) fn trees_own_most(&self) -> bool {
+        2 * self.tree_points > self.ball.len() + self.hinge.len()
     }
 
     /// Whether the ball joints and the hinges are solved in lanes: when there are lanes
@@ -349,7 +330,7 @@ impl JointSet {
     fn in_lanes(&self) -> (bool, bool) {
         self.lanes
             .as_ref()
-            .filter(|l| !self.direct && l.fits(&self.ball, &self.hinge))
+            .filter(|l| l.fits(&self.ball, &self.hinge) && !self.trees_own_most())
             .map_or((false, false), |l| (l.has_balls(), l.has_hinges()))
     }
 

@@ -171,6 +171,7 @@ impl JointTrees {
                 }
             };
             point.direct = false;
+            point.in_tree = false;
             let (ma, mb) = (moving(f.a), moving(f.b));
             let accept = match (ma, mb) {
                 (true, true) => {
@@ -226,10 +227,13 @@ impl JointTrees {
         chosen.retain(|&(r, a, b)| {
             let root = sets.find(if a != NO_PARENT { a } else { b });
             let keep = lopsided[root];
-            point_of_mut(joints, r).direct = keep;
+            let point = point_of_mut(joints, r);
+            point.direct = keep;
+            point.in_tree = keep;
             keep
         });
         joints.direct = !chosen.is_empty();
+        joints.tree_points = chosen.len();
         if chosen.is_empty() {
             return trees;
         }
@@ -360,11 +364,12 @@ impl JointTrees {
                         let Node::Joint { joint, .. } = self.nodes[parent] else {
                             unreachable!("a body's parent is a joint")
                         };
-                        let g =
-                            jacobian(point_of(joints, joint), frame_bodies(joints, joint), body);
-                        // Parent joint: D_j −= G D_b⁻¹ Gᵀ.
-                        d_joint[parent] -= g * d_inv * g.t();
-                        d_inv * g.t()
+                        let (sign, x) =
+                            arm(point_of(joints, joint), frame_bodies(joints, joint), body);
+                        // Parent joint: D_j −= G D_b⁻¹ Gᵀ; up = D_b⁻¹ Gᵀ.
+                        let (g_d_gt, d_gt) = body_through_joint(&d_inv, sign, x);
+                        d_joint[parent].sub_mat3(g_d_gt);
+                        d_gt
                     };
                     self.nodes[k] = Node::Body { body, d_inv, up };
                 }
@@ -379,11 +384,12 @@ impl JointTrees {
                         let Node::Body { body, .. } = self.nodes[parent] else {
                             unreachable!("a joint's parent is a body")
                         };
-                        let g =
-                            jacobian(point_of(joints, joint), frame_bodies(joints, joint), body);
-                        // Parent body: D_b −= Gᵀ D_j⁻¹ G.
-                        d_body[parent] -= g.t() * d_inv * g;
-                        d_inv * g
+                        let (sign, x) =
+                            arm(point_of(joints, joint), frame_bodies(joints, joint), body);
+                        // Parent body: D_b −= Gᵀ D_j⁻¹ G; up = D_j⁻¹ G.
+                        let (gt_d_g, d_g) = joint_through_body(&d_inv, sign, x);
+                        d_body[parent] -= gt_d_g;
+                        d_g
                     };
                     self.nodes[k] = Node::Joint { joint, d_inv, up };
                 }
@@ -520,21 +526,72 @@ fn body_mass(s: &BodyStates, i: usize) -> Matrix6 {
     out
 }
 
-/// The 3×6 block of a joint's point rows on `body`: `[1, −r̂]` on body2, its negative on
-/// body1 (`Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`).
-fn jacobian(p: &PointPart, (a, b): (usize, usize), body: usize) -> Matrix3x6 {
+/// The 3×6 block of a joint's point rows on `body` as `G = σ [1, X]`: the sign `σ` (+1
+/// on body2, −1 on body1) and `X = −r̂` with `r` the anchor's offset from that body
+/// (`Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`, and `−r̂ ω = ω × r`).
+fn arm(p: &PointPart, (a, b): (usize, usize), body: usize) -> (f32, Mat3) {
     let (r, sign) = if body == b {
         (Vec3::from(p.rb()), 1.0)
     } else {
         debug_assert_eq!(body, a);
         (Vec3::from(p.ra()), -1.0)
     };
-    // −r̂ ω = ω × r: rows of −r̂ are (0, r_z, −r_y), (−r_z, 0, r_x), (r_y, −r_x, 0).
-    Mat([
-        [sign, 0.0, 0.0, 0.0, sign * r.z, -sign * r.y],
-        [0.0, sign, 0.0, -sign * r.z, 0.0, sign * r.x],
-        [0.0, 0.0, sign, sign * r.y, -sign * r.x, 0.0],
-    ])
+    // −r̂ by columns: (0, −r_z, r_y), (r_z, 0, −r_x), (−r_y, r_x, 0).
+    let x = Mat3::from_cols(
+        Vec3::new(0.0, -r.z, r.y),
+        Vec3::new(r.z, 0.0, -r.x),
+        Vec3::new(-r.y, r.x, 0.0),
+    );
+    (sign, x)
+}
+
+/// A body's elimination into its parent joint, by 3×3 blocks: with `D⁻¹ = [P Q; R S]`
+/// and `G = σ [1, X]`, `G D⁻¹ Gᵀ = P + Q Xᵀ + X (R + S Xᵀ)` (σ² = 1) and
+/// `D⁻¹ Gᵀ = σ [P + Q Xᵀ; R + S Xᵀ]` — a few 3×3 products for the dense 3×6·6×6·6×3.
+fn body_through_joint(d_inv: &Matrix6, sign: f32, x: Mat3) -> (Mat3, Matrix6x3) {
+    let (p, q) = (d_inv.block(0, 0), d_inv.block(0, 3));
+    let (r, s) = (d_inv.block(3, 0), d_inv.block(3, 3));
+    let xt = x.transpose();
+    let top = p + q * xt;
+    let bottom = r + s * xt;
+    let g_d_gt = top + x * bottom;
+    let mut d_gt = Matrix6x3::ZERO;
+    for c in 0..3 {
+        let (t, b) = (top.col(c) * sign, bottom.col(c) * sign);
+        for k in 0..3 {
+            d_gt.0[k][c] = t[k];
+            d_gt.0[3 + k][c] = b[k];
+        }
+    }
+    (g_d_gt, d_gt)
+}
+
+/// A joint's elimination into its parent body, by 3×3 blocks: with `G = σ [1, X]`,
+/// `Gᵀ D⁻¹ G = [D⁻¹, D⁻¹ X; Xᵀ D⁻¹, Xᵀ D⁻¹ X]` and `D⁻¹ G = σ [D⁻¹, D⁻¹ X]`.
+fn joint_through_body(d_inv: &Matrix3, sign: f32, x: Mat3) -> (Matrix6, Matrix3x6) {
+    let m = &d_inv.0;
+    let d = Mat3::from_cols(
+        Vec3::new(m[0][0], m[1][0], m[2][0]),
+        Vec3::new(m[0][1], m[1][1], m[2][1]),
+        Vec3::new(m[0][2], m[1][2], m[2][2]),
+    );
+    let d_x = d * x;
+    let xt_d = x.transpose() * d;
+    let xt_d_x = xt_d * x;
+    let mut gt_d_g = Matrix6::ZERO;
+    gt_d_g.set_block(0, 0, d);
+    gt_d_g.set_block(0, 3, d_x);
+    gt_d_g.set_block(3, 0, xt_d);
+    gt_d_g.set_block(3, 3, xt_d_x);
+    let mut d_g = Matrix3x6::ZERO;
+    for c in 0..3 {
+        let (l, r) = (d.col(c) * sign, d_x.col(c) * sign);
+        for k in 0..3 {
+            d_g.0[k][c] = l[k];
+            d_g.0[k][3 + c] = r[k];
+        }
+    }
+    (gt_d_g, d_g)
 }
 
 fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {
@@ -645,6 +702,18 @@ impl Matrix6 {
         out.set_block(3, 0, -(s_inv * c_a_inv));
         out.set_block(3, 3, s_inv);
         Some(out)
+    }
+}
+
+impl Matrix3 {
+    /// `self −= m`.
+    fn sub_mat3(&mut self, m: Mat3) {
+        for c in 0..3 {
+            let v = m.col(c);
+            for r in 0..3 {
+                self.0[r][c] -= v[r];
+            }
+        }
     }
 }
 

@@ -1,5 +1,5 @@
 //! Ball joints and hinges four at a time in SIMD lanes, as the contacts are in
-//! [`super::contact_wide`]: a world of many figures has the same joints many times, and
+//! [`super::contact_rows`]: a world of many figures has the same joints many times, and
 //! four figures' joints share an instruction.
 //!
 //! A joint's solve reads the velocities of its two bodies and writes them, so
@@ -32,7 +32,7 @@
 use super::ball::BallJoint;
 use super::body::BodyStates;
 use super::hinge::HingeJoint;
-use super::joint::{AxisRow, JointFrame, RowKind};
+use super::joint::{AxisRow, JointFrame, PointPart, RowKind};
 use super::joint_rows::{self, AlignRows, AngularRow, PointRows, Pose};
 use super::limits::{MARGIN, Swing};
 use super::soft::StepContext;
@@ -245,6 +245,14 @@ struct PointX4 {
     local_b: Vec3x4,
     impulse: Vec3x4,
     rows: PointRows<f32x4>,
+    /// Live lanes whose joint's point rows a joint tree solves ([`super::joint_tree`]):
+    /// the lanes prepare and warm-start them but leave their solve to the tree, which
+    /// owns their impulse (in the joint) meanwhile.
+    direct: f32x4,
+    /// Live lanes whose joint is in a tree of this solve (a superset of `direct`: a
+    /// tree whose factorisation failed hands its rows back to the lanes until it
+    /// succeeds again).
+    in_tree: f32x4,
 }
 
 impl PointX4 {
@@ -272,7 +280,72 @@ impl PointX4 {
 
     #[inline]
     fn solve(&mut self, v: &mut Velocities, l: &Lanes, soft: &Soft) {
-        self.rows.solve(v, l.inv_mass(), &mut self.impulse, soft);
+        let on = self.rows.on & !self.direct;
+        self.rows
+            .solve(v, l.inv_mass(), &mut self.impulse, soft, on);
+    }
+
+    /// Follows the joints' `direct` flags (set when the trees are built and factored):
+    /// a lane leaving a tree takes its impulse back from the joint, a lane joining one
+    /// hands it over, so the impulse is where it is solved.
+    fn sync_direct<J: Pointed>(&mut self, l: &Lanes, joints: &mut [J]) {
+        let now = mask(|k| is_set(l.live, k) && joints[l.joint(k)].point().direct);
+        if now.to_bitmask() == self.direct.to_bitmask() {
+            return;
+        }
+        let mut impulse: [Vec3; LANES] = std::array::from_fn(|k| self.impulse.lane(k));
+        for k in (0..LANES).filter(|&k| is_set(l.live, k)) {
+            let point = joints[l.joint(k)].point_mut();
+            match (is_set(self.direct, k), is_set(now, k)) {
+                (true, false) => impulse[k] = Vec3::from(point.impulse),
+                (false, true) => point.impulse = Vec3A::from(impulse[k]),
+                _ => {}
+            }
+        }
+        self.impulse = Vec3x4::from_fn(|k| impulse[k]);
+        self.direct = now;
+    }
+
+    /// Takes the tree-solved lanes' impulses from their joints (for the warm start).
+    fn take_direct<J: Pointed>(&mut self, l: &Lanes, joints: &[J]) {
+        if self.direct.any() {
+            let from = Vec3x4::from_fn(|k| Vec3::from(joints[l.joint(k)].point().impulse));
+            self.impulse = Vec3x4::select(self.direct, from, self.impulse);
+        }
+    }
+
+    /// Copies the rows of the lanes in a tree to their joints: the tree reads them
+    /// there, and they are the rows the one-by-one code prepares (the same code).
+    fn hand_rows_to_trees<J: Pointed>(&self, l: &Lanes, joints: &mut [J]) {
+        if self.in_tree.any() {
+            for k in (0..LANES).filter(|&k| is_set(self.in_tree, k)) {
+                joints[l.joint(k)].point_mut().rows = self.rows.lane(k);
+            }
+        }
+    }
+}
+
+/// A joint type the lanes bundle: it has a point constraint.
+trait Pointed {
+    fn point(&self) -> &PointPart;
+    fn point_mut(&mut self) -> &mut PointPart;
+}
+
+impl Pointed for BallJoint {
+    fn point(&self) -> &PointPart {
+        &self.point
+    }
+    fn point_mut(&mut self) -> &mut PointPart {
+        &mut self.point
+    }
+}
+
+impl Pointed for HingeJoint {
+    fn point(&self) -> &PointPart {
+        &self.point
+    }
+    fn point_mut(&mut self) -> &mut PointPart {
+        &mut self.point
     }
 }
 
@@ -548,7 +621,10 @@ impl JointLanes {
             let j = |k: usize| &balls[b.lanes.joint(k)];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
+            b.point.direct = mask(|k| is_set(b.lanes.live, k) && j(k).point.direct);
+            b.point.in_tree = mask(|k| is_set(b.lanes.live, k) && j(k).point.in_tree);
             b.point.prepare(&b.lanes, &p);
+            b.point.hand_rows_to_trees(&b.lanes, balls);
         }
         for h in &mut self.hinges {
             let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
@@ -561,7 +637,10 @@ impl JointLanes {
             for (r, row) in h.limit.iter_mut().enumerate() {
                 row.impulse = f4(|k| limit_rows(j(k))[r].impulse);
             }
+            h.point.direct = mask(|k| is_set(h.lanes.live, k) && j(k).point.direct);
+            h.point.in_tree = mask(|k| is_set(h.lanes.live, k) && j(k).point.in_tree);
             h.point.prepare(&h.lanes, &p);
+            h.point.hand_rows_to_trees(&h.lanes, hinges);
             h.align.prepare(&h.lanes, &p);
         }
         self.update_limits(balls, hinges, s);
@@ -579,11 +658,13 @@ impl JointLanes {
             b.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = b.lanes.inertia;
             b.point.weigh(&b.lanes, ia, ib);
+            b.point.hand_rows_to_trees(&b.lanes, balls);
         }
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             h.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = h.lanes.inertia;
             h.point.weigh(&h.lanes, ia, ib);
+            h.point.hand_rows_to_trees(&h.lanes, hinges);
             h.align.weigh(&h.lanes, ia, ib);
         }
         self.update_limits(balls, hinges, s);
@@ -635,9 +716,15 @@ impl JointLanes {
         }
     }
 
-    /// Re-applies the accumulated impulses of the ball joints, in their scalar order.
-    pub fn warm_start_balls(&self, s: &mut BodyStates) {
-        for b in self.balls.iter().filter(|x| x.lanes.is_live()) {
+    /// Re-applies the accumulated impulses of the ball joints, in their scalar order
+    /// (`trees`: some joints' point rows are solved by a tree, see
+    /// [`PointX4::sync_direct`]).
+    pub fn warm_start_balls(&mut self, s: &mut BodyStates, balls: &mut [BallJoint], trees: bool) {
+        for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
+            if trees {
+                b.point.sync_direct(&b.lanes, balls);
+                b.point.take_direct(&b.lanes, balls);
+            }
             b.lanes.update_velocities(s, |v| {
                 b.cone.warm_start(v);
                 b.point.warm_start(v, &b.lanes);
@@ -646,8 +733,17 @@ impl JointLanes {
     }
 
     /// Re-applies the accumulated impulses of the hinges, in their scalar order.
-    pub fn warm_start_hinges(&self, s: &mut BodyStates) {
-        for h in self.hinges.iter().filter(|x| x.lanes.is_live()) {
+    pub fn warm_start_hinges(
+        &mut self,
+        s: &mut BodyStates,
+        hinges: &mut [HingeJoint],
+        trees: bool,
+    ) {
+        for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
+            if trees {
+                h.point.sync_direct(&h.lanes, hinges);
+                h.point.take_direct(&h.lanes, hinges);
+            }
             h.lanes.update_velocities(s, |v| {
                 h.limit[0].warm_start(v);
                 h.limit[1].warm_start(v);
@@ -658,12 +754,26 @@ impl JointLanes {
     }
 
     /// One iteration over the ball joints; the relax pass (`use_bias` false) prepares
-    /// the point rows first, since the positions have moved.
-    pub fn solve_balls(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    /// the point rows first, since the positions have moved (and one by one those a
+    /// tree solves, for the tree).
+    pub fn solve_balls(
+        &mut self,
+        s: &mut BodyStates,
+        balls: &mut [BallJoint],
+        trees: bool,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         let soft = Soft::new(ctx, use_bias);
         for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
+            // The trees are factored (and `direct` may change) only before the warm
+            // start and between the relax passes.
+            if trees && !use_bias {
+                b.point.sync_direct(&b.lanes, balls);
+            }
             if !use_bias {
                 b.point.prepare(&b.lanes, &b.lanes.bodies(s));
+                b.point.hand_rows_to_trees(&b.lanes, balls);
             }
             b.lanes.update_velocities(s, |v| {
                 b.cone.solve(v, &soft);
@@ -675,13 +785,24 @@ impl JointLanes {
     /// One iteration over the hinges; the relax pass prepares the point and axis rows
     /// first. (A preparation reads poses and inertias, which the velocity solve does not
     /// change, so preparing before the range rows' update is preparing after it.)
-    pub fn solve_hinges(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    pub fn solve_hinges(
+        &mut self,
+        s: &mut BodyStates,
+        hinges: &mut [HingeJoint],
+        trees: bool,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         let soft = Soft::new(ctx, use_bias);
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
+            if trees && !use_bias {
+                h.point.sync_direct(&h.lanes, hinges);
+            }
             if !use_bias {
                 let p = h.lanes.bodies(s);
                 h.align.prepare(&h.lanes, &p);
                 h.point.prepare(&h.lanes, &p);
+                h.point.hand_rows_to_trees(&h.lanes, hinges);
             }
             h.lanes.update_velocities(s, |v| {
                 h.limit[0].solve(v, &soft);
@@ -698,14 +819,18 @@ impl JointLanes {
         for b in self.balls.iter().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
                 let j = &mut balls[b.lanes.joints[k] as usize];
-                j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
+                if !is_set(b.point.direct, k) {
+                    j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
+                }
                 cone_row_mut(j).impulse = b.cone.impulse.as_array()[k];
             }
         }
         for h in self.hinges.iter().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
-                j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
+                if !is_set(h.point.direct, k) {
+                    j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
+                }
                 j.align.impulse = h.align.impulse.map(|i| i.as_array()[k]);
                 let rows = &mut j.limit.as_mut().expect("hinge_fits checked the range").rows;
                 for (row, lanes) in rows.iter_mut().zip(&h.limit) {

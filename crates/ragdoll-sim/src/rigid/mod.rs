@@ -45,6 +45,7 @@ mod slider;
 mod soft;
 mod solver;
 mod spring;
+mod substeps;
 mod universal;
 mod world;
 

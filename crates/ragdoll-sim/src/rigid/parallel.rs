@@ -7,7 +7,7 @@
 //! order, into batches of about equal work, and each batch is gathered into dense local
 //! arrays — its moving bodies first, then the static bodies its constraints read; its
 //! joints and touching contact pairs with body indices rewritten to local ones — solved
-//! by the same [`solver::solve`] that solves the whole world on one thread, and
+//! by the same [`substeps::solve`] that solves the whole world on one thread, and
 //! scattered back. Jolt and Box2D v3 hand islands (or constraint colours) to threads for
 //! the same reason.
 //!
@@ -22,7 +22,7 @@ use super::body::{BodyMotion, BodyStates, Motions};
 use super::contact::ContactPair;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::solver::{self, SolveParams};
+use super::substeps::{self, SolveParams};
 use rayon::prelude::*;
 
 /// No island / no local index.
@@ -89,7 +89,7 @@ impl IslandTask {
     }
 }
 
-/// Solves the step of every awake island (see [`solver::solve`]) in parallel on the
+/// Solves the step of every awake island (see [`substeps::solve`]) in parallel on the
 /// current rayon pool. `islands` must hold this step's links.
 pub fn solve_islands(
     s: &mut BodyStates,
@@ -106,7 +106,7 @@ pub fn solve_islands(
         + pairs.iter().filter(|p| p.touching()).count();
     if work < MIN_PARALLEL_WORK {
         // Too little to share out: solve in place.
-        solver::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, p);
         return;
     }
     // Islands in the order of their lowest body.
@@ -126,7 +126,7 @@ pub fn solve_islands(
     }
     if islands_found < 2 {
         // One island: nothing to share out, solve in place.
-        solver::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, p);
         return;
     }
     // A constraint belongs to the island of its moving body (both are in the same one
@@ -216,7 +216,7 @@ pub fn solve_islands(
     }
 
     tasks.par_iter_mut().for_each(|t| {
-        solver::solve(
+        substeps::solve(
             &mut t.states,
             Motions {
                 bodies: &t.motion,

@@ -7,8 +7,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::body::BodyStates;
-use super::joint::{AngularLock3, JointFrame};
-use super::joint_set::JointSolve;
+use super::joint::{AngularLock3, JointFrame, JointSolve};
 use super::soft::{Softness, StepContext};
 use glam::{Vec3, Vec3A};
 

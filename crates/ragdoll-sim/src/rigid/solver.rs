@@ -12,54 +12,25 @@
 //! 4. integrate positions;
 //! 5. relax: solve again without bias, removing the velocity the position feedback
 //!    added, so pushing out does not become bouncing (joints in
-//!    [`RELAX_JOINT_PASSES`] passes).
+//!    `substeps::RELAX_JOINT_PASSES` passes).
 //!
 //! After the substeps, the restitution pass, the position projection ([`super::project`]:
 //! what the soft constraints let give way is put back, positions only); then sleeping.
 //!
-//! The substeps, restitution and projection ([`solve`]) touch only an island's own
+//! The substeps, restitution and projection ([`substeps::solve`]) touch only an island's own
 //! bodies, so on a rayon pool of several threads each island is solved on its own
 //! ([`super::parallel`]), with the same bits as on one.
 
 use super::body::{BodyInfo, BodyStates, Motions};
-use super::contact::{ContactPair, Contacts};
-use super::contact_solver::{ContactConstraints, PushOutBudget};
-use super::integrate::{integrate_positions, integrate_velocities, update_inertia};
+use super::contact::Contacts;
+use super::integrate::update_inertia;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::joint_tree::JointTrees;
 use super::parallel;
-use super::project;
 use super::soft::{Softness, StepContext};
-use crate::scene::{Settings, SleepSettings};
+use super::substeps::{self, SolveParams};
+use crate::scene::Settings;
 use crate::timings::{PhaseClock, PhaseTimes};
-use glam::Vec3;
-
-/// Joint passes of the relax step. The relax takes back the velocity the biased
-/// iterations added to push errors out; one Gauss–Seidel pass does not: a joint's
-/// angular rows (a limit, an alignment) act about the centre of mass, the point row
-/// then holds the anchor, and the two undo each other's work. A hinge door started
-/// 10° outside its range kept 2.6 % of the scene's energy scale as speed after one
-/// pass, 1.2 % after two, 0.6 % after three.
-const RELAX_JOINT_PASSES: u32 = 2;
-
-/// What every island's solve needs besides its bodies and constraints: the same for all
-/// islands of a step.
-#[derive(Clone, Copy, Debug)]
-pub struct SolveParams<'a> {
-    /// Substep length and softness.
-    pub ctx: StepContext,
-    /// Substeps per step.
-    pub substeps: u32,
-    /// Biased velocity iterations per substep.
-    pub iterations: u32,
-    /// Gravity (m/s²).
-    pub gravity: Vec3,
-    /// Approach speed below which contacts do not bounce (m/s).
-    pub restitution_threshold: f32,
-    /// Sleep speeds: bodies below them take no part in the position projection.
-    pub sleep: &'a SleepSettings,
-}
 
 /// Advances the world by `settings.timestep`.
 #[allow(clippy::too_many_arguments)]
@@ -160,7 +131,7 @@ pub fn step(
             &params,
         );
     } else {
-        solve(s, motion, joints, &mut contacts.pairs, awake, &params);
+        substeps::solve(s, motion, joints, &mut contacts.pairs, awake, &params);
     }
     clock.lap(times, "substeps");
 
@@ -169,60 +140,6 @@ pub fn step(
     }
     clock.lap(times, "sleep");
     clock.finish(times);
-}
-
-/// The velocity solve of one step over the bodies, joints and contact pairs given (the
-/// whole world, or one island gathered by [`parallel`]): the substeps, the restitution
-/// pass and the position projection. Reads contacts prepared by [`Contacts::update`].
-pub fn solve(
-    s: &mut BodyStates,
-    motion: Motions<'_>,
-    joints: &mut JointSet,
-    pairs: &mut [ContactPair],
-    awake: &[bool],
-    p: &SolveParams,
-) {
-    let mut contacts = ContactConstraints::build(pairs, s, awake);
-    let mut trees = JointTrees::build(joints, s, awake);
-    for sub in 0..p.substeps {
-        integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
-        if sub == 0 {
-            joints.prepare(s, awake);
-        } else {
-            // The pose is the one the last relax pass prepared the joints on.
-            update_inertia(s, motion, awake);
-            joints.prepare_after_relax(s, awake);
-        }
-        trees.factor(joints, s);
-        joints.warm_start(s, awake);
-        contacts.prepare_substep(s);
-        contacts.warm_start(s);
-        for _ in 0..p.iterations {
-            joints.solve(s, awake, &p.ctx, true);
-            trees.solve(joints, s, &p.ctx, true);
-            contacts.solve(s, &p.ctx, true);
-        }
-        integrate_positions(s, awake, p.ctx.h);
-        for pass in 0..RELAX_JOINT_PASSES {
-            // The first pass prepares the point rows on the moved pose.
-            joints.solve(s, awake, &p.ctx, false);
-            if pass == 0 && !trees.is_empty() {
-                trees.factor(joints, s);
-            }
-            trees.solve(joints, s, &p.ctx, false);
-        }
-        contacts.solve(s, &p.ctx, false);
-    }
-    joints.end_substeps();
-    contacts.end_substeps();
-    contacts.restitution(s, p.restitution_threshold);
-    let push = PushOutBudget {
-        max_speed: p.ctx.max_push_out,
-        bias_rate: p.ctx.contact.bias_rate,
-        dt: p.ctx.h * p.substeps as f32,
-    };
-    project::project_positions(s, joints, &contacts, awake, p.sleep, &push);
-    contacts.store_impulses(pairs);
 }
 
 /// `awake` and the solver inverse masses from the sleep flags: sleeping bodies act as

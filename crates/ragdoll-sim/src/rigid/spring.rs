@@ -6,8 +6,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::body::BodyStates;
-use super::joint::JointFrame;
-use super::joint_set::JointSolve;
+use super::joint::{JointFrame, JointSolve};
 use super::soft::{Softness, Spring, StepContext};
 use glam::{Vec3, Vec3A};
 

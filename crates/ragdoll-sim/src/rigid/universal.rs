@@ -3,8 +3,7 @@
 //! Doom 3 swing limit on shaft1 and PyODE lo/hi stops about each shaft.
 
 use super::body::BodyStates;
-use super::joint::{AxisRow, FrictionMotor, JointFrame, PointPart};
-use super::joint_set::JointSolve;
+use super::joint::{AxisRow, FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::limits::{AngleLimit, Swing};
 use super::soft::StepContext;
 use glam::Vec3;

@@ -522,9 +522,21 @@ mod tests {
     /// collisions, limits meeting their bounds, sleep, and a projectile inserted before
     /// the static anchor (the lanes must follow the anchor's index) — and stretches on
     /// two threads, whose islands are solved one by one, hand the impulses back and
-    /// forth. (No joint to the world: that would put its figure in a joint tree.)
+    /// forth. Equal masses: no joint tree ([`super::joint_tree`]).
     #[test]
     fn joints_in_lanes_give_the_bits_of_joints_one_by_one() {
+        lanes_match_one_by_one(true);
+    }
+
+    /// The same with the first figure's first body twenty times heavier than the rest,
+    /// which puts that figure's point rows in a joint tree: the lanes solve all other
+    /// rows around the tree with the bits of the one-by-one solve.
+    #[test]
+    fn joints_in_lanes_around_trees_give_the_bits_of_joints_one_by_one() {
+        lanes_match_one_by_one(false);
+    }
+
+    fn lanes_match_one_by_one(equal_masses: bool) {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../assets/scenes/pile.af");
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -535,11 +547,11 @@ mod tests {
         let mut scene = parse(&text, &path, &opts)
             .unwrap_or_else(|e| panic!("{e}"))
             .desc;
-        // Equal masses: a joint across a large mass ratio or to the world puts its
-        // figure's point rows in a tree ([`super::joint_tree`]), and the lanes stand
-        // aside in such a solve.
         for b in &mut scene.bodies {
             b.mass = MassSpec::Mass(5.0);
+        }
+        if !equal_masses {
+            scene.bodies[0].mass = MassSpec::Mass(100.0);
         }
         let mut wide = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
         let lanes = wide
@@ -588,6 +600,7 @@ mod tests {
                 .collect::<Vec<_>>();
             (v3(&s.com), q, v3a(&s.lin_vel), v3a(&s.ang_vel))
         };
+        let mut trees = false;
         for frame in 0..240 {
             // One thread mostly; every fifth stretch of six frames on two.
             pools[usize::from(frame / 6 % 5 == 4)].install(|| {
@@ -598,11 +611,16 @@ mod tests {
                 wide.step();
                 single.step();
             });
-            assert!(!wide.joints.direct, "frame {frame}: the lanes stood aside");
+            trees |= wide.joints.direct;
+            assert!(
+                !wide.joints.trees_own_most(),
+                "frame {frame}: the lanes stood aside"
+            );
             assert!(
                 bits(&wide) == bits(&single),
                 "frame {frame}: the lanes' bodies differ"
             );
         }
+        assert_eq!(trees, !equal_masses, "joint trees formed");
     }
 }
