@@ -92,15 +92,6 @@ pub(super) struct PairRows<R> {
     rolling_mass: M3<R>,
     inv_inertia_a: M3<R>,
     inv_inertia_b: M3<R>,
-    /// Each lane's number of points, as a lane value.
-    point_count: R,
-    /// The face row: `r̄_a × n`, `r̄_b × n` at the points' centroid, `I⁻¹` times them
-    /// with the substep's inertia, and `J̄ M⁻¹ J̄ᵀ`.
-    ja_c: V3<R>,
-    jb_c: V3<R>,
-    ia_c: V3<R>,
-    ib_c: V3<R>,
-    face_k: R,
 }
 
 /// The groups of one lane width and their point rows.
@@ -151,12 +142,6 @@ impl<R: Real> ContactLanes<R> {
             rolling_mass: M3::default(),
             inv_inertia_a: M3::default(),
             inv_inertia_b: M3::default(),
-            point_count: R::from_fn(|k| lane(k).map_or(0.0, |p| p.count as f32)),
-            ja_c: V3::from_fn(|k| lane(k).map_or(Vec3::ZERO, |p| p.ja_c)),
-            jb_c: V3::from_fn(|k| lane(k).map_or(Vec3::ZERO, |p| p.jb_c)),
-            ia_c: V3::default(),
-            ib_c: V3::default(),
-            face_k: R::from_fn(|k| or_zero(k, |p| p.face_k)),
         };
         let empty = PointConstraint::default();
         for j in 0..slots {
@@ -216,8 +201,6 @@ impl<R: Real> ContactLanes<R> {
                 w.ia_t = w.ja_t.map(|j| ia * j);
                 w.ib_t = w.jb_t.map(|j| ib * j);
             }
-            g.ia_c = ia * g.ja_c;
-            g.ib_c = ib * g.jb_c;
             if R::any(g.rolling_arm.gt(R::ZERO)) {
                 // Lanes that roll have a body that moves, so `I_a⁻¹ + I_b⁻¹` is
                 // invertible but for a degenerate inertia; then the lane does not roll.
@@ -291,7 +274,6 @@ impl<R: Real> ContactLanes<R> {
         for g in &mut self.groups {
             let [mut va, mut wa, mut vb, mut wb] = g.gather(s);
             let rows = &mut self.rows[g.rows..g.rows + g.slots];
-            g.face_row(rows, [&mut va, &mut wa, &mut vb, &mut wb], coefficients);
             let (ma, mb) = (g.inv_mass_a, g.inv_mass_b);
             let n = g.normal;
             let [t0, t1] = g.tangents;
@@ -375,67 +357,6 @@ impl<R: Real> ContactLanes<R> {
 }
 
 impl<R: Real> PairRows<R> {
-    /// The face row: one step of all a pair's normal impulses together, each by the same
-    /// amount `d`, before its points are solved one by one.
-    ///
-    /// Gauss–Seidel over the points of a face converges slowly, and what it has not yet
-    /// converged is an uneven spread of the impulse over the face: a torque the contact
-    /// does not exert. A box hitting a wall at 50 m/s took 50 N·s over its four points
-    /// as 13.6, 9.4, 16.1 and 9.8 after five passes and came away tumbling at 10 rad/s
-    /// (2 rad/s with friction, which then pushed it sideways). The rows of a face have
-    /// Jacobians `J_i = J̄ + x_i B + y_i C` (r × n is linear in the point), so raising
-    /// every λ_i by `d` applies `N d` along the row at the centroid, `J̄`; the step is the
-    /// exact minimiser of the points' quadratic (soft rows included: a soft row is the
-    /// rigid one with `γ_i = (impulse_scale / mass_scale) / m_i` added to its diagonal)
-    /// along that direction,
-    ///
-    /// `d = −(v̄ + (1/N) Σ (b_i + γ_i λ_i)) / (N (J̄ M⁻¹ J̄ᵀ + Σγ_i / N²))`,
-    ///
-    /// clamped so that no λ_i goes negative (`d ≥ −min λ_i`). A descent step on the same
-    /// problem the point rows solve: it changes how fast they converge, not what to. A
-    /// symmetric impact is then taken evenly in one row, and the point rows are left the
-    /// uneven part of the load (a box resting on an edge, a tilted landing).
-    #[inline]
-    fn face_row(
-        &self,
-        rows: &mut [PointRows<R>],
-        [va, wa, vb, wb]: [&mut V3<R>; 4],
-        coefficients: impl Fn(R) -> (R, R, R),
-    ) {
-        let (zero, one) = (R::ZERO, R::ONE);
-        let count = self.point_count;
-        if !R::any(count.gt(one)) {
-            return;
-        }
-        // Σ (b_i + γ_i λ_i), Σ γ_i and min λ_i over each lane's points (slots past a
-        // lane's count leave its sums as they are).
-        let (mut residual, mut gamma, mut least) = (zero, zero, R::splat(f32::MAX));
-        for (j, p) in rows.iter().enumerate() {
-            let live = R::splat(j as f32).lt(count);
-            let (bias, mass_scale, impulse_scale) = coefficients(p.separation);
-            let g = impulse_scale / (mass_scale * p.normal_mass);
-            let g = R::select(p.normal_mass.gt(zero), g, zero);
-            residual = R::select(live, residual + (bias + g * p.normal_impulse), residual);
-            gamma = R::select(live, gamma + g, gamma);
-            least = R::select(live, least.min(p.normal_impulse), least);
-        }
-        let n = self.normal;
-        let v = n.dot(*vb - *va) + self.jb_c.dot(*wb) - self.ja_c.dot(*wa);
-        let k = (self.face_k + gamma / (count * count)) * count;
-        let on = count.gt(one) & k.gt(R::splat(1e-20));
-        let d = R::select(on, (-(v + residual / count) / k).max(-least), zero);
-        let t = d * count;
-        for (j, p) in rows.iter_mut().enumerate() {
-            let live = on & R::splat(j as f32).lt(count);
-            p.normal_impulse = R::select(live, p.normal_impulse + d, p.normal_impulse);
-            p.max_normal_impulse = p.max_normal_impulse.max(p.normal_impulse);
-        }
-        *va = V3::select(on, *va - n * (t * self.inv_mass_a), *va);
-        *vb = V3::select(on, *vb + n * (t * self.inv_mass_b), *vb);
-        *wa = V3::select(on, *wa - self.ia_c * t, *wa);
-        *wb = V3::select(on, *wb + self.ib_c * t, *wb);
-    }
-
     /// The lanes' body velocities.
     #[inline]
     fn gather(&self, s: &BodyStates) -> Velocities<R> {
@@ -550,8 +471,6 @@ mod tests {
                 tangents: [t0, t1],
                 inv_mass_a: s.inv_mass[i],
                 friction: 0.6,
-                ja_c: points[start].ja_n,
-                face_k: 2.0,
                 ..PairConstraint::default()
             });
         }

@@ -74,12 +74,6 @@ pub(super) struct PairConstraint {
     pub(super) rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
     pub(super) rolling_impulse: Vec3,
-    /// The face row's Jacobian (see [`super::contact_rows`]): the mean of the points'
-    /// `r_a × n` and `r_b × n`, which is `r̄ × n` at the points' centroid r̄.
-    pub(super) ja_c: Vec3,
-    pub(super) jb_c: Vec3,
-    /// `J̄ M⁻¹ J̄ᵀ` of the face row, with the inertia at the start of the step.
-    pub(super) face_k: f32,
 }
 
 /// One contact point's rows: non-penetration along the normal, friction along the two
@@ -175,13 +169,10 @@ impl ContactConstraints {
             let mass =
                 |ja: Vec3, jb: Vec3| inverse_or_zero(ma + mb + ja.dot(ia * ja) + jb.dot(ib * jb));
             let start = out.points.len();
-            let (mut ja_c, mut jb_c) = (Vec3::ZERO, Vec3::ZERO);
             for (c, separation) in pair.contact_points() {
                 let ra = s.rot[a] * c.local_a;
                 let rb = s.rot[b] * c.local_b;
                 let (ja_n, jb_n) = (ra.cross(normal), rb.cross(normal));
-                ja_c += ja_n;
-                jb_c += jb_n;
                 let ja_t = tangents.map(|t| ra.cross(t));
                 let jb_t = tangents.map(|t| rb.cross(t));
                 out.points.push(PointConstraint {
@@ -210,7 +201,6 @@ impl ContactConstraints {
                     ..Default::default()
                 });
             }
-            let (ja_c, jb_c) = (ja_c / points.max(1.0), jb_c / points.max(1.0));
             out.pairs.push(PairConstraint {
                 a,
                 b,
@@ -225,9 +215,6 @@ impl ContactConstraints {
                 restitution: pair.restitution,
                 rolling_arm: pair.rolling_arm,
                 rolling_impulse: pair.rolling_impulse,
-                ja_c,
-                jb_c,
-                face_k: ma + mb + ja_c.dot(ia * ja_c) + jb_c.dot(ib * jb_c),
             });
         }
         out.bundle(s.len());
