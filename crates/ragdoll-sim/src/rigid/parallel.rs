@@ -89,6 +89,71 @@ impl IslandTask {
     }
 }
 
+/// The awake islands of a step, numbered in the order of their lowest body.
+struct Numbering<'a> {
+    awake: &'a [bool],
+    /// Each body's island, `NONE` for a body that does not move.
+    island_of_body: Vec<u32>,
+    count: u32,
+}
+
+impl<'a> Numbering<'a> {
+    /// Numbers the islands of the first `n` (movable) of `len` bodies.
+    fn new(islands: &mut Islands, awake: &'a [bool], n: usize, len: usize) -> Self {
+        let mut island_of_root = vec![NONE; n];
+        let mut island_of_body = vec![NONE; len];
+        let mut count = 0u32;
+        for i in 0..n {
+            if !awake[i] {
+                continue;
+            }
+            let root = islands.root(i);
+            if island_of_root[root] == NONE {
+                island_of_root[root] = count;
+                count += 1;
+            }
+            island_of_body[i] = island_of_root[root];
+        }
+        Numbering {
+            awake,
+            island_of_body,
+            count,
+        }
+    }
+
+    /// The island of a constraint between `a` and `b`: that of its moving body (both
+    /// are in the same one when both move); `None` between bodies that do not move,
+    /// which are not solved at all.
+    fn of(&self, a: usize, b: usize) -> Option<usize> {
+        let t = if self.awake[a] {
+            self.island_of_body[a]
+        } else {
+            self.island_of_body[b]
+        };
+        (t != NONE).then_some(t as usize)
+    }
+
+    /// Each island's work (its moving bodies and constraints), dealt into batches of
+    /// about equal work, consecutive islands together: the batch of each island.
+    fn deal(&self, joints: &JointSet, pairs: &[ContactPair]) -> Vec<u32> {
+        let mut island_work = vec![0usize; self.count as usize];
+        for &t in self.island_of_body.iter().filter(|&&t| t != NONE) {
+            island_work[t as usize] += 1;
+        }
+        let mut count = |a: usize, b: usize| {
+            if let Some(t) = self.of(a, b) {
+                island_work[t] += 1;
+            }
+        };
+        joints.for_each_pair(&mut count);
+        for pair in pairs.iter().filter(|p| p.touching()) {
+            count(pair.a as usize, pair.b as usize);
+        }
+        let wanted = rayon::current_num_threads() * BATCHES_PER_THREAD;
+        crate::batches::deal(&island_work, wanted)
+    }
+}
+
 /// Solves the step of every awake island (see [`substeps::solve`]) in parallel on the
 /// current rayon pool. `islands` must hold this step's links.
 pub fn solve_islands(
@@ -109,101 +174,16 @@ pub fn solve_islands(
         substeps::solve(s, motion, joints, pairs, awake, p);
         return;
     }
-    // Islands in the order of their lowest body.
-    let mut island_of_root = vec![NONE; n];
-    let mut island_of_body = vec![NONE; s.len()];
-    let mut islands_found = 0u32;
-    for i in 0..n {
-        if !awake[i] {
-            continue;
-        }
-        let root = islands.root(i);
-        if island_of_root[root] == NONE {
-            island_of_root[root] = islands_found;
-            islands_found += 1;
-        }
-        island_of_body[i] = island_of_root[root];
-    }
-    if islands_found < 2 {
+    let numbering = Numbering::new(islands, awake, n, s.len());
+    if numbering.count < 2 {
         // One island: nothing to share out, solve in place.
         substeps::solve(s, motion, joints, pairs, awake, p);
         return;
     }
-    // A constraint belongs to the island of its moving body (both are in the same one
-    // when both move); constraints between static bodies are not solved at all.
-    let island_of = |a: usize, b: usize| {
-        let t = if awake[a] {
-            island_of_body[a]
-        } else {
-            island_of_body[b]
-        };
-        (t != NONE).then_some(t as usize)
-    };
-    // Work per island, to deal consecutive islands into batches of about equal work.
-    let mut island_work = vec![0usize; islands_found as usize];
-    for &t in island_of_body.iter().filter(|&&t| t != NONE) {
-        island_work[t as usize] += 1;
-    }
-    let mut count = |a: usize, b: usize| {
-        if let Some(t) = island_of(a, b) {
-            island_work[t] += 1;
-        }
-    };
-    joints.for_each_pair(&mut count);
-    for pair in pairs.iter().filter(|p| p.touching()) {
-        count(pair.a as usize, pair.b as usize);
-    }
-    let wanted = rayon::current_num_threads() * BATCHES_PER_THREAD;
-    let batch_of_island = crate::batches::deal(&island_work, wanted);
-    let batch_count = batch_of_island.last().map_or(0, |&b| b as usize + 1);
-    // Each batch's moving bodies in ascending world order (its islands interleaved).
-    let mut local_of_moving = vec![NONE; s.len()];
-    let mut tasks: Vec<IslandTask> = (0..batch_count).map(|_| IslandTask::default()).collect();
-    for i in 0..n {
-        if island_of_body[i] == NONE {
-            continue;
-        }
-        let t = batch_of_island[island_of_body[i] as usize];
-        let task = &mut tasks[t as usize];
-        local_of_moving[i] = task.bodies.len() as u32;
-        task.bodies.push(i);
-    }
-    for task in &mut tasks {
-        task.moving = task.bodies.len();
-    }
-    // A constraint's batch is its island's.
-    let batch_of = |a: usize, b: usize| island_of(a, b).map(|t| batch_of_island[t] as usize);
-
-    macro_rules! gather_joints {
-        ($($kind:ident),*) => {$(
-            for (k, j) in joints.$kind.iter().enumerate() {
-                let Some(t) = batch_of(j.frame.a, j.frame.b) else { continue };
-                let task = &mut tasks[t];
-                let mut j = j.clone();
-                j.frame.a = task.local(j.frame.a, &local_of_moving);
-                j.frame.b = task.local(j.frame.b, &local_of_moving);
-                task.joints.$kind.push(j);
-                task.joint_slots.$kind.push(k);
-            }
-        )*};
-    }
-    gather_joints!(ball, hinge, universal, fixed, slider, spring);
-
-    for (k, pair) in pairs.iter_mut().enumerate() {
-        if !pair.touching() {
-            continue;
-        }
-        let Some(t) = batch_of(pair.a as usize, pair.b as usize) else {
-            continue;
-        };
-        let task = &mut tasks[t];
-        let mut local = std::mem::take(pair);
-        task.pair_slots.push((k, local.a, local.b));
-        local.a = task.local(local.a as usize, &local_of_moving) as u32;
-        local.b = task.local(local.b as usize, &local_of_moving) as u32;
-        task.pairs.push(local);
-    }
-
+    let batch_of_island = numbering.deal(joints, pairs);
+    let batch_of = |a: usize, b: usize| numbering.of(a, b).map(|t| batch_of_island[t] as usize);
+    let (mut tasks, local_of_moving) = new_tasks(&numbering, &batch_of_island, n, s.len());
+    gather(&mut tasks, &local_of_moving, joints, pairs, batch_of);
     for task in &mut tasks {
         for &i in &task.bodies {
             task.states.push_copy(s, i);
@@ -228,7 +208,83 @@ pub fn solve_islands(
             p,
         );
     });
+    scatter(tasks, s, joints, pairs);
+}
 
+/// One task per batch, holding the batch's moving bodies in ascending world order (its
+/// islands interleaved), and each moving body's index in its task.
+fn new_tasks(
+    numbering: &Numbering,
+    batch_of_island: &[u32],
+    n: usize,
+    len: usize,
+) -> (Vec<IslandTask>, Vec<u32>) {
+    let batch_count = batch_of_island.last().map_or(0, |&b| b as usize + 1);
+    let mut local_of_moving = vec![NONE; len];
+    let mut tasks: Vec<IslandTask> = (0..batch_count).map(|_| IslandTask::default()).collect();
+    for (i, &island) in numbering.island_of_body[..n].iter().enumerate() {
+        if island == NONE {
+            continue;
+        }
+        let task = &mut tasks[batch_of_island[island as usize] as usize];
+        local_of_moving[i] = task.bodies.len() as u32;
+        task.bodies.push(i);
+    }
+    for task in &mut tasks {
+        task.moving = task.bodies.len();
+    }
+    (tasks, local_of_moving)
+}
+
+/// Copies every joint and touching pair into its batch's task (a constraint's batch is
+/// its island's), re-indexed to the task's bodies; a pair is moved out and put back by
+/// [`scatter`].
+fn gather(
+    tasks: &mut [IslandTask],
+    local_of_moving: &[u32],
+    joints: &JointSet,
+    pairs: &mut [ContactPair],
+    batch_of: impl Fn(usize, usize) -> Option<usize>,
+) {
+    macro_rules! gather_joints {
+        ($($kind:ident),*) => {$(
+            for (k, j) in joints.$kind.iter().enumerate() {
+                let Some(t) = batch_of(j.frame.a, j.frame.b) else { continue };
+                let task = &mut tasks[t];
+                let mut j = j.clone();
+                j.frame.a = task.local(j.frame.a, local_of_moving);
+                j.frame.b = task.local(j.frame.b, local_of_moving);
+                task.joints.$kind.push(j);
+                task.joint_slots.$kind.push(k);
+            }
+        )*};
+    }
+    gather_joints!(ball, hinge, universal, fixed, slider, spring);
+
+    for (k, pair) in pairs.iter_mut().enumerate() {
+        if !pair.touching() {
+            continue;
+        }
+        let Some(t) = batch_of(pair.a as usize, pair.b as usize) else {
+            continue;
+        };
+        let task = &mut tasks[t];
+        let mut local = std::mem::take(pair);
+        task.pair_slots.push((k, local.a, local.b));
+        local.a = task.local(local.a as usize, local_of_moving) as u32;
+        local.b = task.local(local.b as usize, local_of_moving) as u32;
+        task.pairs.push(local);
+    }
+}
+
+/// Writes the solved tasks back: their moving bodies' states, their joints (keeping the
+/// world's body indices) and their pairs.
+fn scatter(
+    tasks: Vec<IslandTask>,
+    s: &mut BodyStates,
+    joints: &mut JointSet,
+    pairs: &mut [ContactPair],
+) {
     macro_rules! scatter_joints {
         ($task:expr, $($kind:ident),*) => {$(
             for (j, &k) in $task.joints.$kind.drain(..).zip(&$task.joint_slots.$kind) {
