@@ -603,14 +603,8 @@ impl Q<f32x4> {
 mod tests {
     use super::*;
 
-    fn close(a: Vec3, b: Vec3) -> bool {
-        (a - b).length() < 1e-6 * (1.0 + b.length())
-    }
-
-    /// The lane operations are glam's, lane by lane (to rounding): rotations, their
-    /// inverses, products and the XPBD update, on four different quaternions.
-    #[test]
-    fn lanes_agree_with_glam() {
+    /// Four different rotations and vectors, one per lane.
+    fn samples() -> ([Quat; LANES], [Vec3; LANES]) {
         let qs = [
             Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
             Quat::IDENTITY,
@@ -623,6 +617,18 @@ mod tests {
             Vec3::X,
             Vec3::new(0.01, -4.0, 0.3),
         ];
+        (qs, vs)
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-6 * (1.0 + b.length())
+    }
+
+    /// The lane operations are glam's, lane by lane (to rounding): rotations, their
+    /// inverses, products and the XPBD update, on four different quaternions.
+    #[test]
+    fn lanes_agree_with_glam() {
+        let (qs, vs) = samples();
         let (q, v) = (Quatx4::from_fn(|k| qs[k]), Vec3x4::from_fn(|k| vs[k]));
         let o = Quatx4::from_fn(|k| qs[(k + 1) % 4]);
         let theta = Vec3x4::from_fn(|k| vs[k] * 1e-2);
@@ -650,18 +656,7 @@ mod tests {
             let q2 = q.mul_quat(q.conjugate()).rotate_local(v * R::splat(1e-2));
             (Q::select(n.gt(R::ONE), q2, q), pick.mul_elem(r) - v, n)
         }
-        let qs = [
-            Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
-            Quat::IDENTITY,
-            Quat::from_axis_angle(Vec3::new(0.6, 0.0, 0.8), 2.9),
-            Quat::from_euler(glam::EulerRot::ZYX, -2.0, 0.4, 0.1),
-        ];
-        let vs = [
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(-0.2, 0.0, 0.5),
-            Vec3::X,
-            Vec3::new(0.01, -4.0, 0.3),
-        ];
+        let (qs, vs) = samples();
         let ss = [0.7_f32, -2.5, 1.0, 1e-3];
         let (q4, v4, s4) = chain(
             Q::<f32x4>::from_fn(|k| qs[k]),

@@ -120,7 +120,13 @@ impl Md5Anim {
         let ft = (time.max(0.0) * self.frame_rate as f32) as f64;
         let f1 = (ft.floor() as usize) % (n - 1);
         let t = (ft - ft.floor()) as f32;
-        let (a, b) = (self.local_poses(f1), self.local_poses(f1 + 1));
+        self.blend(f1, t)
+    }
+
+    /// Parent-relative poses a fraction `t` of the way from frame `f` to frame `f + 1`:
+    /// translations lerped, rotations slerped.
+    fn blend(&self, f: usize, t: f32) -> Vec<Pose> {
+        let (a, b) = (self.local_poses(f), self.local_poses(f + 1));
         a.iter()
             .zip(&b)
             .map(|(a, b)| Pose {
@@ -148,14 +154,7 @@ impl Md5Anim {
         let ft = (time.max(0.0) * self.frame_rate as f32).min((n - 1) as f32);
         let f1 = (ft.floor() as usize).min(n - 2);
         let t = ft - f1 as f32;
-        let (a, b) = (self.local_poses(f1), self.local_poses(f1 + 1));
-        a.iter()
-            .zip(&b)
-            .map(|(a, b)| Pose {
-                position: a.position.lerp(b.position, t),
-                rotation: a.rotation.slerp(b.rotation, t),
-            })
-            .collect()
+        self.blend(f1, t)
     }
 
     /// Composes parent-relative poses into model space (parents come first).

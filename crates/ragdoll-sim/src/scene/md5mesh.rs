@@ -71,6 +71,19 @@ pub struct Md5Skeleton {
 }
 
 impl Md5Skeleton {
+    /// The first dozen joint names, comma-separated, with ", ..." when there are more:
+    /// what an error about an unknown joint lists.
+    pub fn some_joint_names(&self) -> String {
+        let names: Vec<&str> = self
+            .joints
+            .iter()
+            .take(12)
+            .map(|j| j.name.as_str())
+            .collect();
+        let more = if self.joints.len() > 12 { ", ..." } else { "" };
+        format!("{}{more}", names.join(", "))
+    }
+
     /// The index of the joint with this name, compared without regard to ASCII case
     /// (Doom 3's `idRenderModelMD5::GetJointHandle` and `idDeclModelDef::FindJoint`).
     pub fn index(&self, name: &str) -> Option<usize> {

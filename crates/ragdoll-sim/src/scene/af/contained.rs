@@ -81,13 +81,6 @@ fn joint_list(ctx: &Ctx, skel: &Md5Skeleton, list: &str, at: Pos) -> R<Vec<usize
     let mut out: Vec<usize> = Vec::new();
     for t in terms(list, at) {
         let Some(j) = skel.index(t.name) else {
-            let known: Vec<&str> = skel
-                .joints
-                .iter()
-                .take(12)
-                .map(|j| j.name.as_str())
-                .collect();
-            let more = if skel.joints.len() > 12 { ", ..." } else { "" };
             let what = if t.name.is_empty() {
                 "a joint name after `-` or `*`".to_string()
             } else {
@@ -96,8 +89,8 @@ fn joint_list(ctx: &Ctx, skel: &Md5Skeleton, list: &str, at: Pos) -> R<Vec<usize
             return Err(ctx.err(
                 t.pos,
                 format!(
-                    "containedJoints: the mesh has {what} (it has {}{more})",
-                    known.join(", ")
+                    "containedJoints: the mesh has {what} (it has {})",
+                    skel.some_joint_names()
                 ),
             ));
         };

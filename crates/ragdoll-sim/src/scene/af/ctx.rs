@@ -246,16 +246,9 @@ impl Ctx<'_> {
         match skel.joint(&name) {
             Some(j) => Ok(j.position),
             None => {
-                let known: Vec<&str> = skel
-                    .joints
-                    .iter()
-                    .take(12)
-                    .map(|j| j.name.as_str())
-                    .collect();
-                let more = if skel.joints.len() > 12 { ", ..." } else { "" };
                 let message = format!(
-                    "the mesh has no joint \"{name}\" (it has {}{more})",
-                    known.join(", ")
+                    "the mesh has no joint \"{name}\" (it has {})",
+                    skel.some_joint_names()
                 );
                 Err(AfError::at(&self.file, at, message))
             }
