@@ -133,14 +133,15 @@ fn the_figure_is_built_from_the_af_pose_frame() {
 /// brief spins of the small bones as they strike, and chaotic: started from other frames
 /// of the walk or at other iteration counts the same figure measures joint gaps of 5–36 mm
 /// and gains of 3.5–15 %). The multibody, whose trees of joints are solved exactly across
-/// this figure's mass ratios, keeps its energy and limits but lets a shin sink 13.9 mm and
-/// a joint open 6.8 mm on landing.
+/// this figure's mass ratios, keeps its energy and limits but lets an upper arm sink
+/// 20.5 mm as it strikes the ground and a joint open 5.3 mm on landing (chaotic too: over
+/// 72 starts shifted by 0–23 mm the deepest sink is 26 mm, the widest joint gap 8.7 mm).
 const KNOWN_GAPS: [(&str, &str, f64); 5] = [
     ("particle", "energy_gain", 0.1432),
     ("particle", "max_joint_gap_m", 0.0104),
     ("particle", "max_limit_violation_deg", 3.20),
-    ("multibody", "max_penetration_m", 0.0139),
-    ("multibody", "max_joint_gap_m", 0.0068),
+    ("multibody", "max_penetration_m", 0.0205),
+    ("multibody", "max_joint_gap_m", 0.0053),
 ];
 
 /// Runs 10 s from the load pose, which is recorded too (as `stats` does): energy the
