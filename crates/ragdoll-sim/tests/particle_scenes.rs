@@ -34,7 +34,7 @@ fn improved_solver_meets_the_issue_thresholds_on_scenes_1_to_9_every_variant() {
 /// (`particle::friction::solve_velocities`), and each point's friction reads the normal
 /// load its point carries after the manifold's block (`rigid_frames::ManifoldSolve`).
 /// One pile's sleep time is chaotic (the last island decides), so four piles are
-/// averaged: 1.83, 2.33, 2.52 and 2.33 s, mean 2.25 s; 3.54 s with an unbounded velocity
+/// averaged: 2.15, 2.22, 2.93 and 3.12 s, mean 2.60 s; 3.54 s with an unbounded velocity
 /// block and no top-up, 5.30 s with the bound alone.
 #[test]
 fn resting_piles_stop_creeping_and_sleep_sooner() {

@@ -301,14 +301,17 @@ struct ManifoldSolve<'a> {
     /// block ([`solve_normals`]); `None` for a manifold of more than [`BLOCK`] points,
     /// whose normals are solved in turn, each before its friction.
     ///
-    /// After a block each point is still topped up before its friction
+    /// After a block each point after the first is still topped up before its friction
     /// ([`solve_normal`]: nothing, unless it is deeper than the block left it). The
     /// earlier points' friction acts below the bone's centre, tilts it and presses the
     /// later points back in; topped up, the cone of each point's friction holds the
     /// normal load that actually carries the bone. Without it the block's friction
     /// spent half of what the points solved one at a time spent on the resting human
     /// (scene 8), and piles of humans crept for seconds: piles of 4, 8, 14 and 26 asleep
-    /// at a mean of 2.63 s without, 2.25 s with (one velocity pass).
+    /// at a mean of 5.30 s without, 2.60 s with. The first point has had no friction
+    /// before it; topping it up too pushed a one-point manifold twice at its material
+    /// point, which on a rolling ball has turned off the bottom between detections, and
+    /// spun the capsule human's ball up without end (20 rad/s after 15 s).
     pushed: Option<[f32; BLOCK]>,
     /// The part of `pushed` the points after the next one to take friction took.
     later: f32,
@@ -347,12 +350,18 @@ impl<'a> ManifoldSolve<'a> {
         if i >= self.points.len() {
             return;
         }
-        if let Some(pushed) = &self.pushed {
-            self.later -= pushed[i];
+        match &self.pushed {
+            // After a block, a top-up of the points after the first: only what the
+            // earlier points' friction pressed this point back in since (see
+            // `ManifoldSolve::pushed`). The first has had no friction before it.
+            Some(pushed) => {
+                self.later -= pushed[i];
+                if i > 0 {
+                    solve_normal(bones, self.m, &mut self.points[i], push_out);
+                }
+            }
+            None => solve_normal(bones, self.m, &mut self.points[i], push_out),
         }
-        // After a block, a top-up: only what the earlier points' friction pressed this
-        // point back in since (see `ManifoldSolve::pushed`).
-        solve_normal(bones, self.m, &mut self.points[i], push_out);
         let normal: f32 = self.points.iter().map(|c| c.lambda_n).sum::<f32>() - self.later;
         self.spent += solve_friction(bones, self.m, &mut self.points[i], normal, self.spent);
     }
@@ -378,13 +387,9 @@ const DETECTION_FAT: f32 = 0.01;
 /// brought, without which a resting figure creeps.
 const PASSES: u32 = 2;
 
-/// Passes of the contact velocity solve. A manifold of up to [`BLOCK`] points is solved
-/// as one block to its targets in a pass, so a second pass only passes impulses between
-/// the manifolds a bone shares; measured, it cost sleep rather than bought anything:
-/// piles of 4, 8, 14 and 26 humans asleep at a mean of 2.92 s with two passes, 2.25 s
-/// with one, and the wall impact, stacks and push-outs of the closed-form suite the
-/// same.
-const VELOCITY_PASSES: u32 = 1;
+/// Passes of the contact velocity solve: one pass over a manifold leaves part of the
+/// push-out velocity of the points solved first.
+const VELOCITY_PASSES: u32 = 2;
 
 /// Substeps per frame: the scene's substeps times its iterations, one constraint pass
 /// each. Macklin et al. 2019 show that spending a fixed budget on substeps rather than
