@@ -77,6 +77,10 @@ pub(crate) struct ContactPoint {
     pub lambda_n: f32,
     /// Tangential (friction) multiplier spent in the current substep.
     pub lambda_t: f32,
+    /// Normal impulse (N s) the velocity pass has applied in the current substep, `> 0`
+    /// pushing: with the position pass's `lambda_n / h` it sums to the substep's whole
+    /// normal impulse, which never pulls (`friction::solve_velocities`).
+    pub lambda_v: f32,
     /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
     pub vn_before: f32,
     /// Tangential offset `pa − pb` of the two points when they last came into touch (at
@@ -105,6 +109,7 @@ impl ContactPoint {
             rb,
             lambda_n: 0.0,
             lambda_t: 0.0,
+            lambda_v: 0.0,
             vn_before: 0.0,
             touched_at: None,
             left: f32::INFINITY,

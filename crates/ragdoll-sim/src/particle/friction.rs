@@ -14,10 +14,12 @@
 //! Static friction also takes back half of a small drift the point made since it became
 //! active ([`ANCHOR_PULL`]), which a resting limb otherwise accumulates as a creep.
 //!
-//! Velocity level: the normal velocity is set to `−e v_n` (the approach speed before
+//! Velocity level: the normal velocity is brought to `−e v_n` (the approach speed before
 //! the solve) above the restitution threshold and to zero below it, which also removes
-//! any velocity the position projection created: pushing out of a penetration must not
-//! add energy.
+//! the velocity the position projection created: pushing out of a penetration must not
+//! add energy. The velocity pass may take back what the position pass pushed, never
+//! pull further: over a substep a contact's normal impulse is a push
+//! ([`solve_velocities`]).
 
 use super::bone::{Bone, Correction, Side, positional_along, rotate_local, side_world};
 use super::contacts::{ContactPoint, Manifold};
@@ -201,10 +203,13 @@ impl Block {
         Block { k, a, b, matrix }
     }
 
-    /// Gauss–Seidel on `K λ = rhs` over the block's own matrix, from `λ = 0`; with
-    /// `project`, each `λ_i ≥ 0` and `(K λ)_i ≥ rhs_i`, complementary (projected
-    /// Gauss–Seidel on the linear complementarity problem of a face's contacts).
-    fn solve(&self, rhs: &[f32], project: bool) -> [f32; BLOCK] {
+    /// Projected Gauss–Seidel on the block's linear complementarity problem, from
+    /// `λ = 0`: each `λ_i ≥ lower_i`, `(K λ)_i ≥ rhs_i`, and one of the two an equality
+    /// (a point pushes only as far as it must; where it pushes less than it could, it is
+    /// left moving apart faster than asked). `lower` all zero is the position pass's
+    /// contact problem; the velocity pass solves for the change of an accumulated
+    /// impulse whose bound it shifts into `lower`.
+    fn solve(&self, rhs: &[f32], lower: &[f32]) -> [f32; BLOCK] {
         let k = self.k;
         let mut lambda = [0.0f32; BLOCK];
         for _ in 0..BLOCK_SWEEPS {
@@ -215,10 +220,7 @@ impl Block {
                     continue;
                 }
                 let moved: f32 = (0..k).map(|j| self.matrix[i][j] * lambda[j]).sum();
-                let mut next = lambda[i] + (rhs[i] - moved) / kii;
-                if project {
-                    next = next.max(0.0);
-                }
+                let next = (lambda[i] + (rhs[i] - moved) / kii).max(lower[i]);
                 change = change.max((next - lambda[i]).abs() * kii);
                 lambda[i] = next;
             }
@@ -270,7 +272,7 @@ pub(crate) fn solve_normals(
         return lambda;
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
-    lambda = block.solve(&need[..k], true);
+    lambda = block.solve(&need[..k], &[0.0; BLOCK][..k]);
     if let Some(s) = &block.a {
         s.apply(bones, -m.n, &lambda[..k]);
     }
@@ -406,13 +408,26 @@ fn velocity_target(m: &Manifold, c: &ContactPoint, restitution_threshold: f32) -
 }
 
 /// Velocity pass for one manifold: the normal velocity of each point that pressed this
-/// substep set to its target ([`velocity_target`]) by impulses solved as one block
+/// substep brought to its target ([`velocity_target`]) by impulses solved as one block
 /// ([`Block::solve`], for the reason [`solve_normals`] gives), then each point's
-/// torsional friction.
+/// torsional friction. Accumulates each point's `lambda_v` over the velocity passes.
+///
+/// A contact only pushes: over the substep, the position pass's impulse `λ_n / h` and
+/// the velocity pass's `λ_v` sum to at least zero at each point. The velocity pass may
+/// so take back the velocity the position pass's push made (a push-out of an overlap,
+/// a corner pushed up harder than the rest of its face) but never pull the shapes
+/// together beyond it: the complementarity problem `λ_v ≥ −λ_n / h`, `v_n ≤ target`,
+/// one an equality, by projected Gauss–Seidel over the accumulated `λ_v` (a later
+/// velocity pass starts from the earlier passes' impulses and may only change them
+/// within the bound).
+/// Unbounded, two points of a manifold a few centimetres apart (a forearm lying on the
+/// ground) have a nearly singular `K`, and the block met their targets with a large push
+/// at one and a large pull at the other: a couple that turned the resting limb at
+/// 0.1–0.25 rad/s and kept piles awake.
 pub(crate) fn solve_velocities(
     bones: &mut [Bone],
     m: &Manifold,
-    points: &[ContactPoint],
+    points: &mut [ContactPoint],
     h: f32,
     restitution_threshold: f32,
 ) {
@@ -434,32 +449,37 @@ pub(crate) fn solve_velocities(
         }
         return;
     }
-    let (mut pa, mut pb, mut excess) = ([Vec3A::ZERO; BLOCK], [Vec3A::ZERO; BLOCK], [0.0; BLOCK]);
+    let (mut pa, mut pb) = ([Vec3A::ZERO; BLOCK], [Vec3A::ZERO; BLOCK]);
+    let (mut excess, mut lower) = ([0.0; BLOCK], [0.0; BLOCK]);
     for (slot, &i) in active[..k].iter().enumerate() {
         let c = &points[i];
         pa[slot] = bones[m.a].world(c.ra);
         pb[slot] = side_world(bones, m.b, c.rb);
         let v = point_velocity(bones, Some(m.a), pa[slot]) - point_velocity(bones, m.b, pb[slot]);
         excess[slot] = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
+        lower[slot] = -c.lambda_n / h - c.lambda_v;
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
-    let lambda = block.solve(&excess[..k], false);
+    let lambda = block.solve(&excess[..k], &lower[..k]);
     if let Some(s) = &block.a {
         s.apply_velocity(bones, -m.n, &lambda[..k]);
     }
     if let Some(s) = &block.b {
         s.apply_velocity(bones, m.n, &lambda[..k]);
     }
-    for &i in &active[..k] {
+    for (&i, l) in active[..k].iter().zip(lambda) {
+        points[i].lambda_v += l;
         solve_twist(bones, m, &points[i], h);
     }
 }
 
-/// Velocity pass for one contact that was active this substep, on its own.
+/// Velocity pass for one contact that was active this substep, on its own: its normal
+/// velocity brought to its target by an impulse bounded as [`solve_velocities`] bounds
+/// a block's, `λ_v ≥ −λ_n / h` accumulated.
 fn solve_velocity(
     bones: &mut [Bone],
     m: &Manifold,
-    c: &ContactPoint,
+    c: &mut ContactPoint,
     h: f32,
     restitution_threshold: f32,
 ) {
@@ -470,12 +490,13 @@ fn solve_velocity(
     let pa = bones[m.a].world(c.ra);
     let pb = side_world(bones, m.b, c.rb);
     let v = point_velocity(bones, a, pa) - point_velocity(bones, m.b, pb);
-    let vn = v.dot(m.n);
-    let target = velocity_target(m, c, restitution_threshold);
+    let excess = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
     let corr = Correction::along(bones, (a, pa), (m.b, pb), m.n);
     if corr.w > 0.0 {
-        let lambda = (target - vn) / corr.w;
-        corr.apply_velocity(bones, lambda);
+        // The push `λ_v` (along `−n`) that meets the target, within the bound.
+        let push = (excess / corr.w).max(-c.lambda_n / h - c.lambda_v);
+        corr.apply_velocity(bones, -push);
+        c.lambda_v += push;
     }
     solve_twist(bones, m, c, h);
 }
