@@ -223,11 +223,12 @@ impl<R: Real> Constants<R> {
         let (pa, pb) = (a.world(self.anchor_a), b.world(self.anchor_b));
         point((a, self.anchor_a), (b, self.anchor_b), pb - pa, aim, active);
         let alpha = self.limit_compliance * R::splat(1.0 / (h * h));
+        let anchors = (self.anchor_a, self.anchor_b);
         if let Some(cone) = &self.cone {
-            cone.solve(a, b, alpha, active);
+            cone.solve(a, b, anchors, alpha, active);
         }
         if let Some(range) = &self.range {
-            range.solve(a, b, alpha, active);
+            range.solve(a, b, anchors, alpha, active);
         }
     }
 }

@@ -476,11 +476,12 @@ impl Joint {
             }
         }
         let alpha = self.limit_compliance * inv_h2;
+        let anchors = (self.anchor_a, self.anchor_b);
         if let Some(s) = &self.swing {
-            s.solve(bones, a, b, alpha, self.slack);
+            s.solve(bones, (a, b), anchors, alpha, self.slack);
         }
         for l in &self.angle_limits {
-            l.solve(bones, a, b, alpha, self.slack);
+            l.solve(bones, (a, b), anchors, alpha, self.slack);
         }
     }
 }

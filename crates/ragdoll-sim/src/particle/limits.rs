@@ -5,10 +5,12 @@
 //! carries the shaft / the measured direction, body2 ("b", or the world) the axis, as in
 //! Doom 3. A breach is corrected by an XPBD angular correction (Müller et al. 2020,
 //! section 3.3.3 "joint limits") that rotates the bones back onto the limit, split by
-//! generalised inverse inertia.
+//! generalised inverse inertia, about the joint's anchor held where it is
+//! (`bone_lanes::angular_held`): the turn and the anchor's three rows solved together,
+//! so that a limit under load does not open its joint.
 
 use super::bone::{Bone, Side, side_rot};
-use super::bone_lanes::{SideLanes, angular, angular_pair, holds, on_pair, per_lane};
+use super::bone_lanes::{SideLanes, angular_held, holds, on_pair, per_lane};
 use crate::lanes::{Q, Real, V3};
 use glam::{Quat, Vec3, Vec3A};
 
@@ -172,11 +174,22 @@ impl AngleLimit {
         (phi - self.max).max(self.min - phi).max(0.0)
     }
 
-    /// Rotates the bones back into the range widened by `slack` on both sides
+    /// Rotates the bones back into the range widened by `slack` on both sides, about
+    /// the joint's anchor (`anchors`: in body1's and body2's frames)
     /// ([`RangeLanes::solve`], for this one joint).
-    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
+    pub fn solve(
+        &self,
+        bones: &mut [Bone],
+        (a, b): (Side, Side),
+        anchors: (Vec3, Vec3),
+        alpha_tilde: f32,
+        slack: f32,
+    ) {
         let range = RangeLanes::<f32>::from_fn(|_| (*self, slack));
-        on_pair(bones, a, b, |sa, sb| range.solve(sa, sb, alpha_tilde, true));
+        let anchors = (V3::from_fn(|_| anchors.0), V3::from_fn(|_| anchors.1));
+        on_pair(bones, a, b, |sa, sb| {
+            range.solve(sa, sb, anchors, alpha_tilde, true)
+        });
     }
 }
 
@@ -230,7 +243,14 @@ impl<R: Real> RangeLanes<R> {
     /// a limit near or past a bound (the same corrections: a limit the quick test passes
     /// by is one whose measured angle its clamp would leave as it is). The slack widens
     /// the range; the quick test, made for the range itself, stays a sure one.
-    pub fn solve(&self, a: &mut SideLanes<R>, b: &mut SideLanes<R>, alpha: R, active: R::Mask) {
+    pub fn solve(
+        &self,
+        a: &mut SideLanes<R>,
+        b: &mut SideLanes<R>,
+        (anchor_a, anchor_b): (V3<R>, V3<R>),
+        alpha: R,
+        active: R::Mask,
+    ) {
         let d = self.rest_inv.mul_quat(b.rot.conjugate().mul_quat(a.rot));
         let flip = d.w.lt(R::ZERO);
         let d = Q::select(flip, d.scale(R::splat(-1.0)), d);
@@ -249,8 +269,10 @@ impl<R: Real> RangeLanes<R> {
         let j2 = j.length_squared();
         let moved = target.lt(phi) | target.gt(phi);
         let fix = near & moved & j2.gt(R::splat(1e-12));
-        // `angular` turns by an angle along a unit direction: `J/|J|` by `C/|J|`.
-        angular(a, b, j * ((target - phi) / j2), alpha, fix);
+        // A turn by an angle along a unit direction: `J/|J|` by `C/|J|`, about the
+        // held anchor (`angular_held`).
+        let dphi = j * ((target - phi) / j2);
+        angular_held((a, anchor_a), (b, anchor_b), dphi, alpha, fix);
     }
 }
 
@@ -300,8 +322,16 @@ impl<R: Real> ConeLanes<R> {
     }
 
     /// Turns the shaft back onto the cone, in the lanes of `active`, compliance `α̃`:
-    /// about `s × axis` (any perpendicular when they are parallel) by the excess.
-    pub fn solve(&self, a: &mut SideLanes<R>, b: &mut SideLanes<R>, alpha: R, active: R::Mask) {
+    /// about `s × axis` (any perpendicular when they are parallel) by the excess, the
+    /// anchor held (`angular_held`).
+    pub fn solve(
+        &self,
+        a: &mut SideLanes<R>,
+        b: &mut SideLanes<R>,
+        (anchor_a, anchor_b): (V3<R>, V3<R>),
+        alpha: R,
+        active: R::Mask,
+    ) {
         let s = a.rot.rotate(self.shaft_a);
         let ax = b.rot.rotate(self.axis_b);
         let Some((phi, over)) = self.breach(s, ax, active) else {
@@ -320,7 +350,8 @@ impl<R: Real> ConeLanes<R> {
             n = V3::select(degenerate, p, n);
         }
         let n = n * (R::ONE / n.length_squared().sqrt());
-        angular(a, b, n * (phi - self.half_angle), alpha, over);
+        let dphi = n * (phi - self.half_angle);
+        angular_held((a, anchor_a), (b, anchor_b), dphi, alpha, over);
     }
 }
 
@@ -372,12 +403,26 @@ impl SwingLimit {
         }
     }
 
-    /// Rotates the shaft back onto the cone or pyramid widened by `slack`.
-    pub fn solve(&self, bones: &mut [Bone], a: Side, b: Side, alpha_tilde: f32, slack: f32) {
+    /// Rotates the shaft back onto the cone or pyramid widened by `slack`, about the
+    /// joint's anchor (`anchors`: in body1's and body2's frames).
+    pub fn solve(
+        &self,
+        bones: &mut [Bone],
+        (a, b): (Side, Side),
+        anchors: (Vec3, Vec3),
+        alpha_tilde: f32,
+        slack: f32,
+    ) {
+        let anchors = (V3::from_fn(|_| anchors.0), V3::from_fn(|_| anchors.1));
         if let Some(cone) = ConeLanes::<f32>::from_fn(|_| (*self, slack)) {
-            on_pair(bones, a, b, |sa, sb| cone.solve(sa, sb, alpha_tilde, true));
+            on_pair(bones, a, b, |sa, sb| {
+                cone.solve(sa, sb, anchors, alpha_tilde, true)
+            });
         } else if let Some((n, angle)) = self.pyramid_target(bones, a, b, slack) {
-            angular_pair(bones, a, b, n * angle, alpha_tilde);
+            let dphi = V3::from_fn(|_| n * angle);
+            on_pair(bones, a, b, |sa, sb| {
+                angular_held((sa, anchors.0), (sb, anchors.1), dphi, alpha_tilde, true)
+            });
         }
     }
 }
@@ -385,7 +430,8 @@ impl SwingLimit {
 #[cfg(test)]
 mod tests {
     use super::super::{scene_world, uniform};
-    use glam::{Quat, Vec3};
+    use super::Swing;
+    use glam::{Quat, Vec3, Vec3A};
 
     /// `AngleLimit::angle`'s `J` is the twist angle's gradient: turning body1 by a small
     /// world rotation `δ` changes the angle by `J · δ`, turning body2 by `−J · δ`. Checked
@@ -436,6 +482,97 @@ mod tests {
                     sign * grad.dot(d)
                 );
             }
+        }
+    }
+
+    /// A limit turns its bones about the joint's anchor, held: on the human's hinges
+    /// (a range) and ball joints (a cone), body1 turned about 2° past the limit about the
+    /// anchor is brought back onto it in one solve, the anchor moves by the second order
+    /// of the turn only (under a twentieth of the `r θ` a turn about body1's centre
+    /// would open it by, `r` the anchor's distance from that centre), and the centre of
+    /// mass of the pair does not move (the anchor's impulse acts on both).
+    #[test]
+    fn a_limit_turns_about_its_held_anchor() {
+        use super::super::joints::JointType;
+        let mut w = scene_world("human.af", None);
+        let picked: Vec<usize> = (0..w.joints.len())
+            .filter(|&k| {
+                let j = &w.joints[k];
+                j.a.is_some()
+                    && j.b.is_some()
+                    && match j.kind {
+                        JointType::Hinge { .. } => !j.angle_limits.is_empty(),
+                        JointType::Ball => {
+                            matches!(j.swing.map(|s| s.kind), Some(Swing::Cone { .. }))
+                        }
+                        _ => false,
+                    }
+            })
+            .collect();
+        let hinges = picked
+            .iter()
+            .filter(|&&k| matches!(w.joints[k].kind, JointType::Hinge { .. }))
+            .count();
+        assert!(hinges >= 2 && picked.len() > hinges, "{picked:?}");
+        for k in picked {
+            let j = w.joints[k].clone();
+            let (ia, ib) = (j.a.unwrap(), j.b.unwrap());
+            let saved = (w.bones[ia].clone(), w.bones[ib].clone());
+            // Past the limit by 20°, turned about the anchor so the joint stays closed.
+            let (anchor, _) = j.anchors(&w.bones);
+            let (axis, past) = if let Some(l) = j.angle_limits.first() {
+                let (phi, _) = l.angle(&w.bones, j.a, j.b);
+                let axis = w.bones[ia].rot * l.axis_a;
+                (axis, l.max - phi + 2f32.to_radians())
+            } else {
+                let s = j.swing.unwrap();
+                let Swing::Cone { half_angle, .. } = s.kind else {
+                    unreachable!()
+                };
+                let shaft = w.bones[ia].rot * s.shaft_a;
+                let ax = w.bones[ib].rot * s.axis_b;
+                let n = shaft.cross(ax);
+                let n = if n.length_squared() > 1e-8 {
+                    -n.normalize()
+                } else {
+                    super::perpendicular(ax)
+                };
+                let now = shaft.dot(ax).clamp(-1.0, 1.0).acos();
+                (n, half_angle - now + 2f32.to_radians())
+            };
+            let turn = Quat::from_axis_angle(axis, past);
+            let b = &mut w.bones[ia];
+            let c = Vec3::from(b.center());
+            b.com = (anchor + turn * (c - anchor)).into();
+            b.dcom = Vec3A::ZERO;
+            b.rot = (turn * b.rot).normalize();
+            let before = j.limit_violation(&w.bones).to_degrees();
+            assert!(before > 1.5, "joint {k}: {before}° past");
+            let arm = (Vec3::from(w.bones[ia].center()) - anchor).length();
+            let (ma, mb) = (w.bones[ia].mass, w.bones[ib].mass);
+            let centre = |w: &super::super::ParticleWorld| {
+                (Vec3::from(w.bones[ia].center()) * ma + Vec3::from(w.bones[ib].center()) * mb)
+                    / (ma + mb)
+            };
+            let centre_before = centre(&w);
+            let anchors = (j.anchor_a, j.anchor_b);
+            if let Some(s) = &j.swing {
+                s.solve(&mut w.bones, (j.a, j.b), anchors, 0.0, 0.0);
+            }
+            for l in &j.angle_limits {
+                l.solve(&mut w.bones, (j.a, j.b), anchors, 0.0, 0.0);
+            }
+            let after = j.limit_violation(&w.bones).to_degrees();
+            let gap = j.gap(&w.bones);
+            let drift = (centre(&w) - centre_before).length();
+            assert!(after < 0.05, "joint {k}: still {after}° past");
+            let first_order = arm * before.to_radians();
+            assert!(
+                gap < first_order / 20.0,
+                "joint {k}: the anchor opened {gap} m (r θ = {first_order} m)"
+            );
+            assert!(drift < 1e-5, "joint {k}: the pair's centre moved {drift} m");
+            (w.bones[ia], w.bones[ib]) = saved;
         }
     }
 
