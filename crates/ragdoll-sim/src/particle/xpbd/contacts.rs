@@ -193,9 +193,7 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
 /// a deep hit) is pushed out at `push_speed` at most (the scene's
 /// `max_push_out_speed`, Box2D's contact push speed): pushed out at once, the
 /// particles' displacement would become their velocity (a box started 25 cm in the
-/// ground left it at 175 m/s). Where a contact starts deeper than [`PUSH_OUT_SLOP`],
-/// the push-out is made before the prediction, on the positions alone
-/// (`step::push_out`).
+/// ground left it at 175 m/s).
 pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed: f32, h: f32) {
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
@@ -374,61 +372,6 @@ pub(crate) fn solve_velocities(
     }
 }
 
-/// The normal correction of one contact: push `a` back along −n and `b` along n until
-/// the points meet along n (less the floor); or, where later corrections pushed them
-/// past that, take back as much of this substep's push as it takes to meet it, never
-/// pulling (`λ_n ≥ 0`). Returns the points' inverse mass `w`, or `None` where the
-/// contact is met without a push or nothing moves.
-fn push(c: &mut Contact, p: &mut XParticles) -> Option<f32> {
-    let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) - c.floor;
-    if depth >= 0.0 && c.lambda <= 0.0 {
-        return None;
-    }
-    let w = c.a.inv_mass(p) + c.b.inv_mass(p);
-    if w <= 0.0 {
-        return None;
-    }
-    let total = (c.lambda - depth / w).max(0.0);
-    let dl = total - c.lambda;
-    c.lambda = total;
-    c.a.shift(p, -c.n * dl);
-    c.b.shift(p, c.n * dl);
-    c.active = total > 0.0;
-    Some(w)
-}
-
-/// A penetration (m) the substep may start with and leave to its position passes.
-const PUSH_OUT_SLOP: f32 = 1e-4;
-
-/// Whether a contact that can move starts the substep deeper than [`PUSH_OUT_SLOP`]:
-/// then the substep's push-out is made first, on the positions it starts from (`step`).
-pub(crate) fn needs_push_out(contacts: &[Contact], p: &XParticles) -> bool {
-    contacts.iter().any(|c| {
-        (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) < -PUSH_OUT_SLOP
-            && c.a.inv_mass(p) + c.b.inv_mass(p) > 0.0
-    })
-}
-
-/// One pass of the push-out (`step`): each contact's normal correction to its floor
-/// (`begin_substep`), no friction, in order or backwards.
-pub(crate) fn push_out(contacts: &mut [Contact], p: &mut XParticles, backwards: bool) {
-    let n = contacts.len();
-    for k in 0..n {
-        push(&mut contacts[if backwards { n - 1 - k } else { k }], p);
-    }
-}
-
-/// After the push-out: each contact may go no deeper in the substep than it is now
-/// (its floor `min(depth, 0)`), its push begun anew.
-pub(crate) fn end_push_out(contacts: &mut [Contact], p: &XParticles) {
-    for c in contacts.iter_mut() {
-        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n);
-        c.floor = depth.min(0.0);
-        c.lambda = 0.0;
-        c.active = false;
-    }
-}
-
 /// One pass over the contacts (module doc), in order or, every other pass, backwards:
 /// symmetric Gauss–Seidel. In one order the first corner of a face takes the whole push
 /// and the others what is left, a turn the next pass does not take back; a box hitting
@@ -437,10 +380,23 @@ pub(crate) fn solve(contacts: &mut [Contact], p: &mut XParticles, backwards: boo
     let n = contacts.len();
     for k in 0..n {
         let c = &mut contacts[if backwards { n - 1 - k } else { k }];
-        let Some(w) = push(c, p) else {
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n) - c.floor;
+        if depth >= 0.0 && c.lambda <= 0.0 {
             continue;
-        };
-        let total = c.lambda;
+        }
+        // Push `a` back along −n and `b` along n until the points meet along n; or,
+        // where later corrections pushed them past that, take back as much of this
+        // substep's push as it takes to meet it, never pulling (`λ_n ≥ 0`).
+        let w = c.a.inv_mass(p) + c.b.inv_mass(p);
+        if w <= 0.0 {
+            continue;
+        }
+        let total = (c.lambda - depth / w).max(0.0);
+        let dl = total - c.lambda;
+        c.lambda = total;
+        c.a.shift(p, -c.n * dl);
+        c.b.shift(p, c.n * dl);
+        c.active = total > 0.0;
         if c.mu <= 0.0 || (total <= 0.0 && c.lambda_t == Vec3::ZERO) {
             continue;
         }

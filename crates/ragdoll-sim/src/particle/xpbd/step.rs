@@ -3,8 +3,6 @@
 //! Per frame, [`DETECTIONS_PER_FRAME`] collision detections or one per
 //! [`DETECTION_SPAN`], whichever is more (`contacts::detect`); per
 //! substep `h` (the scene's substeps × iterations, one pass each: Macklin et al. 2019):
-//! 0. where a contact starts the substep in penetration, its push-out of this substep
-//!    made on the positions first (pre-stabilisation, [`push_out`]);
 //! 1. predict every awake particle: `x_prev = x`, `v += g h`, `x += v h`;
 //! 2. read each bone's frame from its particles (`frame::read`);
 //! 3. [`PASSES`] passes of: the angular parts of the joints and the limits, turning
@@ -24,8 +22,7 @@
 //!
 //! Then the frames are read once more (drawing, metrics, the next detection) and the
 //! sleep islands updated. Every step is a projection or a dissipative velocity change;
-//! the push-out of a penetration moves positions only (0), and what the position
-//! passes push is taken back by step 6.
+//! the only source, the push-out of a penetration, is cancelled by step 6.
 
 use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
@@ -94,37 +91,6 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
     );
 }
 
-/// Pre-stabilisation (Macklin et al. 2014, section 4.3): where a contact starts the
-/// substep in penetration (`contacts::needs_push_out`), the substep's push-out (each
-/// contact to its floor, `contacts::begin_substep`) is made first, on the positions the
-/// substep starts from, in [`PASSES`] passes of the joints, the contacts' normal
-/// corrections and the sticks' projection, before the prediction. It moves `x` and,
-/// with it, `x_prev`, so it never enters `v = (x − x_prev)/h`; the substep then only
-/// keeps each contact from going deeper than it is after (`contacts::end_push_out`).
-/// Pushed inside the substep, the uneven last push of a tilted box leaving the ground
-/// (2 mm at one edge) became a turn the velocity step could stop only at the edge it
-/// pushed: the box left the ground tipping, its centre at 0.99 m/s. On the human
-/// (scene 8) the contacts its joints press a little into the ground were pushed out
-/// again every substep as velocity, and it fell asleep at 5.1 s; now at 2.1 s.
-fn push_out(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
-    // The projection's arms and the points' gradients are taken here, rigid.
-    st.particles.x_prev.copy_from_slice(&st.particles.x);
-    for pass in 0..PASSES {
-        for j in &w.joints {
-            solve_angular(&mut st.particles, &mut w.bones, j, h);
-        }
-        for (j, ends) in w.joints.iter().zip(&st.anchors) {
-            solve_point(&mut st.particles, &mut w.bones, j, ends, h);
-        }
-        contacts::push_out(&mut st.contacts, &mut st.particles, pass % 2 == 1);
-        shape_match::project(&mut st.particles, &mut w.bones);
-    }
-    contacts::end_push_out(&mut st.contacts, &st.particles);
-    for b in w.bones.iter_mut() {
-        b.prev_rot = b.rot;
-    }
-}
-
 /// One frame (module doc).
 pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
     let dt = w.settings.timestep;
@@ -172,9 +138,6 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         // gradients of the joints' points are taken there (`joints::pull_rigid`).
         for b in w.bones.iter_mut() {
             b.prev_rot = b.rot;
-        }
-        if contacts::needs_push_out(&st.contacts, &st.particles) {
-            push_out(w, st, h);
         }
         let p = &mut st.particles;
         for k in 0..p.len() {
