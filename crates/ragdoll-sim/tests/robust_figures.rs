@@ -1,7 +1,7 @@
 //! Robustness of both methods on the articulated scenes (spider, human, capsule human):
 //! timesteps from 1/1000 to 1/10 s and 1 to 40 iterations give no NaN and no explosion,
-//! and neither do combinations of timestep, iterations and substeps for the multibody and
-//! rigid-frames solvers.
+//! and neither do combinations of timestep, iterations and substeps for the multibody,
+//! rigid-frames and XPBD solvers.
 //!
 //! "No explosion" is measured as a bound on every body's speed. The figures start at
 //! most about a metre up: free fall from there is √(2 g h) ≈ 4.5 m/s, and a limb
@@ -145,6 +145,44 @@ fn rigid_frames_figures_stay_bounded_across_timestep_iteration_and_substep_combi
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The XPBD particle solver over the covering set of timestep, iterations and
+/// substeps ([`XPBD_COMBINATIONS`]): each figure stays finite with no body above
+/// 15 m/s.
+fn xpbd_figure_stays_bounded_across_timestep_iteration_and_substep_combinations(name: &str) {
+    let (mut report, mut failures) = (Vec::new(), Vec::new());
+    let base = scene(name);
+    for (dt, iterations, substeps, seconds) in XPBD_COMBINATIONS {
+        let mut s = base.clone();
+        s.settings.timestep = dt;
+        s.settings.iterations = iterations;
+        s.settings.substeps = substeps;
+        let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");
+        let mut w = ParticleWorld::new(&s, ParticleSolver::Xpbd).unwrap();
+        let top = fastest(&mut w, seconds, &what);
+        report.push(format!("{what}: top speed {top:.1} m/s"));
+        if top > MAX_SPEED {
+            failures.push(format!("{what}: a body reached {top} m/s"));
+        }
+    }
+    println!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn xpbd_spider_stays_bounded_across_timestep_iteration_and_substep_combinations() {
+    xpbd_figure_stays_bounded_across_timestep_iteration_and_substep_combinations("spider");
+}
+
+#[test]
+fn xpbd_human_stays_bounded_across_timestep_iteration_and_substep_combinations() {
+    xpbd_figure_stays_bounded_across_timestep_iteration_and_substep_combinations("human");
+}
+
+#[test]
+fn xpbd_capsule_human_stays_bounded_across_timestep_iteration_and_substep_combinations() {
+    xpbd_figure_stays_bounded_across_timestep_iteration_and_substep_combinations("capsule-human");
+}
+
 /// Combinations of timestep (1/1000–1/10 s), iterations (1–200) and substeps (1–50):
 /// every corner of the three ranges that costs little to run, the expensive corners
 /// (small timestep with many iterations and substeps) over fewer simulated seconds, and
@@ -163,4 +201,26 @@ const COMBINATIONS: [(f32, u32, u32, f32); 10] = [
     (0.1, 40, 1, 10.0),
     (0.1, 200, 10, 5.0),
     (0.1, 200, 50, 3.0),
+];
+
+/// [`COMBINATIONS`] for the XPBD solver, whose substeps are iterations × substeps
+/// (capped at 1000 a frame), each of 16 constraint passes: the same ten (every pair of
+/// values of two settings), the expensive ones over fewer simulated seconds. At
+/// 1/1000 s, 400 substeps a frame for 0.35 s, past each figure's first landing
+/// (0.18–0.32 s), and 1000 (substeps of 1 µs) for 0.05 s; at 1/60 s, 1000 substeps for
+/// 0.5 s; at 1/10 s, 1000 substeps for 3 s, and once more (the same substeps) for 1 s.
+/// Then the corner none of the ten reaches, where one substep is a whole 1/10 s frame,
+/// the solver's longest (1 iteration × 1 substep).
+const XPBD_COMBINATIONS: [(f32, u32, u32, f32); 11] = [
+    (0.001, 1, 1, 1.5),
+    (0.001, 40, 10, 0.35),
+    (0.001, 200, 50, 0.05),
+    (1.0 / 60.0, 1, 10, 3.0),
+    (1.0 / 60.0, 40, 50, 0.5),
+    (1.0 / 60.0, 200, 1, 2.0),
+    (0.1, 1, 50, 10.0),
+    (0.1, 40, 1, 10.0),
+    (0.1, 200, 10, 3.0),
+    (0.1, 200, 50, 1.0),
+    (0.1, 1, 1, 10.0),
 ];

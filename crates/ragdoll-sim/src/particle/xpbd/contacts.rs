@@ -26,10 +26,10 @@ use super::super::contacts::{
 };
 use super::frame::weights;
 use super::joints::Anchor;
-use super::particles::XParticles;
+use super::particles::{PER_BONE, XParticles};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::Settings;
-use glam::{Mat3, Vec3};
+use glam::{DMat3, DVec3, Mat3, Vec3};
 use parry3d::query::ContactManifold;
 
 /// One contact point between bone `a` and bone `b` or the ground.
@@ -65,6 +65,10 @@ pub(crate) struct Scratch {
     manifolds: Vec<ContactManifold<(), ()>>,
     margins: Vec<f32>,
     speeds: Vec<f32>,
+    /// Per contact, its two sides' levers for the velocity step.
+    levers: Vec<[Lever; 2]>,
+    /// Per contact, the friction impulse of the velocity step so far.
+    friction: Vec<Vec3>,
 }
 
 /// A point given in world coordinates, attached to bone `i`'s particles.
@@ -201,39 +205,170 @@ pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed
     }
 }
 
+/// One side of a contact at the velocity level: its bone as the rigid body the sticks
+/// make of its particles (`shape_match::project_velocities`), seen from the contact
+/// point.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Lever {
+    /// The bone's `1/M`; 0 for the world or a bone that takes no correction.
+    inv_total: f32,
+    /// The point about the particles' centre, `r`.
+    arm: Vec3,
+    /// `I⁻¹` (world) of the particles about their centre.
+    inv_inertia: Mat3,
+}
+
+impl Lever {
+    /// The lever of `side`, with `I = Σ m_k (|r_k|² 1 − r_k r_kᵀ)` the particles' own
+    /// inertia about their centre (in f64, as their projection takes it).
+    fn of(side: &Anchor, p: &XParticles) -> Lever {
+        let Anchor::Bone(i, _) = *side else {
+            return Lever::default();
+        };
+        let i = i as usize;
+        if !p.moves(i) {
+            return Lever::default();
+        }
+        let f = PER_BONE * i;
+        let c = p.centre(i);
+        let mut inertia = DMat3::ZERO;
+        for k in f..f + PER_BONE {
+            let r = p.x[k] - c;
+            inertia += (DMat3::from_diagonal(DVec3::splat(r.length_squared()))
+                - DMat3::from_cols(r * r.x, r * r.y, r * r.z))
+                * p.mass[k] as f64;
+        }
+        let det = inertia.determinant();
+        let inv_inertia = if det.is_finite() && det.abs() > 1e-300 {
+            inertia.inverse().as_mat3()
+        } else {
+            Mat3::ZERO
+        };
+        Lever {
+            inv_total: 1.0 / p.mass[f..f + PER_BONE].iter().sum::<f32>(),
+            arm: (side.point64(p) - c).as_vec3(),
+            inv_inertia,
+        }
+    }
+
+    /// The point's generalised inverse mass along the unit `d`,
+    /// `1/M + (r × d)ᵀ I⁻¹ (r × d)`.
+    fn inv_mass(&self, d: Vec3) -> f32 {
+        let rd = self.arm.cross(d);
+        self.inv_total + rd.dot(self.inv_inertia * rd)
+    }
+
+    /// Changes the bone's velocities by the impulse `j` at the point: particle `k` by
+    /// `j / M + (I⁻¹ (r × j)) × r_k`, a rigid velocity change.
+    fn kick(&self, side: &Anchor, p: &mut XParticles, j: Vec3) {
+        let Anchor::Bone(i, _) = *side else {
+            return;
+        };
+        if self.inv_total == 0.0 {
+            return;
+        }
+        let f = PER_BONE * i as usize;
+        let c = p.centre(i as usize);
+        let (dv, dw) = (j * self.inv_total, self.inv_inertia * self.arm.cross(j));
+        for k in f..f + PER_BONE {
+            p.v[k] += dv + dw.cross((p.x[k] - c).as_vec3());
+        }
+    }
+}
+
 /// After the velocities are derived: the velocity pass of Müller et al. 2020
-/// (section 3.6, eq. 34). A contact that pushed leaves with the normal velocity
-/// Newton's law of restitution gives, `v_n = max(−e ṽ_n, 0)` with `ṽ_n` its approach
-/// before the substep (`e = 0` below `threshold`), set by a velocity change of its
-/// points on the same barycentric weights, in order or (`backwards`) in reverse.
-/// Without it the push-out of a position correction would stay in the velocities as
-/// energy the contact never had.
+/// (section 3.6), `passes` symmetric Gauss–Seidel passes (forwards, then backwards,
+/// ...) over the contacts that pushed during the substep `h`.
+///
+/// **Normal** (their eq. 34): the contact leaves with the normal velocity Newton's law
+/// of restitution gives, `v_n = max(−e ṽ_n, 0)` with `ṽ_n` its approach before the
+/// substep (`e = 0` below `threshold`). Without it the push-out of a position
+/// correction would stay in the velocities as energy the contact never had.
+///
+/// **Tangential**: the part of the Coulomb cone the position step left unused (its
+/// friction `|λ_t| ≤ μ λ_n`, module doc) stops the points' relative tangential
+/// velocity, an impulse of at most `(μ λ_n − |λ_t|) / h` over the passes: the total
+/// friction of the substep stays within the cone, so a contact sliding at the kinetic
+/// rate (`|λ_t| = μ λ_n`) is left alone, and one that holds leaves without the slip the
+/// position step's corrections left in its velocity (a 20 cm cube hitting a wall at
+/// 50 m/s came away rolling along it at 0.12 m/s, 0.79 rad/s).
+///
+/// The velocities enter rigid (`shape_match::project_velocities`), so each change is
+/// an impulse `j` at the point on the rigid velocities, with the point's rigid
+/// generalised inverse mass `1/M + (r × d)ᵀ I⁻¹ (r × d)` along `d` ([`Lever`]): the
+/// change a kick on the barycentric weights followed by the velocity projection gives
+/// (its linear part `Σ β_k j / M`, its turn `I⁻¹ Σ β_k r_k × j`, `Σ β_k r_k = r`),
+/// sized for it. Sized by the barycentric inverse mass `Σ β_k² w_k` instead — 10/M at a
+/// 1 m cube's corner against the rigid 4/M — each kick met only 40 % of its target,
+/// and two cubes pushed out of each other at 3 m/s kept drifting apart at 0.54 m/s.
 pub(crate) fn solve_velocities(
     contacts: &[Contact],
     p: &mut XParticles,
+    scratch: &mut Scratch,
     threshold: f32,
-    backwards: bool,
+    h: f32,
+    passes: u32,
 ) {
-    let n = contacts.len();
-    for k in 0..n {
-        let c = &contacts[if backwards { n - 1 - k } else { k }];
-        if !c.active {
-            continue;
-        }
-        let e = if -c.vn_before > threshold {
-            c.restitution
+    // Positions stay put through the passes: each side's lever is taken once.
+    scratch.levers.clear();
+    scratch.levers.extend(contacts.iter().map(|c| {
+        if c.active {
+            [Lever::of(&c.a, p), Lever::of(&c.b, p)]
         } else {
-            0.0
-        };
-        let target = (-e * c.vn_before).max(0.0);
-        let dv = target - normal_velocity(c, p);
-        let w = c.a.inv_mass(p) + c.b.inv_mass(p);
-        if w <= 0.0 || dv.abs() < 1e-9 {
-            continue;
+            [Lever::default(); 2]
         }
-        let dl = dv / w;
-        c.a.kick(p, -c.n * dl);
-        c.b.kick(p, c.n * dl);
+    }));
+    scratch.friction.clear();
+    scratch.friction.resize(contacts.len(), Vec3::ZERO);
+    let n = contacts.len();
+    for pass in 0..passes {
+        let backwards = pass % 2 == 1;
+        for k in 0..n {
+            let k = if backwards { n - 1 - k } else { k };
+            let (c, [la, lb]) = (&contacts[k], &scratch.levers[k]);
+            if !c.active {
+                continue;
+            }
+            let e = if -c.vn_before > threshold {
+                c.restitution
+            } else {
+                0.0
+            };
+            let target = (-e * c.vn_before).max(0.0);
+            let dv = target - normal_velocity(c, p);
+            let w = la.inv_mass(c.n) + lb.inv_mass(c.n);
+            if w <= 0.0 {
+                continue;
+            }
+            if dv.abs() >= 1e-9 {
+                let j = c.n * (dv / w);
+                la.kick(&c.a, p, -j);
+                lb.kick(&c.b, p, j);
+            }
+            let cap = (c.mu * c.lambda - c.lambda_t.length()) / h;
+            if cap <= 0.0 {
+                continue;
+            }
+            let rel = c.b.velocity(p) - c.a.velocity(p);
+            let slip = rel - c.n * c.n.dot(rel);
+            let speed = slip.length();
+            if speed < 1e-9 {
+                continue;
+            }
+            let d = slip / speed;
+            let w = la.inv_mass(d) + lb.inv_mass(d);
+            if w <= 0.0 {
+                continue;
+            }
+            let old = scratch.friction[k];
+            let mut total = old - d * (speed / w);
+            if total.length_squared() > cap * cap {
+                total *= cap / total.length();
+            }
+            scratch.friction[k] = total;
+            la.kick(&c.a, p, old - total);
+            lb.kick(&c.b, p, total - old);
+        }
     }
 }
 

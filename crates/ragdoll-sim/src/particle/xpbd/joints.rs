@@ -69,18 +69,6 @@ impl Anchor {
         }
     }
 
-    /// Changes the point's velocity by `d` times its inverse mass: particle `k`'s by
-    /// `β_k w_k d`.
-    #[inline]
-    pub fn kick(&self, p: &mut XParticles, d: Vec3) {
-        if let Anchor::Bone(i, ref w) = *self {
-            let f = PER_BONE * i as usize;
-            for (k, wk) in w.iter().enumerate() {
-                p.v[f + k] += d * (wk * p.w[f + k]);
-            }
-        }
-    }
-
     /// Its generalised inverse mass, `Σ β_k² w_k`.
     #[inline]
     pub fn inv_mass(&self, p: &XParticles) -> f32 {
