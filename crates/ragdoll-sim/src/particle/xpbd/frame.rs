@@ -116,8 +116,10 @@ pub(crate) fn match_rotation(p: &[Vec3; 4], rest: &[Vec3; 4], q: Quat) -> Quat {
 /// substep's start: `Q` is a turn of `ω h`, a few milliradians, and an absolute f32
 /// orientation resolves angles only to 1e-7 rad, a relative error of 3e-5 a substep
 /// in the spin, biased enough to drain 3 % of a box's angular momentum in 10 s.
-pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4]) -> DQuat {
-    let mut q = DQuat::IDENTITY;
+/// Newton starts from `guess` (the turn the corrections so far imply); the answer does
+/// not depend on it.
+pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4], guess: DQuat) -> DQuat {
+    let mut q = guess;
     for _ in 0..NEWTON_ITERATIONS {
         let mut t = DVec3::ZERO;
         let mut j = DMat3::ZERO;
@@ -219,14 +221,14 @@ mod tests {
         ];
         let turn = DQuat::from_scaled_axis(DVec3::new(0.002, -0.003, 0.004));
         let rigid = arms.map(|a| turn * a);
-        let got = match_turn(&rigid, &arms);
+        let got = match_turn(&rigid, &arms, DQuat::IDENTITY);
         assert!(got.dot(turn).abs() > 1.0 - 1e-12, "{got} vs {turn}");
         // Stretched: each point pushed out along its arm and sideways.
         let p: [DVec3; 4] =
             std::array::from_fn(|k| rigid[k] * 1.01 + DVec3::new(0.0, 0.001 * k as f64, -0.0005));
         let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
         let p = p.map(|x| x - c);
-        let q = match_turn(&p, &arms);
+        let q = match_turn(&p, &arms, DQuat::IDENTITY);
         let moves: [DVec3; 4] = std::array::from_fn(|k| q * arms[k] - p[k]);
         let torque: DVec3 = (0..4).map(|k| arms[k].cross(moves[k])).sum();
         let sum: DVec3 = moves.iter().sum();

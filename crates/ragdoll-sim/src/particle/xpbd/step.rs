@@ -19,8 +19,9 @@
 //! 6. [`VELOCITY_PASSES`] passes of the contacts' velocity step (restitution, and no
 //!    push-out kept as velocity), each followed by the velocity-level sticks.
 //!
-//! Then the frames are read once more (drawing, metrics, the next detection) and the
-//! sleep islands updated. Every step is a projection or a dissipative velocity change;
+//! Each substep ends by reading the frames from the particles (drawing, metrics, the
+//! next detection, the next substep's start); the frame ends by updating the sleep
+//! islands. Every step is a projection or a dissipative velocity change;
 //! the only source, the push-out of a penetration, is cancelled by step 6.
 
 use super::super::ParticleWorld;
@@ -163,6 +164,9 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         if w.grab.is_some() {
             shape_match::project(&mut st.particles, &mut w.bones);
         }
+        // The frames the projection composed, read once from the particles: the next
+        // substep's start (`prev_rot`) is then the particles' own frame.
+        read_frames(w, st);
         update_velocities(w, st, h);
         for vp in 0..VELOCITY_PASSES {
             contacts::solve_velocities(
@@ -176,7 +180,6 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             }
         }
     }
-    read_frames(w, st);
     sleeping::update(
         &mut st.particles,
         &mut w.bones,
