@@ -25,6 +25,10 @@ use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3, Vec3A};
 const EXTRACT_TOLERANCE: f32 = 1e-7;
 /// Most iterations of the fixed-point extraction (the fallback).
 const EXTRACT_ITERATIONS: usize = 16;
+/// A Newton step of [`match_turn`] (rad) after which the turn has converged: the next
+/// would be of the order of its square, 1e-16 rad, where a substep's turn of
+/// `ω h` ≈ 1e-3 rad is resolved by f64 to about 1e-19.
+const TURN_STEP_DONE: f64 = 1e-8;
 /// Most Newton iterations of [`match_rotation`]; warm-started, a substep needs two.
 const NEWTON_ITERATIONS: usize = 8;
 
@@ -140,7 +144,9 @@ pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4], guess: DQuat) -> DQu
         }
         let delta = if angle > 1.0 { delta / angle } else { delta };
         q = (DQuat::from_scaled_axis(delta) * q).normalize();
-        if angle < 1e-13 {
+        // Newton converges quadratically: after a step below [`TURN_STEP_DONE`] the
+        // error left is of the order of its square, below f64's resolution of the turn.
+        if angle < TURN_STEP_DONE {
             break;
         }
     }
