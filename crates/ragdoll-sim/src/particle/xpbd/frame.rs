@@ -25,6 +25,10 @@ use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3, Vec3A};
 const EXTRACT_TOLERANCE: f32 = 1e-7;
 /// Most iterations of the fixed-point extraction (the fallback).
 const EXTRACT_ITERATIONS: usize = 16;
+/// A Newton step of [`match_turn`] (rad) after which the turn has converged: the next
+/// would be of the order of its square, 1e-16 rad, where a substep's turn of
+/// `ω h` ≈ 1e-3 rad is resolved by f64 to about 1e-19.
+const TURN_STEP_DONE: f64 = 1e-8;
 /// Most Newton iterations of [`match_rotation`]; warm-started, a substep needs two.
 const NEWTON_ITERATIONS: usize = 8;
 
@@ -116,8 +120,10 @@ pub(crate) fn match_rotation(p: &[Vec3; 4], rest: &[Vec3; 4], q: Quat) -> Quat {
 /// substep's start: `Q` is a turn of `ω h`, a few milliradians, and an absolute f32
 /// orientation resolves angles only to 1e-7 rad, a relative error of 3e-5 a substep
 /// in the spin, biased enough to drain 3 % of a box's angular momentum in 10 s.
-pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4]) -> DQuat {
-    let mut q = DQuat::IDENTITY;
+/// Newton starts from `guess` (the turn the corrections so far imply); the answer does
+/// not depend on it.
+pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4], guess: DQuat) -> DQuat {
+    let mut q = guess;
     for _ in 0..NEWTON_ITERATIONS {
         let mut t = DVec3::ZERO;
         let mut j = DMat3::ZERO;
@@ -138,7 +144,9 @@ pub(crate) fn match_turn(p: &[DVec3; 4], arms: &[DVec3; 4]) -> DQuat {
         }
         let delta = if angle > 1.0 { delta / angle } else { delta };
         q = (DQuat::from_scaled_axis(delta) * q).normalize();
-        if angle < 1e-13 {
+        // Newton converges quadratically: after a step below [`TURN_STEP_DONE`] the
+        // error left is of the order of its square, below f64's resolution of the turn.
+        if angle < TURN_STEP_DONE {
             break;
         }
     }
@@ -219,14 +227,14 @@ mod tests {
         ];
         let turn = DQuat::from_scaled_axis(DVec3::new(0.002, -0.003, 0.004));
         let rigid = arms.map(|a| turn * a);
-        let got = match_turn(&rigid, &arms);
+        let got = match_turn(&rigid, &arms, DQuat::IDENTITY);
         assert!(got.dot(turn).abs() > 1.0 - 1e-12, "{got} vs {turn}");
         // Stretched: each point pushed out along its arm and sideways.
         let p: [DVec3; 4] =
             std::array::from_fn(|k| rigid[k] * 1.01 + DVec3::new(0.0, 0.001 * k as f64, -0.0005));
         let c = (p[0] + p[1] + p[2] + p[3]) * 0.25;
         let p = p.map(|x| x - c);
-        let q = match_turn(&p, &arms);
+        let q = match_turn(&p, &arms, DQuat::IDENTITY);
         let moves: [DVec3; 4] = std::array::from_fn(|k| q * arms[k] - p[k]);
         let torque: DVec3 = (0..4).map(|k| arms[k].cross(moves[k])).sum();
         let sum: DVec3 = moves.iter().sum();

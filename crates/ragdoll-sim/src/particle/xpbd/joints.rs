@@ -187,7 +187,13 @@ fn inertia_lever_start(p: &XParticles, bones: &[Bone], s: Side, n: Vec3) -> (f32
 
 /// Moves bone `i`'s particles by `shift + omega × a_k`, `a_k` their arms about their
 /// centre at the substep's start (`pull_rigid`), and turns its read frame by `omega`.
-fn move_linear(p: &mut XParticles, bones: &mut [Bone], i: usize, shift: Vec3, omega: Vec3) {
+pub(super) fn move_linear(
+    p: &mut XParticles,
+    bones: &mut [Bone],
+    i: usize,
+    shift: Vec3,
+    omega: Vec3,
+) {
     let f = PER_BONE * i;
     let c0 = p.centre_prev(i);
     for k in f..f + PER_BONE {
@@ -263,7 +269,7 @@ pub(crate) fn turn(
 
 /// Orientation of a side (identity for the world).
 #[inline]
-fn rot(bones: &[Bone], s: Side) -> Quat {
+pub(super) fn rot(bones: &[Bone], s: Side) -> Quat {
     s.map_or(Quat::IDENTITY, |i| bones[i].rot)
 }
 
@@ -331,7 +337,7 @@ pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h
 /// The turn of body1 that brings a swing limit's shaft back onto its cone or pyramid,
 /// if it is outside: about `s × t` by the angle between the shaft `s` and the nearest
 /// allowed direction `t`.
-fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side) -> Option<Vec3> {
+pub(super) fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side) -> Option<Vec3> {
     let qb = rot(bones, b);
     let shaft = rot(bones, a) * s.shaft_a;
     let axis = qb * s.axis_b;

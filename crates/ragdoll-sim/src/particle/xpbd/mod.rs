@@ -16,9 +16,11 @@
 //! velocities (`friction`). The loop is in `step`; islands sleep in `sleeping`; the
 //! metrics read the particles' own velocities (`measure`).
 
+pub(crate) mod contact_block;
 pub(crate) mod contacts;
 pub(crate) mod frame;
 pub(crate) mod friction;
+pub(crate) mod joint_block;
 pub(crate) mod joints;
 pub(crate) mod measure;
 pub(crate) mod particles;

@@ -21,10 +21,12 @@
 use super::super::bone::Bone;
 use super::frame;
 use super::particles::{PER_BONE, XParticles};
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DVec3, Vec3A};
 
 /// Moves every moving bone's particles onto their projected rigid pose (module doc),
-/// and reads its frame there.
+/// and sets its frame there: the pose is the turn `Q` of the particles at the
+/// substep's start, whose frame was read then (`prev_rot`), so the frame is
+/// `Q prev_rot` without reading it again (`step` reads it once at the substep's end).
 pub(crate) fn project(p: &mut XParticles, bones: &mut [Bone]) {
     for (i, b) in bones.iter_mut().enumerate() {
         if !p.moves(i) {
@@ -36,13 +38,18 @@ pub(crate) fn project(p: &mut XParticles, bones: &mut [Bone]) {
         let (co, c) = (centre(&old), centre(&x));
         let arms = old.map(|o| o - co);
         let off = x.map(|xk| xk - c);
-        let q = frame::match_turn(&off, &arms);
+        // The frame turned with every correction (`joints::move_linear`): a guess
+        // within the second order of the answer.
+        let guess = (b.rot.as_dquat() * b.prev_rot.as_dquat().inverse()).normalize();
+        let q = frame::match_turn(&off, &arms, guess);
         let d: [DVec3; 4] = std::array::from_fn(|k| q * arms[k] - off[k]);
         let mean = (d[0] + d[1] + d[2] + d[3]) * 0.25;
         for (xk, dk) in p.x[f..f + PER_BONE].iter_mut().zip(d) {
             *xk += dk - mean;
         }
-        frame::read(b, &p.bone64(i));
+        b.rot = (q.as_quat() * b.prev_rot).normalize();
+        b.com = Vec3A::from(c.as_vec3());
+        b.dcom = Vec3A::ZERO;
     }
 }
 
