@@ -99,6 +99,12 @@ pub struct JointTrees {
     /// Whether the last factorisation was usable (finite); otherwise the joints of the
     /// trees fall back to Gauss–Seidel for the substep.
     ok: bool,
+    /// What the trees were built from: per body, its inverse mass when it moves, zero
+    /// otherwise; then, per ball joint, hinge and universal joint in that order, its two
+    /// bodies. The trees depend on nothing else, so while this is unchanged (every
+    /// step of a world whose sleep states and joints do not change) they are kept.
+    built_from: Vec<f32>,
+    built_joints: Vec<(usize, usize)>,
     /// Scratch of `factor`, kept between calls so the substeps allocate nothing: `D` of
     /// every joint node and of every body node (indexed by node).
     d_joint: Vec<Matrix3>,
@@ -145,6 +151,54 @@ impl Sets {
 }
 
 impl JointTrees {
+    /// [`JointTrees::build`] into `self`, unless the bodies' motion and the joints are
+    /// those of the last build: then the trees are kept and only the joints' flags are
+    /// set again (an island solved elsewhere in between may have changed them).
+    pub fn rebuild(&mut self, joints: &mut JointSet, s: &BodyStates, awake: &[bool]) {
+        let n = s.len();
+        let moving = |i: usize| i < awake.len() && awake[i] && s.inv_mass[i] > 0.0;
+        let masses = (0..n).map(|i| if moving(i) { s.inv_mass[i] } else { 0.0 });
+        let pairs = |joints: &JointSet| {
+            all_refs(joints)
+                .map(|r| frame_bodies(joints, r))
+                .collect::<Vec<_>>()
+        };
+        // Bitwise, so that any change of a mass rebuilds.
+        let same = self.built_from.len() == n
+            && (self.built_from.iter().zip(masses.clone()))
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+            && self.built_joints.len() == all_refs(joints).count()
+            && (self.built_joints.iter().zip(all_refs(joints)))
+                .all(|(&p, r)| p == frame_bodies(joints, r));
+        if same {
+            for r in all_refs(joints) {
+                let point = point_of_mut(joints, r);
+                point.direct = false;
+                point.in_tree = false;
+            }
+            let mut count = 0;
+            for node in &self.nodes {
+                if let Node::Joint { joint, .. } = *node {
+                    let point = point_of_mut(joints, joint);
+                    point.direct = true;
+                    point.in_tree = true;
+                    count += 1;
+                }
+            }
+            joints.direct = count > 0;
+            joints.tree_points = count;
+            self.ok = true;
+            return;
+        }
+        let built = JointTrees::build(joints, s, awake);
+        self.nodes = built.nodes;
+        self.parent = built.parent;
+        self.ok = built.ok;
+        self.built_from.clear();
+        self.built_from.extend(masses);
+        self.built_joints = pairs(joints);
+    }
+
     /// Picks the ball joints and hinges whose point rows form trees over the moving
     /// bodies (inverse mass > 0, awake), marks them `direct` (their own solve then skips
     /// the point rows) and orders each tree leaves first. Joints that would close a loop
@@ -158,11 +212,7 @@ impl JointTrees {
         };
         // Tree joints and, per moving body, the tree joints acting on it (in order).
         let mut chosen: Vec<(JointRef, usize, usize)> = Vec::new();
-        let refs = (0..joints.ball.len())
-            .map(JointRef::Ball)
-            .chain((0..joints.hinge.len()).map(JointRef::Hinge))
-            .chain((0..joints.universal.len()).map(JointRef::Universal));
-        for r in refs {
+        for r in all_refs(joints) {
             let (f, point) = match r {
                 JointRef::Ball(i) => (joints.ball[i].frame, &mut joints.ball[i].point),
                 JointRef::Hinge(i) => (joints.hinge[i].frame, &mut joints.hinge[i].point),
@@ -592,6 +642,14 @@ fn joint_through_body(d_inv: &Matrix3, sign: f32, x: Mat3) -> (Matrix6, Matrix3x
         }
     }
     (gt_d_g, d_g)
+}
+
+/// Every ball joint, hinge and universal joint, in that order.
+fn all_refs(joints: &JointSet) -> impl Iterator<Item = JointRef> + use<> {
+    (0..joints.ball.len())
+        .map(JointRef::Ball)
+        .chain((0..joints.hinge.len()).map(JointRef::Hinge))
+        .chain((0..joints.universal.len()).map(JointRef::Universal))
 }
 
 fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {

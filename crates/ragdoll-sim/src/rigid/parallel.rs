@@ -22,7 +22,7 @@ use super::body::{BodyMotion, BodyStates, Motions};
 use super::contact::ContactPair;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::substeps::{self, SolveParams};
+use super::substeps::{self, SolveBuffers, SolveParams};
 use rayon::prelude::*;
 
 /// No island / no local index.
@@ -66,6 +66,8 @@ struct IslandTask {
     joints: JointSet,
     joint_slots: JointSlots,
     pairs: Vec<ContactPair>,
+    /// The batch's constraint arrays.
+    buffers: SolveBuffers,
     /// Per local pair: its slot in the world's pair array and its world bodies.
     pair_slots: Vec<(usize, u32, u32)>,
 }
@@ -155,7 +157,9 @@ impl<'a> Numbering<'a> {
 }
 
 /// Solves the step of every awake island (see [`substeps::solve`]) in parallel on the
-/// current rayon pool. `islands` must hold this step's links.
+/// current rayon pool. `islands` must hold this step's links; `buffers` serve a solve
+/// in place.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_islands(
     s: &mut BodyStates,
     motion: Motions<'_>,
@@ -163,6 +167,7 @@ pub fn solve_islands(
     pairs: &mut [ContactPair],
     islands: &mut Islands,
     awake: &[bool],
+    buffers: &mut SolveBuffers,
     p: &SolveParams,
 ) {
     let n = motion.bodies.len();
@@ -171,13 +176,13 @@ pub fn solve_islands(
         + pairs.iter().filter(|p| p.touching()).count();
     if work < MIN_PARALLEL_WORK {
         // Too little to share out: solve in place.
-        substeps::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, buffers, p);
         return;
     }
     let numbering = Numbering::new(islands, awake, n, s.len());
     if numbering.count < 2 {
         // One island: nothing to share out, solve in place.
-        substeps::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, buffers, p);
         return;
     }
     let batch_of_island = numbering.deal(joints, pairs);
@@ -205,6 +210,7 @@ pub fn solve_islands(
             &mut t.joints,
             &mut t.pairs,
             &t.awake,
+            &mut t.buffers,
             p,
         );
     });

@@ -30,7 +30,7 @@ use super::island::Islands;
 use super::joint_set::JointSet;
 use super::parallel;
 use super::soft::{Softness, StepContext};
-use super::substeps::{self, SolveParams};
+use super::substeps::{self, SolveBuffers, SolveParams};
 use crate::scene::Settings;
 use crate::timings::{PhaseClock, PhaseTimes};
 
@@ -47,6 +47,7 @@ pub fn step(
     dynamic: &[bool],
     settings: &Settings,
     time: f32,
+    buffers: &mut SolveBuffers,
     times: &mut PhaseTimes,
 ) {
     // Phases as this solver runs them: collision (broad and narrow phase), islands (links
@@ -118,10 +119,19 @@ pub fn step(
                 &mut contacts.pairs,
                 islands,
                 awake,
+                buffers,
                 &params,
             );
         } else {
-            substeps::solve(s, motion, joints, &mut contacts.pairs, awake, &params);
+            substeps::solve(
+                s,
+                motion,
+                joints,
+                &mut contacts.pairs,
+                awake,
+                buffers,
+                &params,
+            );
         }
     }
     clock.lap(times, "substeps");

@@ -7,6 +7,7 @@ use super::impulse::Bodies;
 use super::island::Islands;
 use super::joint_set::JointSet;
 use super::solver;
+use super::substeps::SolveBuffers;
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
 use crate::motor::JointMotor;
@@ -43,6 +44,8 @@ pub struct MultibodyWorld {
     grab: Option<Grab>,
     /// The last step's phase times, for display only.
     phase_times: PhaseTimes,
+    /// The constraint arrays of the step's solve, kept between steps.
+    buffers: SolveBuffers,
 }
 
 impl MultibodyWorld {
@@ -156,6 +159,7 @@ impl MultibodyWorld {
             time: 0.0,
             grab: None,
             phase_times: PhaseTimes::default(),
+            buffers: SolveBuffers::default(),
         })
     }
 
@@ -296,6 +300,7 @@ impl Method for MultibodyWorld {
             &self.dynamic,
             &self.settings,
             self.time as f32,
+            &mut self.buffers,
             &mut self.phase_times,
         );
         self.bodies().advance_kinematic(dt);
