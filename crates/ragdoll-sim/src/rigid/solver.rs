@@ -28,7 +28,7 @@ use super::contact::Contacts;
 use super::integrate::update_inertia;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::parallel;
+use super::parallel::{self, IslandTasks};
 use super::soft::{Softness, StepContext};
 use super::substeps::{self, SolveBuffers, SolveParams};
 use crate::scene::Settings;
@@ -48,6 +48,7 @@ pub fn step(
     settings: &Settings,
     time: f32,
     buffers: &mut SolveBuffers,
+    tasks: &mut IslandTasks,
     times: &mut PhaseTimes,
 ) {
     // Phases as this solver runs them: collision (broad and narrow phase), islands (links
@@ -120,6 +121,7 @@ pub fn step(
                 islands,
                 awake,
                 buffers,
+                tasks,
                 &params,
             );
         } else {

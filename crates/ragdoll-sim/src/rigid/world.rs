@@ -6,6 +6,7 @@ use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::impulse::Bodies;
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::parallel::IslandTasks;
 use super::solver;
 use super::substeps::SolveBuffers;
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
@@ -44,8 +45,10 @@ pub struct MultibodyWorld {
     grab: Option<Grab>,
     /// The last step's phase times, for display only.
     phase_times: PhaseTimes,
-    /// The constraint arrays of the step's solve, kept between steps.
+    /// The constraint arrays of the step's solve, and the islands' batches of a
+    /// parallel one, kept between steps.
     buffers: SolveBuffers,
+    island_tasks: IslandTasks,
 }
 
 impl MultibodyWorld {
@@ -160,6 +163,7 @@ impl MultibodyWorld {
             grab: None,
             phase_times: PhaseTimes::default(),
             buffers: SolveBuffers::default(),
+            island_tasks: IslandTasks::default(),
         })
     }
 
@@ -301,6 +305,7 @@ impl Method for MultibodyWorld {
             &self.settings,
             self.time as f32,
             &mut self.buffers,
+            &mut self.island_tasks,
             &mut self.phase_times,
         );
         self.bodies().advance_kinematic(dt);
