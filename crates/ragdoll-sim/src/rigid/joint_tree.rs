@@ -127,6 +127,12 @@ struct JointNode {
     sign: f32,
     /// `D⁻¹` (3×3, symmetric); while factoring, `D` itself is summed here first.
     d_inv: Mat3A,
+    /// The rows' anchor offsets from a's and b's centres of mass and their gap
+    /// `p_b − p_a`, as the factorisation read them: the solve's `Ċ` and `C` are those
+    /// of the `G` it factorised.
+    ra: Vec3A,
+    rb: Vec3A,
+    c: Vec3A,
 }
 
 impl JointNode {
@@ -139,6 +145,9 @@ impl JointNode {
             r: Vec3A::ZERO,
             sign: 0.0,
             d_inv: Mat3A::ZERO,
+            ra: Vec3A::ZERO,
+            rb: Vec3A::ZERO,
+            c: Vec3A::ZERO,
         }
     }
 }
@@ -462,6 +471,8 @@ impl JointTrees {
             ..
         } = self;
         for node in nodes.iter_mut() {
+            let p = point_of(joints, node.joint);
+            (node.ra, node.rb, node.c) = (p.ra(), p.rb(), p.c());
             node.d_inv = Mat3A::ZERO;
         }
         for node in bodies.iter_mut() {
@@ -495,7 +506,7 @@ impl JointTrees {
                     // Into the parent joint: with X = −r̂, G D⁻¹ Gᵀ = top + X bottom,
                     // top = P + Q Xᵀ, bottom = Qᵀ + S Xᵀ, and D⁻¹ Gᵀ = σ [top; bottom].
                     let joint = &mut nodes[body.parent];
-                    let (r, sign) = arm(point_of(joints, joint.joint), joint, body.body);
+                    let (r, sign) = arm(joint, body.body);
                     let x = minus_cross_matrix(r);
                     let xt = x.transpose();
                     let top = body.p + body.q * xt;
@@ -517,7 +528,7 @@ impl JointTrees {
                     }
                     // Into the parent body: Gᵀ D⁻¹ G = [D⁻¹, D⁻¹ X; Xᵀ D⁻¹, Xᵀ D⁻¹ X].
                     let body = &mut bodies[joint.parent];
-                    let (r, sign) = arm(point_of(joints, joint.joint), joint, body.body);
+                    let (r, sign) = arm(joint, body.body);
                     let x = minus_cross_matrix(r);
                     let d_x = d_inv * x;
                     body.p -= d_inv;
@@ -576,9 +587,8 @@ impl JointTrees {
         x_ang.resize(bodies.len(), Vec3A::ZERO);
         x_joint.clear();
         x_joint.extend(nodes.iter().map(|node| {
-            let p = point_of(joints, node.joint);
-            let cdot = s.point_velocity(node.b, p.rb()) - s.point_velocity(node.a, p.ra());
-            -(cdot + soft.bias_rate * p.c())
+            let cdot = s.point_velocity(node.b, node.rb) - s.point_velocity(node.a, node.ra);
+            -(cdot + soft.bias_rate * node.c)
         }));
         // Up the tree, each node's D⁻¹ applied on the way.
         for &node in order.iter() {
@@ -632,13 +642,12 @@ impl JointTrees {
         }
         for (node, &y) in nodes.iter().zip(x_joint.iter()) {
             let lambda = -y;
-            let f = frame_of(joints, node.joint);
-            let p = point_of_mut(joints, node.joint);
-            let decay = -soft.impulse_scale * p.impulse;
+            let decay = -soft.impulse_scale * point_of(joints, node.joint).impulse;
             if soft.impulse_scale != 0.0 {
-                p.apply(&f, s, decay);
+                let f = frame_of(joints, node.joint);
+                point_of(joints, node.joint).apply(&f, s, decay);
             }
-            p.impulse += soft.mass_scale * lambda + decay;
+            point_of_mut(joints, node.joint).impulse += soft.mass_scale * lambda + decay;
         }
     }
 }
@@ -662,12 +671,12 @@ fn minus_cross_matrix(r: Vec3A) -> Mat3A {
 /// The block of a joint's point rows on `body` as `G = σ [1, X]`, `X = −r̂`: the anchor's
 /// offset `r` from that body and the sign `σ` (+1 on body2, −1 on body1;
 /// `Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`, and `−r̂ ω = ω × r`).
-fn arm(p: &PointPart, joint: &JointNode, body: usize) -> (Vec3A, f32) {
+fn arm(joint: &JointNode, body: usize) -> (Vec3A, f32) {
     if body == joint.b {
-        (p.rb(), 1.0)
+        (joint.rb, 1.0)
     } else {
         debug_assert_eq!(body, joint.a);
-        (p.ra(), -1.0)
+        (joint.ra, -1.0)
     }
 }
 
