@@ -64,6 +64,10 @@ pub fn step(
     // island links, the solver's passes over every joint and pair and the sleep update
     // would cost a few ms a frame for nothing on a resting pile of 1000 humans.
     if !awake.contains(&true) {
+        // The solve's arrays are kept between busy steps; a world at rest gives them
+        // back (a step waking it pays for growing them once).
+        *buffers = SolveBuffers::default();
+        *tasks = IslandTasks::default();
         clock.finish(times);
         return;
     }
