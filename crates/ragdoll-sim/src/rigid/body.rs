@@ -91,6 +91,16 @@ impl BodyStates {
         }
     }
 
+    /// Removes every entry, keeping the arrays' capacity.
+    pub fn clear(&mut self) {
+        self.com.clear();
+        self.rot.clear();
+        self.lin_vel.clear();
+        self.ang_vel.clear();
+        self.inv_mass.clear();
+        self.inv_inertia.clear();
+    }
+
     /// Number of entries including the static anchor.
     pub fn len(&self) -> usize {
         self.com.len()

@@ -17,8 +17,9 @@
 //! (r_a × d)·ω_a` and applies an impulse λ as `v ± d λ/m`, `ω ± I⁻¹(r × d) λ`: dot
 //! products and scaled additions, no cross product and no 3×3 product in the loop that
 //! runs most often (forming them in every iteration would multiply its cost). The
-//! arrays live for one solve (one island on one thread), so they cost no memory
-//! between steps; [`ContactConstraints::store_impulses`] writes the impulses back to
+//! arrays are filled anew for every solve (one island on one thread) and kept for the
+//! next, so a step allocates nothing once they have grown;
+//! [`ContactConstraints::store_impulses`] writes the impulses back to
 //! the pairs for the next step's warm start.
 //!
 //! The rows themselves are [`super::contact_rows`], written once over the lane type:
@@ -134,15 +135,19 @@ pub struct ContactConstraints {
 impl ContactConstraints {
     /// Constraints for the touching pairs of `pairs` with at least one awake body, from
     /// the bodies' poses, velocities and inverse inertias now (call after
-    /// `update_inertia`, before the substeps). Impulses carried by the pairs warm start.
-    pub fn build(pairs: &[ContactPair], s: &BodyStates, awake: &[bool]) -> ContactConstraints {
+    /// `update_inertia`, before the substeps), in place of the last step's: the arrays
+    /// keep their capacity, so a step allocates nothing once they have grown. Impulses
+    /// carried by the pairs warm start.
+    pub fn rebuild(&mut self, pairs: &[ContactPair], s: &BodyStates, awake: &[bool]) {
         let active =
             |p: &&ContactPair| p.touching() && (awake[p.a as usize] || awake[p.b as usize]);
-        let count = pairs.iter().filter(active).count();
-        let mut out = ContactConstraints {
-            pairs: Vec::with_capacity(count),
-            ..Default::default()
-        };
+        debug_assert!(
+            self.single.is_empty() && self.bundles.is_empty(),
+            "end_substeps not called"
+        );
+        let out = self;
+        out.pairs.clear();
+        out.points.clear();
         for (slot, pair) in pairs.iter().enumerate() {
             if !active(&pair) {
                 continue;
@@ -218,7 +223,6 @@ impl ContactConstraints {
             });
         }
         out.bundle(s.len());
-        out
     }
 
     /// Colours the pairs and loads the groups of four and the pairs solved one by one

@@ -36,6 +36,12 @@
 //! sag.) Only trees with a joint across a large mass ratio ([`MASS_RATIO`]) or to a
 //! static body are solved this way; the others stay with the soft Gauss–Seidel rows.
 //!
+//! Storage and work per node: a body keeps `D⁻¹` as three 3×3 blocks (it is symmetric)
+//! and `D⁻¹ Gᵀ` to its parent joint, a joint its 3×3 `D⁻¹` and the arm of `G` on its
+//! parent body; `G` and `Gᵀ` are applied as cross products, and the pass up applies
+//! each node's `D⁻¹` as soon as its children are in, so the diagonal solve costs no
+//! pass of its own. A leaf body's `D⁻¹` is its inverse mass and inertia as they are.
+//!
 //! Determinism: a tree's nodes are ordered by its own joints' and bodies' relative order
 //! only, so a tree solved alone (an island on another thread) gets the bits it gets in
 //! the whole world.
@@ -44,14 +50,7 @@ use super::body::BodyStates;
 use super::joint::PointPart;
 use super::joint_set::JointSet;
 use super::soft::{Softness, StepContext};
-use glam::{Mat3, Vec3, Vec3A};
-
-type Matrix6 = Mat<6, 6>;
-type Matrix3 = Mat<3, 3>;
-type Matrix6x3 = Mat<6, 3>;
-type Matrix3x6 = Mat<3, 6>;
-type Vector6 = Mat<6, 1>;
-type Vector3 = Mat<3, 1>;
+use glam::{Mat3A, Vec3, Vec3A};
 
 /// A joint whose point rows are in a tree: its type's array and index.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,50 +60,120 @@ enum JointRef {
     Universal(usize),
 }
 
-/// A node of a tree: a body or a joint, with the block to its parent.
+/// A node in elimination order: an index into [`JointTrees::bodies`] or
+/// [`JointTrees::joints`].
 #[derive(Clone, Copy, Debug)]
-enum Node {
-    /// A moving body (index into the states).
-    Body {
-        body: usize,
-        /// `D⁻¹`, 6×6.
-        d_inv: Matrix6,
-        /// `D⁻¹ H_{self,parent}` to the parent joint (6×3); unused at the root.
-        up: Matrix6x3,
-    },
-    /// A joint's point rows.
-    Joint {
-        joint: JointRef,
-        /// `D⁻¹`, 3×3.
-        d_inv: Matrix3,
-        /// `D⁻¹ H_{self,parent}` to the parent body (3×6); unused at the root.
-        up: Matrix3x6,
-    },
+enum NodeRef {
+    Body(usize),
+    Joint(usize),
 }
 
-/// Where a node's value lives during a solve: 6 entries for a body, 3 for a joint.
+/// A body of a tree and its blocks of the factorisation.
+///
+/// Its block of the parent joint's rows is `G = σ [1, X]` with `X = −r̂` (see [`arm`]),
+/// so `G u = σ (u_lin + u_ang × r)` (the anchor's velocity in the motion `u`) and
+/// `Gᵀ p = σ (p, r × p)` (the impulse `p` at the anchor): the solve applies them as
+/// cross products.
 #[derive(Clone, Copy, Debug)]
-enum Value {
-    Body(Vector6),
-    Joint(Vector3),
+struct BodyNode {
+    /// Index into the states.
+    body: usize,
+    /// The parent joint (index into [`JointTrees::joints`]), [`NO_PARENT`] at a root.
+    parent: usize,
+    /// Whether joints of the tree hang below it; a body without is a leaf, whose `D`
+    /// is its mass matrix, inverted by its inverse mass and inertia as they are.
+    inner: bool,
+    /// The parent joint's anchor offset from the body's centre of mass, and `σ`.
+    r: Vec3A,
+    sign: f32,
+    /// `D⁻¹ = [P Q; Qᵀ S]` by 3×3 blocks (`D` is symmetric). While factoring, `D =
+    /// [A B; Bᵀ E]` itself is summed here first.
+    p: Mat3A,
+    q: Mat3A,
+    s: Mat3A,
+    /// `D⁻¹ Gᵀ` to the parent joint, σ included: its linear and angular 3×3 blocks.
+    up_lin: Mat3A,
+    up_ang: Mat3A,
+}
+
+impl BodyNode {
+    fn new(body: usize, parent: usize, inner: bool) -> BodyNode {
+        BodyNode {
+            body,
+            parent,
+            inner,
+            r: Vec3A::ZERO,
+            sign: 0.0,
+            p: Mat3A::ZERO,
+            q: Mat3A::ZERO,
+            s: Mat3A::ZERO,
+            up_lin: Mat3A::ZERO,
+            up_ang: Mat3A::ZERO,
+        }
+    }
+}
+
+/// A joint's point rows in a tree and their block of the factorisation.
+#[derive(Clone, Copy, Debug)]
+struct JointNode {
+    joint: JointRef,
+    /// The joint's bodies (its frame's `a` and `b`, indices into the states).
+    a: usize,
+    b: usize,
+    /// The parent body (index into [`JointTrees::bodies`]), [`NO_PARENT`] at a root.
+    parent: usize,
+    /// The anchor's offset from the parent body's centre of mass, and `σ` on it.
+    r: Vec3A,
+    sign: f32,
+    /// `D⁻¹` (3×3, symmetric); while factoring, `D` itself is summed here first.
+    d_inv: Mat3A,
+    /// The rows' anchor offsets from a's and b's centres of mass and their gap
+    /// `p_b − p_a`, as the factorisation read them: the solve's `Ċ` and `C` are those
+    /// of the `G` it factorised.
+    ra: Vec3A,
+    rb: Vec3A,
+    c: Vec3A,
+}
+
+impl JointNode {
+    fn new(joint: JointRef, a: usize, b: usize, parent: usize) -> JointNode {
+        JointNode {
+            joint,
+            a,
+            b,
+            parent,
+            r: Vec3A::ZERO,
+            sign: 0.0,
+            d_inv: Mat3A::ZERO,
+            ra: Vec3A::ZERO,
+            rb: Vec3A::ZERO,
+            c: Vec3A::ZERO,
+        }
+    }
 }
 
 /// The trees of one solve (the whole world, or one island's batch).
 #[derive(Clone, Debug, Default)]
 pub struct JointTrees {
-    /// Every tree's nodes, leaves first, each tree's root last; trees one after another.
-    nodes: Vec<Node>,
-    /// Parent of each node (index into `nodes`), `usize::MAX` at a root.
-    parent: Vec<usize>,
+    /// Every tree's nodes in elimination order: leaves first, each tree's root last,
+    /// trees one after another.
+    order: Vec<NodeRef>,
+    bodies: Vec<BodyNode>,
+    joints: Vec<JointNode>,
     /// Whether the last factorisation was usable (finite); otherwise the joints of the
     /// trees fall back to Gauss–Seidel for the substep.
     ok: bool,
-    /// Scratch of `factor`, kept between calls so the substeps allocate nothing: `D` of
-    /// every joint node and of every body node (indexed by node).
-    d_joint: Vec<Matrix3>,
-    d_body: Vec<Matrix6>,
-    /// Scratch of `solve`: every node's value.
-    x: Vec<Value>,
+    /// What the trees were built from: per body, its inverse mass when it moves, zero
+    /// otherwise; then, per ball joint, hinge and universal joint in that order, its two
+    /// bodies. The trees depend on nothing else, so while this is unchanged (every
+    /// step of a world whose sleep states and joints do not change) they are kept.
+    built_from: Vec<f32>,
+    built_joints: Vec<(usize, usize)>,
+    /// Scratch of `solve`, kept between calls so the substeps allocate nothing: each
+    /// body node's linear and angular value, each joint node's.
+    x_lin: Vec<Vec3A>,
+    x_ang: Vec<Vec3A>,
+    x_joint: Vec<Vec3A>,
 }
 
 const NO_PARENT: usize = usize::MAX;
@@ -145,6 +214,51 @@ impl Sets {
 }
 
 impl JointTrees {
+    /// [`JointTrees::build`] into `self`, unless the bodies' motion and the joints are
+    /// those of the last build: then the trees are kept and only the joints' flags are
+    /// set again (an island solved elsewhere in between may have changed them).
+    pub fn rebuild(&mut self, joints: &mut JointSet, s: &BodyStates, awake: &[bool]) {
+        let n = s.len();
+        let moving = |i: usize| i < awake.len() && awake[i] && s.inv_mass[i] > 0.0;
+        let masses = (0..n).map(|i| if moving(i) { s.inv_mass[i] } else { 0.0 });
+        let pairs = |joints: &JointSet| {
+            all_refs(joints)
+                .map(|r| frame_bodies(joints, r))
+                .collect::<Vec<_>>()
+        };
+        // Bitwise, so that any change of a mass rebuilds.
+        let same = self.built_from.len() == n
+            && (self.built_from.iter().zip(masses.clone()))
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+            && self.built_joints.len() == all_refs(joints).count()
+            && (self.built_joints.iter().zip(all_refs(joints)))
+                .all(|(&p, r)| p == frame_bodies(joints, r));
+        if same {
+            for r in all_refs(joints) {
+                let point = point_of_mut(joints, r);
+                point.direct = false;
+                point.in_tree = false;
+            }
+            for node in &self.joints {
+                let point = point_of_mut(joints, node.joint);
+                point.direct = true;
+                point.in_tree = true;
+            }
+            joints.direct = !self.joints.is_empty();
+            joints.tree_points = self.joints.len();
+            self.ok = true;
+            return;
+        }
+        let built = JointTrees::build(joints, s, awake);
+        self.order = built.order;
+        self.bodies = built.bodies;
+        self.joints = built.joints;
+        self.ok = built.ok;
+        self.built_from.clear();
+        self.built_from.extend(masses);
+        self.built_joints = pairs(joints);
+    }
+
     /// Picks the ball joints and hinges whose point rows form trees over the moving
     /// bodies (inverse mass > 0, awake), marks them `direct` (their own solve then skips
     /// the point rows) and orders each tree leaves first. Joints that would close a loop
@@ -158,11 +272,7 @@ impl JointTrees {
         };
         // Tree joints and, per moving body, the tree joints acting on it (in order).
         let mut chosen: Vec<(JointRef, usize, usize)> = Vec::new();
-        let refs = (0..joints.ball.len())
-            .map(JointRef::Ball)
-            .chain((0..joints.hinge.len()).map(JointRef::Hinge))
-            .chain((0..joints.universal.len()).map(JointRef::Universal));
-        for r in refs {
+        for r in all_refs(joints) {
             let (f, point) = match r {
                 JointRef::Ball(i) => (joints.ball[i].frame, &mut joints.ball[i].point),
                 JointRef::Hinge(i) => (joints.hinge[i].frame, &mut joints.hinge[i].point),
@@ -299,119 +409,148 @@ impl JointTrees {
                 }
                 next += 1;
             }
-            // This tree, reversed: children before parents.
-            let len = order.len() - start;
-            let base = trees.nodes.len();
+            // This tree, reversed: children before parents. First each node's index
+            // among the nodes of its kind, then the nodes with their parents'.
+            let mut slot_of = Vec::with_capacity(order.len() - start);
+            let (mut bodies, mut joints_seen) = (trees.bodies.len(), trees.joints.len());
+            for slot in (start..order.len()).rev() {
+                let counter = if order[slot].0 {
+                    &mut bodies
+                } else {
+                    &mut joints_seen
+                };
+                slot_of.push(*counter);
+                *counter += 1;
+            }
+            // `slot_of` runs backwards over `order[start..]`.
+            let index_of = |slot: usize| slot_of[order.len() - 1 - slot];
+            let mut inner = vec![false; order.len() - start];
+            for &(node_is_body, _, parent) in &order[start..] {
+                if !node_is_body && parent != NO_PARENT {
+                    inner[parent - start] = true;
+                }
+            }
             for slot in (start..order.len()).rev() {
                 let (node_is_body, i, parent) = order[slot];
-                trees.nodes.push(if node_is_body {
-                    Node::Body {
-                        body: i,
-                        d_inv: Matrix6::ZERO,
-                        up: Matrix6x3::ZERO,
-                    }
-                } else {
-                    Node::Joint {
-                        joint: chosen[i].0,
-                        d_inv: Matrix3::ZERO,
-                        up: Matrix3x6::ZERO,
-                    }
-                });
-                // Slot `slot` of `order` lands at `base + (order.len() - 1 - slot)`.
-                trees.parent.push(if parent == NO_PARENT {
+                let parent = if parent == NO_PARENT {
                     NO_PARENT
                 } else {
-                    base + (start + len - 1 - parent)
-                });
+                    index_of(parent)
+                };
+                if node_is_body {
+                    trees.order.push(NodeRef::Body(trees.bodies.len()));
+                    trees
+                        .bodies
+                        .push(BodyNode::new(i, parent, inner[slot - start]));
+                } else {
+                    let joint = chosen[i].0;
+                    let (a, b) = frame_bodies(joints, joint);
+                    trees.order.push(NodeRef::Joint(trees.joints.len()));
+                    trees.joints.push(JointNode::new(joint, a, b, parent));
+                }
             }
         }
         trees
     }
-
     /// Whether there is anything to solve.
     pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
+        self.order.is_empty()
     }
 
     /// Factorises the trees on the current pose and inertias and the anchors of the
-    /// joints' last `prepare`. A tree that does not factorise (a degenerate inertia)
-    /// hands its joints back to Gauss–Seidel.
+    /// joints' last `prepare`, eliminating the nodes in order: a body's
+    /// `D⁻¹` (by its Schur complement, [`invert_blocks`]) goes into its parent joint as
+    /// `D_j −= G D_b⁻¹ Gᵀ`, a joint's into its parent body as `D_b −= Gᵀ D_j⁻¹ G`. A
+    /// tree that does not factorise (a degenerate inertia) hands its joints back to
+    /// Gauss–Seidel.
     pub fn factor(&mut self, joints: &mut JointSet, s: &BodyStates) {
-        // `D` of every node, children subtracted as they are eliminated.
-        let mut d_joint = std::mem::take(&mut self.d_joint);
-        let mut d_body = std::mem::take(&mut self.d_body);
-        d_joint.clear();
-        d_joint.resize(self.nodes.len(), Matrix3::ZERO);
-        d_body.clear();
-        d_body.resize(self.nodes.len(), Matrix6::ZERO);
-        for (k, node) in self.nodes.iter().enumerate() {
-            if let Node::Body { body, .. } = *node {
-                d_body[k] = body_mass(s, body);
+        let JointTrees {
+            order,
+            bodies,
+            joints: nodes,
+            ..
+        } = self;
+        for node in nodes.iter_mut() {
+            let p = point_of(joints, node.joint);
+            (node.ra, node.rb, node.c) = (p.ra(), p.rb(), p.c());
+            node.d_inv = Mat3A::ZERO;
+        }
+        for node in bodies.iter_mut() {
+            let i = node.body;
+            if node.inner {
+                // D = M = diag(m 1, I), I the world inertia now; children subtract.
+                node.p = Mat3A::from_diagonal(Vec3::splat(1.0 / s.inv_mass[i]));
+                node.q = Mat3A::ZERO;
+                node.s = s.inv_inertia[i].inverse();
+            } else {
+                node.p = Mat3A::from_diagonal(Vec3::splat(s.inv_mass[i]));
+                node.q = Mat3A::ZERO;
+                node.s = s.inv_inertia[i];
             }
         }
         let mut ok = true;
-        for k in 0..self.nodes.len() {
-            let parent = self.parent[k];
-            match self.nodes[k] {
-                Node::Body { body, .. } => {
-                    let Some(d_inv) = d_body[k].try_inverse_blocks() else {
-                        ok = false;
-                        break;
-                    };
-                    let up = if parent == NO_PARENT {
-                        Matrix6x3::ZERO
-                    } else {
-                        let Node::Joint { joint, .. } = self.nodes[parent] else {
-                            unreachable!("a body's parent is a joint")
+        for &node in order.iter() {
+            match node {
+                NodeRef::Body(k) => {
+                    let body = &mut bodies[k];
+                    if body.inner {
+                        let Some((p, q, s)) = invert_blocks(body.p, body.q, body.s) else {
+                            ok = false;
+                            break;
                         };
-                        let (sign, x) =
-                            arm(point_of(joints, joint), frame_bodies(joints, joint), body);
-                        // Parent joint: D_j −= G D_b⁻¹ Gᵀ; up = D_b⁻¹ Gᵀ.
-                        let (g_d_gt, d_gt) = body_through_joint(&d_inv, sign, x);
-                        d_joint[parent].sub_mat3(g_d_gt);
-                        d_gt
-                    };
-                    self.nodes[k] = Node::Body { body, d_inv, up };
+                        (body.p, body.q, body.s) = (p, q, s);
+                    }
+                    if body.parent == NO_PARENT {
+                        continue;
+                    }
+                    // Into the parent joint: with X = −r̂, G D⁻¹ Gᵀ = top + X bottom,
+                    // top = P + Q Xᵀ, bottom = Qᵀ + S Xᵀ, and D⁻¹ Gᵀ = σ [top; bottom].
+                    let joint = &mut nodes[body.parent];
+                    let (r, sign) = arm(joint, body.body);
+                    let x = minus_cross_matrix(r);
+                    let xt = x.transpose();
+                    let top = body.p + body.q * xt;
+                    let bottom = body.q.transpose() + body.s * xt;
+                    joint.d_inv -= top + x * bottom;
+                    (body.r, body.sign) = (r, sign);
+                    (body.up_lin, body.up_ang) = (top * sign, bottom * sign);
+                    ok &= body.up_lin.is_finite() && body.up_ang.is_finite();
                 }
-                Node::Joint { joint, .. } => {
-                    let Some(d_inv) = d_joint[k].try_inverse() else {
+                NodeRef::Joint(k) => {
+                    let joint = &mut nodes[k];
+                    let Some(d_inv) = invert(joint.d_inv) else {
                         ok = false;
                         break;
                     };
-                    let up = if parent == NO_PARENT {
-                        Matrix3x6::ZERO
-                    } else {
-                        let Node::Body { body, .. } = self.nodes[parent] else {
-                            unreachable!("a joint's parent is a body")
-                        };
-                        let (sign, x) =
-                            arm(point_of(joints, joint), frame_bodies(joints, joint), body);
-                        // Parent body: D_b −= Gᵀ D_j⁻¹ G; up = D_j⁻¹ G.
-                        let (gt_d_g, d_g) = joint_through_body(&d_inv, sign, x);
-                        d_body[parent] -= gt_d_g;
-                        d_g
-                    };
-                    self.nodes[k] = Node::Joint { joint, d_inv, up };
+                    joint.d_inv = d_inv;
+                    if joint.parent == NO_PARENT {
+                        continue;
+                    }
+                    // Into the parent body: Gᵀ D⁻¹ G = [D⁻¹, D⁻¹ X; Xᵀ D⁻¹, Xᵀ D⁻¹ X].
+                    let body = &mut bodies[joint.parent];
+                    let (r, sign) = arm(joint, body.body);
+                    let x = minus_cross_matrix(r);
+                    let d_x = d_inv * x;
+                    body.p -= d_inv;
+                    body.q -= d_x;
+                    body.s -= x.transpose() * d_x;
+                    (joint.r, joint.sign) = (r, sign);
                 }
             }
         }
-        ok &= self.nodes.iter().all(|node| match node {
-            Node::Body { d_inv, up, .. } => d_inv.is_finite() && up.is_finite(),
-            Node::Joint { d_inv, up, .. } => d_inv.is_finite() && up.is_finite(),
-        });
         self.ok = ok;
-        self.d_joint = d_joint;
-        self.d_body = d_body;
-        for node in &self.nodes {
-            if let Node::Joint { joint, .. } = *node {
-                point_of_mut(joints, joint).direct = ok;
-            }
+        for node in &self.joints {
+            point_of_mut(joints, node.joint).direct = ok;
         }
     }
 
     /// One block update of every tree's point rows: the exact `λ' = K⁻¹(−r)` with
     /// `r = Ċ + bias_rate · C`, then the soft step's `λ += s_m λ' − s_i λ_acc`. The relax
     /// pass (`use_bias` false) solves rigidly with `r = Ċ`.
+    ///
+    /// The pass up the tree applies each node's `D⁻¹` as soon as its children are in
+    /// (`x_parent −= Hᵀ D⁻¹ x = Hᵀ u` with `u = D⁻¹ x`, the node's value after the
+    /// diagonal solve), the pass down `x_child −= D⁻¹ H x_parent`.
     pub fn solve(
         &mut self,
         joints: &mut JointSet,
@@ -419,7 +558,7 @@ impl JointTrees {
         ctx: &StepContext,
         use_bias: bool,
     ) {
-        if !self.ok || self.nodes.is_empty() {
+        if !self.ok || self.order.is_empty() {
             return;
         }
         // Rigid rows; the biased pass closes the fraction `TREE_BIAS` of the gap over
@@ -432,166 +571,153 @@ impl JointTrees {
         } else {
             Softness::RIGID
         };
+        let JointTrees {
+            order,
+            bodies,
+            joints: nodes,
+            x_lin,
+            x_ang,
+            x_joint,
+            ..
+        } = self;
         // Right-hand sides: zero for bodies, −r for joints.
-        let mut x = std::mem::take(&mut self.x);
-        x.clear();
-        x.extend(self.nodes.iter().map(|node| match *node {
-            Node::Body { .. } => Value::Body(Vector6::ZERO),
-            Node::Joint { joint, .. } => {
-                let (a, b) = frame_bodies(joints, joint);
-                let p = point_of(joints, joint);
-                let cdot = s.point_velocity(b, p.rb()) - s.point_velocity(a, p.ra());
-                let r = cdot + soft.bias_rate * p.c();
-                Value::Joint(Mat([[-r.x], [-r.y], [-r.z]]))
-            }
+        x_lin.clear();
+        x_lin.resize(bodies.len(), Vec3A::ZERO);
+        x_ang.clear();
+        x_ang.resize(bodies.len(), Vec3A::ZERO);
+        x_joint.clear();
+        x_joint.extend(nodes.iter().map(|node| {
+            let cdot = s.point_velocity(node.b, node.rb) - s.point_velocity(node.a, node.ra);
+            -(cdot + soft.bias_rate * node.c)
         }));
-        // Up the tree: x_parent −= upᵀ x_child.
-        for k in 0..self.nodes.len() {
-            let parent = self.parent[k];
-            if parent == NO_PARENT {
-                continue;
-            }
-            match (self.nodes[k], x[k]) {
-                (Node::Body { up, .. }, Value::Body(v)) => {
-                    if let Value::Joint(ref mut xp) = x[parent] {
-                        *xp -= up.t() * v;
+        // Up the tree, each node's D⁻¹ applied on the way.
+        for &node in order.iter() {
+            match node {
+                NodeRef::Body(k) => {
+                    let body = &bodies[k];
+                    let (v, w) = (x_lin[k], x_ang[k]);
+                    let u_lin = body.p * v + body.q * w;
+                    let u_ang = transpose_mul(&body.q, v) + body.s * w;
+                    (x_lin[k], x_ang[k]) = (u_lin, u_ang);
+                    if body.parent != NO_PARENT {
+                        x_joint[body.parent] -= (u_lin + u_ang.cross(body.r)) * body.sign;
                     }
                 }
-                (Node::Joint { up, .. }, Value::Joint(v)) => {
-                    if let Value::Body(ref mut xp) = x[parent] {
-                        *xp -= up.t() * v;
+                NodeRef::Joint(k) => {
+                    let joint = &nodes[k];
+                    let u = joint.d_inv * x_joint[k];
+                    x_joint[k] = u;
+                    if joint.parent != NO_PARENT {
+                        x_lin[joint.parent] -= u * joint.sign;
+                        x_ang[joint.parent] -= joint.r.cross(u) * joint.sign;
                     }
                 }
-                _ => unreachable!("node and value kinds match"),
             }
         }
-        for (node, v) in self.nodes.iter().zip(x.iter_mut()) {
-            match (node, v) {
-                (Node::Body { d_inv, .. }, Value::Body(v)) => *v = *d_inv * *v,
-                (Node::Joint { d_inv, .. }, Value::Joint(v)) => *v = *d_inv * *v,
-                _ => unreachable!("node and value kinds match"),
-            }
-        }
-        // Down the tree: x_child −= up x_parent.
-        for k in (0..self.nodes.len()).rev() {
-            let parent = self.parent[k];
-            if parent == NO_PARENT {
-                continue;
-            }
-            let xp = x[parent];
-            match (self.nodes[k], &mut x[k], xp) {
-                (Node::Body { up, .. }, Value::Body(v), Value::Joint(p)) => *v -= up * p,
-                (Node::Joint { up, .. }, Value::Joint(v), Value::Body(p)) => *v -= up * p,
-                _ => unreachable!("a tree alternates bodies and joints"),
+        // Down the tree.
+        for &node in order.iter().rev() {
+            match node {
+                NodeRef::Body(k) => {
+                    let body = &bodies[k];
+                    if body.parent != NO_PARENT {
+                        let p = x_joint[body.parent];
+                        x_lin[k] -= body.up_lin * p;
+                        x_ang[k] -= body.up_ang * p;
+                    }
+                }
+                NodeRef::Joint(k) => {
+                    let joint = &nodes[k];
+                    if joint.parent != NO_PARENT {
+                        let (v, w) = (x_lin[joint.parent], x_ang[joint.parent]);
+                        x_joint[k] -= joint.d_inv * (v + w.cross(joint.r)) * joint.sign;
+                    }
+                }
             }
         }
         // Apply: bodies get s_m Δv', each joint's accumulated impulse decays by s_i.
-        for (node, v) in self.nodes.iter().zip(&x) {
-            match (node, v) {
-                (Node::Body { body, .. }, Value::Body(dv)) => {
-                    let b = *body;
-                    let dv = dv.0;
-                    s.lin_vel[b] += Vec3A::new(dv[0][0], dv[1][0], dv[2][0]) * soft.mass_scale;
-                    s.ang_vel[b] += Vec3A::new(dv[3][0], dv[4][0], dv[5][0]) * soft.mass_scale;
-                }
-                (Node::Joint { joint, .. }, Value::Joint(y)) => {
-                    let y = y.0;
-                    let lambda = -Vec3A::new(y[0][0], y[1][0], y[2][0]);
-                    let f = frame_of(joints, *joint);
-                    let p = point_of_mut(joints, *joint);
-                    let decay = -soft.impulse_scale * p.impulse;
-                    if soft.impulse_scale != 0.0 {
-                        p.apply(&f, s, decay);
-                    }
-                    p.impulse += soft.mass_scale * lambda + decay;
-                }
-                _ => unreachable!("node and value kinds match"),
+        for (k, body) in bodies.iter().enumerate() {
+            let b = body.body;
+            s.lin_vel[b] += x_lin[k] * soft.mass_scale;
+            s.ang_vel[b] += x_ang[k] * soft.mass_scale;
+        }
+        for (node, &y) in nodes.iter().zip(x_joint.iter()) {
+            let lambda = -y;
+            let decay = -soft.impulse_scale * point_of(joints, node.joint).impulse;
+            if soft.impulse_scale != 0.0 {
+                let f = frame_of(joints, node.joint);
+                point_of(joints, node.joint).apply(&f, s, decay);
             }
+            point_of_mut(joints, node.joint).impulse += soft.mass_scale * lambda + decay;
         }
-        self.x = x;
     }
 }
 
-/// `M = diag(m 1, I)` of body `i`, with `I` the world inertia now.
-fn body_mass(s: &BodyStates, i: usize) -> Matrix6 {
-    let m = 1.0 / s.inv_mass[i];
-    let inertia = Mat3::from(s.inv_inertia[i]).inverse();
-    let mut out = Matrix6::ZERO;
-    for r in 0..3 {
-        out.0[r][r] = m;
-        for c in 0..3 {
-            out.0[3 + r][3 + c] = inertia.col(c)[r];
-        }
-    }
-    out
+/// `Mᵀ v`.
+#[inline]
+fn transpose_mul(m: &Mat3A, v: Vec3A) -> Vec3A {
+    Vec3A::new(m.x_axis.dot(v), m.y_axis.dot(v), m.z_axis.dot(v))
 }
 
-/// The 3×6 block of a joint's point rows on `body` as `G = σ [1, X]`: the sign `σ` (+1
-/// on body2, −1 on body1) and `X = −r̂` with `r` the anchor's offset from that body
-/// (`Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`, and `−r̂ ω = ω × r`).
-fn arm(p: &PointPart, (a, b): (usize, usize), body: usize) -> (f32, Mat3) {
-    let (r, sign) = if body == b {
-        (Vec3::from(p.rb()), 1.0)
+/// `−r̂`, the matrix of `u ↦ u × r`: by columns `(0, −r_z, r_y)`, `(r_z, 0, −r_x)`,
+/// `(−r_y, r_x, 0)`.
+fn minus_cross_matrix(r: Vec3A) -> Mat3A {
+    Mat3A::from_cols(
+        Vec3A::new(0.0, -r.z, r.y),
+        Vec3A::new(r.z, 0.0, -r.x),
+        Vec3A::new(-r.y, r.x, 0.0),
+    )
+}
+
+/// The block of a joint's point rows on `body` as `G = σ [1, X]`, `X = −r̂`: the anchor's
+/// offset `r` from that body and the sign `σ` (+1 on body2, −1 on body1;
+/// `Ċ = v_b + ω_b × r_b − v_a − ω_a × r_a`, and `−r̂ ω = ω × r`).
+fn arm(joint: &JointNode, body: usize) -> (Vec3A, f32) {
+    if body == joint.b {
+        (joint.rb, 1.0)
     } else {
-        debug_assert_eq!(body, a);
-        (Vec3::from(p.ra()), -1.0)
-    };
-    // −r̂ by columns: (0, −r_z, r_y), (r_z, 0, −r_x), (−r_y, r_x, 0).
-    let x = Mat3::from_cols(
-        Vec3::new(0.0, -r.z, r.y),
-        Vec3::new(r.z, 0.0, -r.x),
-        Vec3::new(-r.y, r.x, 0.0),
-    );
-    (sign, x)
+        debug_assert_eq!(body, joint.a);
+        (joint.ra, -1.0)
+    }
 }
 
-/// A body's elimination into its parent joint, by 3×3 blocks: with `D⁻¹ = [P Q; R S]`
-/// and `G = σ [1, X]`, `G D⁻¹ Gᵀ = P + Q Xᵀ + X (R + S Xᵀ)` (σ² = 1) and
-/// `D⁻¹ Gᵀ = σ [P + Q Xᵀ; R + S Xᵀ]` — a few 3×3 products for the dense 3×6·6×6·6×3.
-fn body_through_joint(d_inv: &Matrix6, sign: f32, x: Mat3) -> (Mat3, Matrix6x3) {
-    let (p, q) = (d_inv.block(0, 0), d_inv.block(0, 3));
-    let (r, s) = (d_inv.block(3, 0), d_inv.block(3, 3));
-    let xt = x.transpose();
-    let top = p + q * xt;
-    let bottom = r + s * xt;
-    let g_d_gt = top + x * bottom;
-    let mut d_gt = Matrix6x3::ZERO;
-    for c in 0..3 {
-        let (t, b) = (top.col(c) * sign, bottom.col(c) * sign);
-        for k in 0..3 {
-            d_gt.0[k][c] = t[k];
-            d_gt.0[3 + k][c] = b[k];
-        }
-    }
-    (g_d_gt, d_gt)
+/// Whether a 3×3 block can be inverted: a finite determinant away from zero.
+fn invertible(m: &Mat3A) -> bool {
+    let det = m.determinant();
+    det.is_finite() && det.abs() > 1e-30
 }
 
-/// A joint's elimination into its parent body, by 3×3 blocks: with `G = σ [1, X]`,
-/// `Gᵀ D⁻¹ G = [D⁻¹, D⁻¹ X; Xᵀ D⁻¹, Xᵀ D⁻¹ X]` and `D⁻¹ G = σ [D⁻¹, D⁻¹ X]`.
-fn joint_through_body(d_inv: &Matrix3, sign: f32, x: Mat3) -> (Matrix6, Matrix3x6) {
-    let m = &d_inv.0;
-    let d = Mat3::from_cols(
-        Vec3::new(m[0][0], m[1][0], m[2][0]),
-        Vec3::new(m[0][1], m[1][1], m[2][1]),
-        Vec3::new(m[0][2], m[1][2], m[2][2]),
-    );
-    let d_x = d * x;
-    let xt_d = x.transpose() * d;
-    let xt_d_x = xt_d * x;
-    let mut gt_d_g = Matrix6::ZERO;
-    gt_d_g.set_block(0, 0, d);
-    gt_d_g.set_block(0, 3, d_x);
-    gt_d_g.set_block(3, 0, xt_d);
-    gt_d_g.set_block(3, 3, xt_d_x);
-    let mut d_g = Matrix3x6::ZERO;
-    for c in 0..3 {
-        let (l, r) = (d.col(c) * sign, d_x.col(c) * sign);
-        for k in 0..3 {
-            d_g.0[k][c] = l[k];
-            d_g.0[k][3 + c] = r[k];
-        }
-    }
-    (gt_d_g, d_g)
+/// The inverse of a 3×3 block, `None` when it does not exist.
+fn invert(m: Mat3A) -> Option<Mat3A> {
+    invertible(&m).then(|| m.inverse())
+}
+
+/// The inverse of a body's `D = [A B; Bᵀ E]` (3×3 blocks, symmetric) by its Schur
+/// complement `S = E − Bᵀ A⁻¹ B`:
+///
+/// ```text
+/// D⁻¹ = [ A⁻¹ + A⁻¹B S⁻¹ Bᵀ A⁻¹   −A⁻¹B S⁻¹ ]
+///       [ −S⁻¹ Bᵀ A⁻¹               S⁻¹       ]
+/// ```
+///
+/// returned as its blocks `(P, Q, S⁻¹)`, the lower left being `Qᵀ`. A body's `D` is its
+/// mass matrix plus the positive semidefinite terms of its eliminated children, so `A`
+/// (mass times the identity plus those terms) and `S` are positive definite and need no
+/// pivoting. `None` when a block's determinant vanishes or is not finite.
+fn invert_blocks(a: Mat3A, b: Mat3A, e: Mat3A) -> Option<(Mat3A, Mat3A, Mat3A)> {
+    let a_inv = invert(a)?;
+    let a_inv_b = a_inv * b;
+    let s_inv = invert(e - b.transpose() * a_inv_b)?;
+    let q = -(a_inv_b * s_inv);
+    let p = a_inv - q * a_inv_b.transpose();
+    (p.is_finite() && q.is_finite() && s_inv.is_finite()).then_some((p, q, s_inv))
+}
+
+/// Every ball joint, hinge and universal joint, in that order.
+fn all_refs(joints: &JointSet) -> impl Iterator<Item = JointRef> + use<> {
+    (0..joints.ball.len())
+        .map(JointRef::Ball)
+        .chain((0..joints.hinge.len()).map(JointRef::Hinge))
+        .chain((0..joints.universal.len()).map(JointRef::Universal))
 }
 
 fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {
@@ -621,166 +747,4 @@ fn frame_of(joints: &JointSet, j: JointRef) -> super::joint::JointFrame {
 fn frame_bodies(joints: &JointSet, j: JointRef) -> (usize, usize) {
     let f = frame_of(joints, j);
     (f.a, f.b)
-}
-
-/// A small dense matrix, row-major: the blocks of the factorisation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Mat<const R: usize, const C: usize>([[f32; C]; R]);
-
-impl<const R: usize, const C: usize> Mat<R, C> {
-    const ZERO: Self = Mat([[0.0; C]; R]);
-
-    /// The transpose.
-    fn t(&self) -> Mat<C, R> {
-        let mut out = Mat::<C, R>::ZERO;
-        for r in 0..R {
-            for c in 0..C {
-                out.0[c][r] = self.0[r][c];
-            }
-        }
-        out
-    }
-
-    fn is_finite(&self) -> bool {
-        self.0.iter().flatten().all(|x| x.is_finite())
-    }
-}
-
-impl Matrix6 {
-    /// The 3×3 block at row `r0`, column `c0`.
-    fn block(&self, r0: usize, c0: usize) -> Mat3 {
-        let m = &self.0;
-        let col = |c: usize| Vec3::new(m[r0][c0 + c], m[r0 + 1][c0 + c], m[r0 + 2][c0 + c]);
-        Mat3::from_cols(col(0), col(1), col(2))
-    }
-
-    fn set_block(&mut self, r0: usize, c0: usize, b: Mat3) {
-        for c in 0..3 {
-            let v = b.col(c);
-            for r in 0..3 {
-                self.0[r0 + r][c0 + c] = v[r];
-            }
-        }
-    }
-
-    /// The inverse of a body's `D = [A B; C E]` (3×3 blocks) by its Schur complement
-    /// `S = E − C A⁻¹ B`:
-    ///
-    /// ```text
-    /// D⁻¹ = [ A⁻¹ + A⁻¹B S⁻¹ C A⁻¹   −A⁻¹B S⁻¹ ]
-    ///       [ −S⁻¹ C A⁻¹              S⁻¹       ]
-    /// ```
-    ///
-    /// A body's `D` is its mass matrix plus the positive semidefinite terms of its
-    /// eliminated children, so `A` (mass times the identity plus those terms) and `S` are
-    /// positive definite and need no pivoting. `None` when a block's determinant vanishes
-    /// or is not finite.
-    fn try_inverse_blocks(&self) -> Option<Self> {
-        let usable = |m: &Mat3| {
-            let det = m.determinant();
-            det.is_finite() && det.abs() > 1e-30
-        };
-        let a = self.block(0, 0);
-        let b = self.block(0, 3);
-        let c = self.block(3, 0);
-        let e = self.block(3, 3);
-        if !usable(&a) {
-            return None;
-        }
-        let a_inv = a.inverse();
-        let a_inv_b = a_inv * b;
-        let c_a_inv = c * a_inv;
-        let schur = e - c * a_inv_b;
-        if !usable(&schur) {
-            return None;
-        }
-        let s_inv = schur.inverse();
-        let top_right = -(a_inv_b * s_inv);
-        let mut out = Matrix6::ZERO;
-        out.set_block(0, 0, a_inv - top_right * c_a_inv);
-        out.set_block(0, 3, top_right);
-        out.set_block(3, 0, -(s_inv * c_a_inv));
-        out.set_block(3, 3, s_inv);
-        Some(out)
-    }
-}
-
-impl Matrix3 {
-    /// `self −= m`.
-    fn sub_mat3(&mut self, m: Mat3) {
-        for c in 0..3 {
-            let v = m.col(c);
-            for r in 0..3 {
-                self.0[r][c] -= v[r];
-            }
-        }
-    }
-}
-
-impl<const N: usize> Mat<N, N> {
-    /// The inverse by Gauss–Jordan elimination with partial pivoting, `None` when a
-    /// pivot vanishes.
-    fn try_inverse(&self) -> Option<Self> {
-        let mut a = self.0;
-        let mut inv = [[0.0f32; N]; N];
-        for (i, row) in inv.iter_mut().enumerate() {
-            row[i] = 1.0;
-        }
-        for col in 0..N {
-            let pivot = (col..N).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
-            // Also true for NaN, which must stop the factorisation too.
-            if a[pivot][col].abs().partial_cmp(&1e-30) != Some(std::cmp::Ordering::Greater) {
-                return None;
-            }
-            a.swap(col, pivot);
-            inv.swap(col, pivot);
-            let scale = 1.0 / a[col][col];
-            for k in 0..N {
-                a[col][k] *= scale;
-                inv[col][k] *= scale;
-            }
-            for r in 0..N {
-                if r != col {
-                    let f = a[r][col];
-                    if f != 0.0 {
-                        for k in 0..N {
-                            a[r][k] -= f * a[col][k];
-                            inv[r][k] -= f * inv[col][k];
-                        }
-                    }
-                }
-            }
-        }
-        Some(Mat(inv))
-    }
-}
-
-/// The product, every term summed without skipping zero factors: a branch per entry
-/// keeps the compiler from vectorising the row updates, and the blocks are finite
-/// (`factor` checks), so a zero factor adds a zero.
-impl<const R: usize, const K: usize, const C: usize> std::ops::Mul<Mat<K, C>> for Mat<R, K> {
-    type Output = Mat<R, C>;
-
-    fn mul(self, o: Mat<K, C>) -> Mat<R, C> {
-        let mut out = Mat::<R, C>::ZERO;
-        for r in 0..R {
-            for k in 0..K {
-                let x = self.0[r][k];
-                for c in 0..C {
-                    out.0[r][c] += x * o.0[k][c];
-                }
-            }
-        }
-        out
-    }
-}
-
-impl<const R: usize, const C: usize> std::ops::SubAssign for Mat<R, C> {
-    fn sub_assign(&mut self, o: Self) {
-        for r in 0..R {
-            for c in 0..C {
-                self.0[r][c] -= o.0[r][c];
-            }
-        }
-    }
 }

@@ -22,7 +22,7 @@ use super::body::{BodyMotion, BodyStates, Motions};
 use super::contact::ContactPair;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::substeps::{self, SolveParams};
+use super::substeps::{self, SolveBuffers, SolveParams};
 use rayon::prelude::*;
 
 /// No island / no local index.
@@ -52,6 +52,12 @@ struct JointSlots {
     spring: Vec<usize>,
 }
 
+/// The batches of the last parallel solve, kept with their arrays so that the next
+/// step gathers into arrays already grown (and a batch holding the same islands keeps
+/// its joint trees, [`super::joint_tree::JointTrees::rebuild`]).
+#[derive(Default)]
+pub struct IslandTasks(Vec<IslandTask>);
+
 /// One batch of islands, gathered into local arrays.
 #[derive(Default)]
 struct IslandTask {
@@ -66,11 +72,33 @@ struct IslandTask {
     joints: JointSet,
     joint_slots: JointSlots,
     pairs: Vec<ContactPair>,
+    /// The batch's constraint arrays.
+    buffers: SolveBuffers,
     /// Per local pair: its slot in the world's pair array and its world bodies.
     pair_slots: Vec<(usize, u32, u32)>,
 }
 
 impl IslandTask {
+    /// Empties the task for another batch, keeping its arrays' capacity.
+    fn clear(&mut self) {
+        self.bodies.clear();
+        self.moving = 0;
+        self.states.clear();
+        self.motion.clear();
+        self.awake.clear();
+        macro_rules! clear_joints {
+            ($($kind:ident),*) => {$(
+                self.joints.$kind.clear();
+                self.joint_slots.$kind.clear();
+            )*};
+        }
+        clear_joints!(ball, hinge, universal, fixed, slider, spring);
+        let j = &mut self.joints;
+        (j.lanes, j.direct, j.tree_points) = (None, false, 0);
+        self.pairs.clear();
+        self.pair_slots.clear();
+    }
+
     /// Local index of world body `i`: a moving body's from `local_of_moving`, otherwise
     /// it is added as a static body on first use. A batch reads only a handful of static
     /// bodies (the anchor, the fixed bodies its islands touch: on the 1000-human pile
@@ -155,7 +183,9 @@ impl<'a> Numbering<'a> {
 }
 
 /// Solves the step of every awake island (see [`substeps::solve`]) in parallel on the
-/// current rayon pool. `islands` must hold this step's links.
+/// current rayon pool. `islands` must hold this step's links; `buffers` serve a solve
+/// in place, `tasks` the batches.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_islands(
     s: &mut BodyStates,
     motion: Motions<'_>,
@@ -163,6 +193,8 @@ pub fn solve_islands(
     pairs: &mut [ContactPair],
     islands: &mut Islands,
     awake: &[bool],
+    buffers: &mut SolveBuffers,
+    tasks: &mut IslandTasks,
     p: &SolveParams,
 ) {
     let n = motion.bodies.len();
@@ -171,28 +203,28 @@ pub fn solve_islands(
         + pairs.iter().filter(|p| p.touching()).count();
     if work < MIN_PARALLEL_WORK {
         // Too little to share out: solve in place.
-        substeps::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, buffers, p);
         return;
     }
     let numbering = Numbering::new(islands, awake, n, s.len());
     if numbering.count < 2 {
         // One island: nothing to share out, solve in place.
-        substeps::solve(s, motion, joints, pairs, awake, p);
+        substeps::solve(s, motion, joints, pairs, awake, buffers, p);
         return;
     }
     let batch_of_island = numbering.deal(joints, pairs);
     let batch_of = |a: usize, b: usize| numbering.of(a, b).map(|t| batch_of_island[t] as usize);
-    let (mut tasks, local_of_moving) = new_tasks(&numbering, &batch_of_island, n, s.len());
-    gather(&mut tasks, &local_of_moving, joints, pairs, batch_of);
-    for task in &mut tasks {
+    let tasks = &mut tasks.0;
+    let local_of_moving = new_tasks(tasks, &numbering, &batch_of_island, n, s.len());
+    gather(tasks, &local_of_moving, joints, pairs, batch_of);
+    for task in tasks.iter_mut() {
         for &i in &task.bodies {
             task.states.push_copy(s, i);
         }
-        task.motion = task.bodies[..task.moving]
-            .iter()
-            .map(|&i| motion.bodies[i])
-            .collect();
-        task.awake = (0..task.bodies.len()).map(|l| l < task.moving).collect();
+        let moving = &task.bodies[..task.moving];
+        task.motion.extend(moving.iter().map(|&i| motion.bodies[i]));
+        task.awake
+            .extend((0..task.bodies.len()).map(|l| l < task.moving));
     }
 
     tasks.par_iter_mut().for_each(|t| {
@@ -205,23 +237,29 @@ pub fn solve_islands(
             &mut t.joints,
             &mut t.pairs,
             &t.awake,
+            &mut t.buffers,
             p,
         );
     });
     scatter(tasks, s, joints, pairs);
 }
 
-/// One task per batch, holding the batch's moving bodies in ascending world order (its
-/// islands interleaved), and each moving body's index in its task.
+/// One task per batch (the last step's, emptied), holding the batch's moving bodies in
+/// ascending world order (its islands interleaved); returns each moving body's index in
+/// its task.
 fn new_tasks(
+    tasks: &mut Vec<IslandTask>,
     numbering: &Numbering,
     batch_of_island: &[u32],
     n: usize,
     len: usize,
-) -> (Vec<IslandTask>, Vec<u32>) {
+) -> Vec<u32> {
     let batch_count = batch_of_island.last().map_or(0, |&b| b as usize + 1);
     let mut local_of_moving = vec![NONE; len];
-    let mut tasks: Vec<IslandTask> = (0..batch_count).map(|_| IslandTask::default()).collect();
+    tasks.resize_with(batch_count, IslandTask::default);
+    for task in tasks.iter_mut() {
+        task.clear();
+    }
     for (i, &island) in numbering.island_of_body[..n].iter().enumerate() {
         if island == NONE {
             continue;
@@ -230,10 +268,10 @@ fn new_tasks(
         local_of_moving[i] = task.bodies.len() as u32;
         task.bodies.push(i);
     }
-    for task in &mut tasks {
+    for task in tasks.iter_mut() {
         task.moving = task.bodies.len();
     }
-    (tasks, local_of_moving)
+    local_of_moving
 }
 
 /// Copies every joint and touching pair into its batch's task (a constraint's batch is
@@ -280,7 +318,7 @@ fn gather(
 /// Writes the solved tasks back: their moving bodies' states, their joints (keeping the
 /// world's body indices) and their pairs.
 fn scatter(
-    tasks: Vec<IslandTask>,
+    tasks: &mut [IslandTask],
     s: &mut BodyStates,
     joints: &mut JointSet,
     pairs: &mut [ContactPair],
@@ -294,12 +332,12 @@ fn scatter(
             }
         )*};
     }
-    for mut task in tasks {
+    for task in tasks {
         for (l, &i) in task.bodies[..task.moving].iter().enumerate() {
             s.copy_from(i, &task.states, l);
         }
         scatter_joints!(task, ball, hinge, universal, fixed, slider, spring);
-        for (mut pair, &(k, a, b)) in task.pairs.into_iter().zip(&task.pair_slots) {
+        for (mut pair, &(k, a, b)) in task.pairs.drain(..).zip(&task.pair_slots) {
             pair.a = a;
             pair.b = b;
             pairs[k] = pair;

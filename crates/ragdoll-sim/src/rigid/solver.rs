@@ -28,9 +28,9 @@ use super::contact::Contacts;
 use super::integrate::update_inertia;
 use super::island::Islands;
 use super::joint_set::JointSet;
-use super::parallel;
+use super::parallel::{self, IslandTasks};
 use super::soft::{Softness, StepContext};
-use super::substeps::{self, SolveParams};
+use super::substeps::{self, SolveBuffers, SolveParams};
 use crate::scene::Settings;
 use crate::timings::{PhaseClock, PhaseTimes};
 
@@ -47,6 +47,8 @@ pub fn step(
     dynamic: &[bool],
     settings: &Settings,
     time: f32,
+    buffers: &mut SolveBuffers,
+    tasks: &mut IslandTasks,
     times: &mut PhaseTimes,
 ) {
     // Phases as this solver runs them: collision (broad and narrow phase), islands (links
@@ -62,6 +64,10 @@ pub fn step(
     // island links, the solver's passes over every joint and pair and the sleep update
     // would cost a few ms a frame for nothing on a resting pile of 1000 humans.
     if !awake.contains(&true) {
+        // The solve's arrays are kept between busy steps; a world at rest gives them
+        // back (a step waking it pays for growing them once).
+        *buffers = SolveBuffers::default();
+        *tasks = IslandTasks::default();
         clock.finish(times);
         return;
     }
@@ -118,10 +124,20 @@ pub fn step(
                 &mut contacts.pairs,
                 islands,
                 awake,
+                buffers,
+                tasks,
                 &params,
             );
         } else {
-            substeps::solve(s, motion, joints, &mut contacts.pairs, awake, &params);
+            substeps::solve(
+                s,
+                motion,
+                joints,
+                &mut contacts.pairs,
+                awake,
+                buffers,
+                &params,
+            );
         }
     }
     clock.lap(times, "substeps");

@@ -6,7 +6,9 @@ use super::contact::{Contacts, GroundCollider, may_collide, shape_pose};
 use super::impulse::Bodies;
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::parallel::IslandTasks;
 use super::solver;
+use super::substeps::SolveBuffers;
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::metrics::potential_energy;
 use crate::motor::JointMotor;
@@ -43,6 +45,10 @@ pub struct MultibodyWorld {
     grab: Option<Grab>,
     /// The last step's phase times, for display only.
     phase_times: PhaseTimes,
+    /// The constraint arrays of the step's solve, and the islands' batches of a
+    /// parallel one, kept between steps.
+    buffers: SolveBuffers,
+    island_tasks: IslandTasks,
 }
 
 impl MultibodyWorld {
@@ -156,6 +162,8 @@ impl MultibodyWorld {
             time: 0.0,
             grab: None,
             phase_times: PhaseTimes::default(),
+            buffers: SolveBuffers::default(),
+            island_tasks: IslandTasks::default(),
         })
     }
 
@@ -296,6 +304,8 @@ impl Method for MultibodyWorld {
             &self.dynamic,
             &self.settings,
             self.time as f32,
+            &mut self.buffers,
+            &mut self.island_tasks,
             &mut self.phase_times,
         );
         self.bodies().advance_kinematic(dt);
