@@ -70,6 +70,8 @@ pub(crate) struct Scratch {
     levers: Vec<[Lever; 2]>,
     /// Per contact, the friction impulse of the velocity step so far.
     friction: Vec<Vec3>,
+    /// Per contact, the normal impulse of the velocity step so far.
+    normal: Vec<f32>,
 }
 
 /// A point given in world coordinates, attached to bone `i`'s particles.
@@ -288,11 +290,16 @@ impl Lever {
 ///
 /// **Tangential**: the part of the Coulomb cone the position step left unused (its
 /// friction `|λ_t| ≤ μ λ_n`, module doc) stops the points' relative tangential
-/// velocity, an impulse of at most `(μ λ_n − |λ_t|) / h` over the passes: the total
-/// friction of the substep stays within the cone, so a contact sliding at the kinetic
-/// rate (`|λ_t| = μ λ_n`) is left alone, and one that holds leaves without the slip the
+/// velocity, an impulse of at most `μ (λ_n / h + j_n) − |λ_t| / h` over the passes,
+/// `j_n` the normal impulse of this step so far: the cone is on the substep's net
+/// normal impulse, the push less what the normal step takes back, so the total
+/// friction of the substep stays within it. A contact sliding at the kinetic rate
+/// (`|λ_t| = μ λ_n`) is left alone, and one that holds leaves without the slip the
 /// position step's corrections left in its velocity (a 20 cm cube hitting a wall at
-/// 50 m/s came away rolling along it at 0.12 m/s, 0.79 rad/s).
+/// 50 m/s came away rolling along it at 0.12 m/s, 0.79 rad/s). On the push alone
+/// (`(μ λ_n − |λ_t|) / h`), a resting contact's push-out, taken back as velocity by
+/// the normal step, still widened the cone: friction no normal impulse carried kept
+/// the human's hands and forearms trembling at 0.1 m/s, and it never fell asleep.
 ///
 /// The velocities enter rigid (`shape_match::project_velocities`), so each change is
 /// an impulse `j` at the point on the rigid velocities, with the point's rigid
@@ -321,6 +328,8 @@ pub(crate) fn solve_velocities(
     }));
     scratch.friction.clear();
     scratch.friction.resize(contacts.len(), Vec3::ZERO);
+    scratch.normal.clear();
+    scratch.normal.resize(contacts.len(), 0.0);
     let n = contacts.len();
     for pass in 0..passes {
         let backwards = pass % 2 == 1;
@@ -342,29 +351,39 @@ pub(crate) fn solve_velocities(
                 continue;
             }
             if dv.abs() >= 1e-9 {
+                scratch.normal[k] += dv / w;
                 let j = c.n * (dv / w);
                 la.kick(&c.a, p, -j);
                 lb.kick(&c.b, p, j);
             }
-            let cap = (c.mu * c.lambda - c.lambda_t.length()) / h;
-            if cap <= 0.0 {
+            // The substep's net normal impulse is the position step's push `λ_n / h`
+            // plus this step's so far (negative where it takes back a push-out): the
+            // cone is on that, not on the push alone.
+            let cap =
+                (c.mu * (c.lambda / h + scratch.normal[k]) - c.lambda_t.length() / h).max(0.0);
+            let old = scratch.friction[k];
+            if cap == 0.0 && old == Vec3::ZERO {
                 continue;
             }
             let rel = c.b.velocity(p) - c.a.velocity(p);
             let slip = rel - c.n * c.n.dot(rel);
             let speed = slip.length();
-            if speed < 1e-9 {
-                continue;
+            let mut total = old;
+            if speed >= 1e-9 {
+                let d = slip / speed;
+                let w = la.inv_mass(d) + lb.inv_mass(d);
+                if w > 0.0 {
+                    total -= d * (speed / w);
+                }
             }
-            let d = slip / speed;
-            let w = la.inv_mass(d) + lb.inv_mass(d);
-            if w <= 0.0 {
-                continue;
-            }
-            let old = scratch.friction[k];
-            let mut total = old - d * (speed / w);
+            // A cone narrowed since an earlier pass (more push-out taken back) takes
+            // back the friction beyond it.
             if total.length_squared() > cap * cap {
-                total *= cap / total.length();
+                total = if cap > 0.0 {
+                    total * (cap / total.length())
+                } else {
+                    Vec3::ZERO
+                };
             }
             scratch.friction[k] = total;
             la.kick(&c.a, p, old - total);
