@@ -123,23 +123,13 @@ fn multibody_figures_stay_bounded_across_timestep_iteration_and_substep_combinat
 /// body above 15 m/s.
 #[test]
 fn rigid_frames_figures_stay_bounded_across_timestep_iteration_and_substep_combinations() {
+    let extra = (0.05, 200, 50, 3.0);
+    let combinations: Vec<_> = COMBINATIONS.into_iter().chain([extra]).collect();
     let (mut report, mut failures) = (Vec::new(), Vec::new());
     for name in FIGURES {
-        let base = scene(name);
-        let extra = (0.05, 200, 50, 3.0);
-        for (dt, iterations, substeps, seconds) in COMBINATIONS.into_iter().chain([extra]) {
-            let mut s = base.clone();
-            s.settings.timestep = dt;
-            s.settings.iterations = iterations;
-            s.settings.substeps = substeps;
-            let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");
-            let mut w = ParticleWorld::new(&s, ParticleSolver::RigidFrames).unwrap();
-            let top = fastest(&mut w, seconds, &what);
-            report.push(format!("{what}: top speed {top:.1} m/s"));
-            if top > MAX_SPEED {
-                failures.push(format!("{what}: a body reached {top} m/s"));
-            }
-        }
+        let (r, f) = particle_top_speeds(name, ParticleSolver::RigidFrames, &combinations);
+        report.extend(r);
+        failures.extend(f);
     }
     println!("{}", report.join("\n"));
     assert!(failures.is_empty(), "{failures:#?}");
@@ -149,23 +139,35 @@ fn rigid_frames_figures_stay_bounded_across_timestep_iteration_and_substep_combi
 /// substeps ([`XPBD_COMBINATIONS`]): each figure stays finite with no body above
 /// 15 m/s.
 fn xpbd_figure_stays_bounded_across_timestep_iteration_and_substep_combinations(name: &str) {
+    let (report, failures) = particle_top_speeds(name, ParticleSolver::Xpbd, &XPBD_COMBINATIONS);
+    println!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Runs the figure `name` with a particle `solver` at each (timestep, iterations,
+/// substeps, simulated seconds) of `combinations`: a report line per run, and a failure
+/// per run in which a body went above [`MAX_SPEED`].
+fn particle_top_speeds(
+    name: &str,
+    solver: ParticleSolver,
+    combinations: &[(f32, u32, u32, f32)],
+) -> (Vec<String>, Vec<String>) {
     let (mut report, mut failures) = (Vec::new(), Vec::new());
     let base = scene(name);
-    for (dt, iterations, substeps, seconds) in XPBD_COMBINATIONS {
+    for &(dt, iterations, substeps, seconds) in combinations {
         let mut s = base.clone();
         s.settings.timestep = dt;
         s.settings.iterations = iterations;
         s.settings.substeps = substeps;
         let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");
-        let mut w = ParticleWorld::new(&s, ParticleSolver::Xpbd).unwrap();
+        let mut w = ParticleWorld::new(&s, solver).unwrap();
         let top = fastest(&mut w, seconds, &what);
         report.push(format!("{what}: top speed {top:.1} m/s"));
         if top > MAX_SPEED {
             failures.push(format!("{what}: a body reached {top} m/s"));
         }
     }
-    println!("{}", report.join("\n"));
-    assert!(failures.is_empty(), "{failures:#?}");
+    (report, failures)
 }
 
 #[test]

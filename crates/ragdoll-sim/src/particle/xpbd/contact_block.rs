@@ -33,7 +33,7 @@ use super::super::bone::Bone;
 use super::contacts::Contact;
 use super::joints::{Anchor, move_linear};
 use super::particles::XParticles;
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DMat3, DVec3};
 
 /// Most points of a block; a longer manifold is solved in blocks of this many.
 pub(crate) const MAX_POINTS: usize = 8;
@@ -56,12 +56,10 @@ impl Body {
             Anchor::Bone(i, _) if p.moves(i as usize) => {
                 let i = i as usize;
                 let b = &bones[i];
-                let r = DMat3::from_quat(b.prev_rot.as_dquat());
-                let inv = DMat3::from_diagonal(Vec3::from(b.inv_inertia_local).as_dvec3());
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: r * inv * r.transpose(),
+                    inv_inertia: super::frame::inv_inertia_prev(b),
                     centre: p.centre_prev(i),
                 }
             }

@@ -55,6 +55,14 @@ pub(crate) fn combine64(x: &[DVec3; 4], w: &[f32; 4]) -> DVec3 {
     x[0] * w[0] as f64 + x[1] * w[1] as f64 + x[2] * w[2] as f64 + x[3] * w[3] as f64
 }
 
+/// The bone's world inverse inertia `R I⁻¹ Rᵀ` at the substep's start (`prev_rot`),
+/// where its particles are rigid: the one the joint and contact blocks move it by.
+pub(crate) fn inv_inertia_prev(bone: &Bone) -> DMat3 {
+    let r = DMat3::from_quat(bone.prev_rot.as_dquat());
+    let inv = DMat3::from_diagonal(Vec3::from(bone.inv_inertia_local).as_dvec3());
+    r * inv * r.transpose()
+}
+
 /// Reads `bone`'s frame from its particles `x` (module doc), its old orientation the
 /// starting guess.
 pub(crate) fn read(bone: &mut Bone, x: &[DVec3; 4]) {

@@ -56,12 +56,10 @@ impl Body {
         match s {
             Some(i) if p.moves(i) => {
                 let b = &bones[i];
-                let r = DMat3::from_quat(b.prev_rot.as_dquat());
-                let inv = DMat3::from_diagonal(Vec3::from(b.inv_inertia_local).as_dvec3());
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: r * inv * r.transpose(),
+                    inv_inertia: super::frame::inv_inertia_prev(b),
                     lever: end.prev_point64(p) - p.centre_prev(i),
                 }
             }
