@@ -212,23 +212,29 @@ pub(super) fn point<R: Real>(
     let (arm_a, ka) = a.point_block(local_a, aim);
     let (arm_b, kb) = b.point_block(local_b, aim);
     let k: [R; 6] = std::array::from_fn(|i| ka[i] + kb[i]);
-    let [xx, yy, zz, xy, xz, yz] = k;
-    // The adjugate of the symmetric `K`, and its determinant.
-    let (axx, ayy, azz) = (yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy);
-    let (axy, axz, ayz) = (xz * yz - xy * zz, xy * yz - xz * yy, xy * xz - xx * yz);
-    let det = xx * axx + xy * axy + xz * axz;
+    let (adj_delta, det) = adjugate_times(k, delta);
     let mask = mask & delta.length_squared().ge(R::splat(1e-18)) & det.abs().gt(R::splat(1e-30));
     if !R::any(mask) {
         return;
     }
-    let inv = R::ONE / det;
-    let impulse = V3 {
-        x: (axx * delta.x + axy * delta.y + axz * delta.z) * inv,
-        y: (axy * delta.x + ayy * delta.y + ayz * delta.z) * inv,
-        z: (axz * delta.x + ayz * delta.y + azz * delta.z) * inv,
-    };
+    let impulse = adj_delta * (R::ONE / det);
     a.apply_point(mask, arm_a, impulse);
     b.apply_point(mask, arm_b, -impulse);
+}
+
+/// `adj(K) v` and `det K` for the symmetric 3×3 `K` given as `[xx, yy, zz, xy, xz, yz]`:
+/// `K⁻¹ v = adj(K) v / det K`, the anchor's solve in [`point`] and [`angular_held`].
+fn adjugate_times<R: Real>(k: [R; 6], v: V3<R>) -> (V3<R>, R) {
+    let [xx, yy, zz, xy, xz, yz] = k;
+    let (axx, ayy, azz) = (yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy);
+    let (axy, axz, ayz) = (xz * yz - xy * zz, xy * yz - xz * yy, xy * xz - xx * yz);
+    let det = xx * axx + xy * axy + xz * axz;
+    let adj_v = V3 {
+        x: axx * v.x + axy * v.y + axz * v.z,
+        y: axy * v.x + ayy * v.y + ayz * v.z,
+        z: axz * v.x + ayz * v.y + azz * v.z,
+    };
+    (adj_v, det)
 }
 
 /// [`angular`] with the joint's anchor held: turns `a` relative to `b` by the rotation
@@ -268,19 +274,12 @@ pub(super) fn angular_held<R: Real>(
     let g =
         a.rot.rotate(ta).cross(a.rot.rotate(arm_a)) + b.rot.rotate(tb).cross(b.rot.rotate(arm_b));
     let k: [R; 6] = std::array::from_fn(|i| ka[i] + kb[i]);
-    let [xx, yy, zz, xy, xz, yz] = k;
-    let (axx, ayy, azz) = (yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy);
-    let (axy, axz, ayz) = (xz * yz - xy * zz, xy * yz - xz * yy, xy * xz - xx * yz);
-    let det = xx * axx + xy * axy + xz * axz;
+    let (adj_g, det) = adjugate_times(k, g);
     let w = wa + wb;
     let solvable = det.abs().gt(R::splat(1e-30));
     let inv = R::select(solvable, R::ONE / det, R::ZERO);
     // `K⁻¹ g` by the adjugate.
-    let v = V3 {
-        x: (axx * g.x + axy * g.y + axz * g.z) * inv,
-        y: (axy * g.x + ayy * g.y + ayz * g.z) * inv,
-        z: (axz * g.x + ayz * g.y + azz * g.z) * inv,
-    };
+    let v = adj_g * inv;
     let free = w - g.dot(v);
     let held = mask & angle2.ge(R::splat(1e-18)) & solvable & free.gt(w * R::splat(1e-4));
     if R::any(held) {

@@ -149,7 +149,7 @@ fn pull_rigid(
             Anchor::Bone(i, _) if p.moves(i as usize) => {
                 let i = i as usize;
                 let rn = (e.prev_point64(p) - p.centre_prev(i)).as_vec3().cross(n);
-                let (wr, turn) = inertia_lever_start(p, bones, Some(i), rn);
+                let (wr, turn) = inertia_lever(p, bones, Some(i), rn, |b| b.prev_rot);
                 Some((i, 1.0 / bones[i].mass + wr, turn))
             }
             _ => None,
@@ -167,21 +167,6 @@ fn pull_rigid(
             let shift = n * (sign * dl / bones[i].mass);
             move_linear(p, bones, i, shift, turn * (sign * dl));
         }
-    }
-}
-
-/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for `n` with the frame at the substep's
-/// start, 0 if it takes no correction.
-#[inline]
-fn inertia_lever_start(p: &XParticles, bones: &[Bone], s: Side, n: Vec3) -> (f32, Vec3) {
-    match s {
-        Some(i) if p.moves(i) => {
-            let b = &bones[i];
-            let local = b.prev_rot.inverse() * n;
-            let turn = b.prev_rot * (Vec3::from(b.inv_inertia_local) * local);
-            (n.dot(turn), turn)
-        }
-        _ => (0.0, Vec3::ZERO),
     }
 }
 
@@ -204,14 +189,22 @@ pub(super) fn move_linear(
     b.rot = (Quat::from_scaled_axis(omega) * b.rot).normalize();
 }
 
-/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for `n`, 0 if it takes no correction.
+/// `nᵀ I⁻¹ n` and `I⁻¹ n` (world) of bone `i` for `n`, with the bone's frame `frame`
+/// reads (now, or at the substep's start), 0 if it takes no correction.
 #[inline]
-fn inertia_lever(p: &XParticles, bones: &[Bone], s: Side, n: Vec3) -> (f32, Vec3) {
+fn inertia_lever(
+    p: &XParticles,
+    bones: &[Bone],
+    s: Side,
+    n: Vec3,
+    frame: impl Fn(&Bone) -> Quat,
+) -> (f32, Vec3) {
     match s {
         Some(i) if p.moves(i) => {
             let b = &bones[i];
-            let local = b.rot.inverse() * n;
-            let turn = b.rot * (Vec3::from(b.inv_inertia_local) * local);
+            let rot = frame(b);
+            let local = rot.inverse() * n;
+            let turn = rot * (Vec3::from(b.inv_inertia_local) * local);
             (n.dot(turn), turn)
         }
         _ => (0.0, Vec3::ZERO),
@@ -252,8 +245,8 @@ pub(crate) fn turn(
         return;
     }
     let n = dphi / c;
-    let (wa, ta) = inertia_lever(p, bones, a, n);
-    let (wb, tb) = inertia_lever(p, bones, b, n);
+    let (wa, ta) = inertia_lever(p, bones, a, n, |b| b.rot);
+    let (wb, tb) = inertia_lever(p, bones, b, n, |b| b.rot);
     let den = wa + wb + alpha_tilde;
     if den <= 0.0 {
         return;
