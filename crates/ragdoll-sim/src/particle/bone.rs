@@ -522,9 +522,12 @@ pub(crate) fn positional_along(
 /// Gauss–Seidel passes leave part of each joint's correction undone, which then may
 /// add energy as well as take it (a freely swinging chain of five links gained 3.7 %
 /// of its energy scale with every pass aimed from the start). So the first pass aims
-/// from the start and the last projects from the end: the residual the first leaves
-/// is taken out by a projection, which can only take energy, and on a single joint the
-/// first pass has already closed the gap, so the projection has nothing left to turn.
+/// from the start and the later ones project from the end: the residual the first
+/// leaves is taken out by projections, which can only take energy, and on a single
+/// joint the first pass has already closed the gap, so the projections have nothing
+/// left to turn. (With five passes on the lab humanoid, all but the last aimed from the
+/// start gained 1.2 % of its energy scale in the median over 72 starts, only the first
+/// 0.7 %.)
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Aim {
     /// Arms from the frame at the substep's start, `R₀ p = R d⁻¹ p` (`Bone::dturn`).
@@ -534,9 +537,10 @@ pub(crate) enum Aim {
 }
 
 impl Aim {
-    /// The aim of pass `pass` of `passes`: from the start, the last from the end.
+    /// The aim of pass `pass` of `passes`: the first from the start, the later ones
+    /// from the end (a single pass from the end).
     pub fn of_pass(pass: u32, passes: u32) -> Aim {
-        if pass + 1 < passes {
+        if pass == 0 && passes > 1 {
             Aim::Start
         } else {
             Aim::End

@@ -19,7 +19,7 @@
 //! Energy: a free bone keeps its energy and angular momentum (no damping of its own);
 //! every other step is a constraint correction or a dissipative velocity change. A
 //! joint's anchor is corrected in one 3×3 solve aimed from the substep's start in the
-//! first pass and projected from its end in the last (`bone::Aim`): a frictionless hinge
+//! first pass and projected from its end in the later ones (`bone::Aim`): a frictionless hinge
 //! pendulum keeps its exact period and loses 0.1–0.2 % of its swing energy in 10 s at
 //! 20 substeps a frame, where a projection alone loses 8.6 %. The only source of energy
 //! (push-out from a penetration) is cancelled by the velocity pass.
@@ -385,7 +385,21 @@ const DETECTION_FAT: f32 = 0.01;
 /// way and its joint pulls it back; a second pass halves the gap an impact leaves
 /// (human, scene 8: 4.0 → 1.9 mm), and lets friction correct the slip the joints
 /// brought, without which a resting figure creeps.
-const PASSES: u32 = 2;
+///
+/// A figure that lands on a limb needs more: a shin on the ground with the knee at its
+/// stop carries the torso, and each pass the ground's contact (its friction pinning the
+/// foot, its normal lifting the shin) moves the light shin, and the knee, the hip and
+/// the heavy torso behind them pull it back by nearly as much. What the passes leave of
+/// that fight is a penetration the next substep pushes out as a velocity, or a turn of
+/// the limb read as spin (a forearm under the chest spun up to 200 rad/s in one frame
+/// with two passes). On the lab humanoid (`tests/doom3_mod.rs`), median (worst) over
+/// the 72 starts of `examples/ensemble.rs` with 2 / 4 / 5 / 6 passes: energy gain 5.1
+/// (32) / 1.2 (8.6) / 0.7 (7.0) / 1.5 (12) % of the energy scale, joint gap 8.3 (19) /
+/// 5.5 (9.7) / 3.1 (7.2) / 3.8 (13) mm, penetration 13.7 (43) / 3.4 (12) / 2.7 (4.5) /
+/// 2.3 (20) mm; the next 72 starts (`--from 24`) agree (2 passes 4.5 %, 8.6 mm,
+/// 12.7 mm; 5 passes 0.95 %, 3.6 mm, 2.7 mm). Only the first pass aims the joints from
+/// the substep's start (`Aim::of_pass`).
+const PASSES: u32 = 5;
 
 /// Passes of the contact velocity solve: one pass over a manifold leaves part of the
 /// push-out velocity of the points solved first.
@@ -440,8 +454,8 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 };
             }
         }
-        // 3. constraints: contacts then joints, twice (the joints' anchors aimed from the
-        // substep's start, then from its end: `Aim`)
+        // 3. constraints: contacts then joints, `PASSES` times (the joints' anchors aimed
+        // from the substep's start, then from its end: `Aim`)
         for pass in 0..PASSES {
             contact_pass(p.bones, p.manifolds, p.points, push_out);
             p.lockstep
