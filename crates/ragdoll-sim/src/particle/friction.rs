@@ -209,8 +209,31 @@ impl Block {
     /// left moving apart faster than asked). `lower` all zero is the position pass's
     /// contact problem; the velocity pass solves for the change of an accumulated
     /// impulse whose bound it shifts into `lower`.
+    ///
+    /// Run for the block's size as a constant ([`Block::solve_k`]): a sweep is a chain
+    /// of a few multiply–adds a row, and with `k` known the loops unroll and the rows'
+    /// bounds checks go.
     fn solve(&self, rhs: &[f32], lower: &[f32]) -> [f32; BLOCK] {
-        let k = self.k;
+        match self.k {
+            0 => [0.0; BLOCK],
+            1 => self.solve_k::<1>(rhs, lower),
+            2 => self.solve_k::<2>(rhs, lower),
+            3 => self.solve_k::<3>(rhs, lower),
+            4 => self.solve_k::<4>(rhs, lower),
+            5 => self.solve_k::<5>(rhs, lower),
+            6 => self.solve_k::<6>(rhs, lower),
+            7 => self.solve_k::<7>(rhs, lower),
+            8 => self.solve_k::<8>(rhs, lower),
+            k => unreachable!("a block of {k} points, more than {BLOCK}"),
+        }
+    }
+
+    /// [`Block::solve`] of a block of `K` points (`K == self.k`).
+    #[inline(always)]
+    fn solve_k<const K: usize>(&self, rhs: &[f32], lower: &[f32]) -> [f32; BLOCK] {
+        debug_assert_eq!(K, self.k, "a block of {} points", self.k);
+        let k = K;
+        let (rhs, lower) = (&rhs[..k], &lower[..k]);
         let mut lambda = [0.0f32; BLOCK];
         for _ in 0..BLOCK_SWEEPS {
             let mut change = 0.0f32;
@@ -443,9 +466,12 @@ pub(crate) fn solve_velocities(
             k += 1;
         }
     }
+    // The twist's levers, formed at the first point that twists: they read the bones'
+    // frames and inertia, which the velocity pass does not change.
+    let mut turn = None;
     if k <= 1 || k > BLOCK {
         for c in points {
-            solve_velocity(bones, m, c, h, restitution_threshold);
+            solve_velocity(bones, m, c, h, restitution_threshold, &mut turn);
         }
         return;
     }
@@ -469,7 +495,7 @@ pub(crate) fn solve_velocities(
     }
     for (&i, l) in active[..k].iter().zip(lambda) {
         points[i].lambda_v += l;
-        solve_twist(bones, m, &points[i], h);
+        solve_twist(bones, m, &points[i], h, &mut turn);
     }
 }
 
@@ -482,6 +508,7 @@ fn solve_velocity(
     c: &mut ContactPoint,
     h: f32,
     restitution_threshold: f32,
+    turn: &mut Option<Correction>,
 ) {
     if c.lambda_n <= 0.0 {
         return;
@@ -498,12 +525,20 @@ fn solve_velocity(
         corr.apply_velocity(bones, -push);
         c.lambda_v += push;
     }
-    solve_twist(bones, m, c, h);
+    solve_twist(bones, m, c, h, turn);
 }
 
 /// Torsional friction of one contact point: twist about the normal, capped by
-/// `μ r λ_n / h` ([`PATCH_RADIUS`]).
-fn solve_twist(bones: &mut [Bone], m: &Manifold, c: &ContactPoint, h: f32) {
+/// `μ r λ_n / h` ([`PATCH_RADIUS`]). `turn` holds the manifold's turning levers
+/// ([`Correction::turning`]) once a point has formed them: the same for each of its
+/// points while only velocities change.
+fn solve_twist(
+    bones: &mut [Bone],
+    m: &Manifold,
+    c: &ContactPoint,
+    h: f32,
+    turn: &mut Option<Correction>,
+) {
     let a = Some(m.a);
     let twist = |bones: &[Bone], s: Side| match s {
         Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
@@ -512,7 +547,7 @@ fn solve_twist(bones: &mut [Bone], m: &Manifold, c: &ContactPoint, h: f32) {
     let spin = twist(bones, a) - twist(bones, m.b);
     if spin != 0.0 {
         // Both levers `I⁻¹ n` formed once, for the inverse mass and the impulse.
-        let turn = Correction::turning(bones, a, m.b, m.n);
+        let turn = *turn.get_or_insert_with(|| Correction::turning(bones, a, m.b, m.n));
         if turn.w > 0.0 {
             let cap = m.mu * PATCH_RADIUS * c.lambda_n / h;
             let l = spin.signum() * (spin.abs() / turn.w).min(cap);

@@ -24,7 +24,7 @@
 //! 20 substeps a frame, where a projection alone loses 8.6 %. The only source of energy
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
-use super::bone::{Aim, Bone};
+use super::bone::{Aim, Bone, advance_moving};
 use super::contacts::{
     BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, ground_plane,
     point_runs, reaches_ground, shape_pair,
@@ -424,10 +424,8 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             b.prev_rot = b.rot;
             b.dturn = Quat::IDENTITY;
             b.dcom = Vec3A::ZERO;
-            if !b.is_static() {
-                b.advance(h, s.gravity);
-            }
         }
+        advance_moving(p.bones, h, s.gravity);
         // A new substep for every contact point; the relative normal velocity before
         // the solve for restitution, on manifolds that bounce at all: with `e = 0` the
         // velocity pass's target is zero whatever the approach (every shipped scene),
