@@ -139,18 +139,17 @@ fn the_figure_is_built_from_the_af_pose_frame() {
 ///
 /// Multibody: it keeps its energy and limits, but lets the folded shins and the upper arm
 /// under the landing chest sink (a 2 kg body carrying 25 kg to the ground through a
-/// joint), and a joint opens in the jolt of the knee's stop. Nor does it fall asleep: at
-/// rest its bone-model limbs' spins still change by about 0.02 rad/s a frame, an angular
-/// acceleration above the file's `suspendSpeed` 60°/s².
+/// joint: the soft contact row under the light body gives way as a spring of its
+/// effective mass), and a joint opens in the jolt of the knee's stop.
 ///
 /// One start says little on a landing this chaotic; over 72 starts shifted by 0–23 mm
 /// (`cargo run --release -p ragdoll-sim --example ensemble -- lab-human [--multibody]`),
 /// median (worst): rigid-frames energy gain 0.7 % (7.0 %), joint gap 3.1 mm (7.2),
-/// penetration 2.7 mm (4.5), asleep in 72 of 72; multibody energy gain 0.6 % (4.5 %),
-/// joint gap 4.9 mm (8.6), penetration 14.4 mm (29.5), asleep in none.
+/// penetration 2.7 mm (4.5), asleep in 72 of 72; multibody energy gain 0.3 % (1.0 %),
+/// joint gap 5.4 mm (6.9), penetration 14.3 mm (25.8), asleep in 53 of 72.
 const KNOWN_GAPS: [(&str, &str, f64); 2] = [
-    ("multibody", "max_penetration_m", 0.0101),
-    ("multibody", "max_joint_gap_m", 0.0063),
+    ("multibody", "max_penetration_m", 0.0143),
+    ("multibody", "max_joint_gap_m", 0.0064),
 ];
 
 /// Runs 10 s from the load pose, which is recorded too (as `stats` does): energy the
@@ -227,6 +226,18 @@ fn both_methods_hold_the_scene_thresholds_on_the_mod_humanoid() {
     }
     println!("{}", report.join("\n"));
     assert!(failures.is_empty(), "{failures:#?}\n{}", report.join("\n"));
+}
+
+/// The figure comes to rest and falls asleep under the multibody, by the file's own
+/// `suspendSpeed` and `noMoveTime` (the scene threshold: a figure must sleep). Its limbs
+/// are bone models, thin across: a joint friction couple that turned them about their
+/// centres of mass kept their spins changing faster than `suspendSpeed` allows.
+#[test]
+fn the_multibody_puts_the_mod_humanoid_to_sleep() {
+    let sc = figure(true);
+    let mut w = MultibodyWorld::new(&sc).unwrap();
+    let st = run(&mut w, &sc);
+    assert!(st.asleep_at_s.is_some(), "still awake after 10 s");
 }
 
 /// The shape-frame poses of a method's bodies (the frame the rig's load poses use).

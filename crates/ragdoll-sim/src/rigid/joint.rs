@@ -643,52 +643,100 @@ impl FrictionMotor {
         }
     }
 
-    /// [`FrictionMotor::solve`] of a motor with a positive cap.
-    ///
-    /// The impulse is a couple, `l` on a and `−l` on b. When the joint's point rows are
-    /// solved exactly right after ([`super::joint_tree`]), a couple turns each body about
-    /// the anchor, not about its centre of mass: the point rows move the centre to keep
-    /// the anchor. So the effective inertia is then each body's about the anchor,
-    /// `I + m (|r|² 1 − r rᵀ)` (parallel axes), and a joint to a static body is held in
-    /// one update. With the inertias about the centres of mass, a bob on a frictional
-    /// hinge (`I_cm ≪ m r²`) took a few hundred alternations of couple and point rows
-    /// to hold, and slipped meanwhile.
+    /// [`FrictionMotor::solve`] of a motor with a positive cap. The impulse is a couple,
+    /// `l` on a and `−l` on b; a joint whose point rows are solved by Gauss–Seidel gets
+    /// it about the centres of mass, with the effective mass `(I_a⁻¹ + I_b⁻¹)⁻¹`.
     fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, point: &PointPart) {
-        let sum = if point.direct {
-            about_anchor(s, f.a, point.ra()) + about_anchor(s, f.b, point.rb())
-        } else {
-            f.inv_inertia_sum(s)
-        };
-        let Some(k_inv) = invert(sum) else {
+        if point.direct {
+            self.hold_with_point(f, s, ctx, point);
+            return;
+        }
+        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
             return;
         };
         let old = self.impulse;
-        let mut new = old - k_inv * f.rel_ang_vel(s);
-        let cap = self.max_torque * ctx.h;
-        self.holding = new.length_squared() <= cap * cap;
-        if !self.holding {
-            // `v · (1/|v|)`, as `Vec3::normalize` rounds it (`Vec3A::normalize` divides
-            // each lane by `|v|`, which rounds differently).
-            new = new * new.length_recip() * cap;
-        }
+        let new = self.clamped(old - k_inv * f.rel_ang_vel(s), ctx);
         self.impulse = new;
         f.apply_angular(s, new - old);
     }
+
+    /// `new` within the cap `max_torque · h`; whether it was already is `holding`.
+    fn clamped(&mut self, new: Vec3A, ctx: &StepContext) -> Vec3A {
+        let cap = self.max_torque * ctx.h;
+        self.holding = new.length_squared() <= cap * cap;
+        if self.holding {
+            new
+        } else {
+            // `v · (1/|v|)`, as `Vec3::normalize` rounds it (`Vec3A::normalize` divides
+            // each lane by `|v|`, which rounds differently).
+            new * new.length_recip() * cap
+        }
+    }
+
+    /// The friction of a joint whose point rows are solved exactly
+    /// ([`super::joint_tree`]): the couple and the impulse `p` at the anchor that keeps
+    /// the anchors' relative velocity where it was, solved together, so the couple turns
+    /// the two bodies about their anchor as the exact point rows will have them turn.
+    ///
+    /// With `K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b` (the anchor's
+    /// response to `p`) and `C = r̂_b I_b⁻¹ + r̂_a I_a⁻¹` (its response to `l`), `p =
+    /// −K⁻¹ C l`, and the friction row's effective mass is the Schur complement's
+    /// inverse, `(I_a⁻¹ + I_b⁻¹ − Cᵀ K⁻¹ C)⁻¹`. For a joint to a static body that is
+    /// the body's inertia about the anchor, `I + m (|r|² 1 − r rᵀ)` (parallel axes): a
+    /// bob on a frictional hinge (`I_cm ≪ m r²`) is held in one update, where the
+    /// inertias about the centres of mass took a few hundred alternations of couple and
+    /// point rows.
+    ///
+    /// A couple alone, weighed with the inertias about the anchor, would turn each body
+    /// about its centre of mass until the tree solve: the limit rows and the other
+    /// joints' friction of the same iteration would read a relative spin up to
+    /// `m r² / I_cm` times the one meant (a thin limb's roll) and answer it. On a resting
+    /// figure of bone-model limbs (the lab humanoid, `tests/doom3_mod.rs`) the friction
+    /// then flips from one side of its cap to the other within a substep and the limbs'
+    /// spins change by ~0.02 rad/s a frame, above `suspendSpeed`'s 60°/s²: the figure
+    /// never sleeps.
+    fn hold_with_point(
+        &mut self,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        point: &PointPart,
+    ) {
+        let (ra, rb) = (point.ra(), point.rb());
+        let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
+        let (sa, sb) = (skew(ra), skew(rb));
+        // K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b: the anchor's response.
+        let k = Mat3A::from_diagonal(glam::Vec3::splat(s.inv_mass[f.a] + s.inv_mass[f.b]))
+            - sa * ia * sa
+            - sb * ib * sb;
+        let Some(k_inv) = invert(k) else {
+            return;
+        };
+        // C: the anchor's response to the couple; its transpose, the couple row's
+        // response to an impulse at the anchor.
+        let c = sb * ib + sa * ia;
+        let schur = ia + ib - c.transpose() * k_inv * c;
+        let Some(m) = invert(schur) else {
+            return;
+        };
+        let old = self.impulse;
+        let new = self.clamped(old - m * f.rel_ang_vel(s), ctx);
+        let dl = new - old;
+        let p = -(k_inv * (c * dl));
+        self.impulse = new;
+        f.apply_angular(s, dl);
+        s.apply_impulse(f.b, rb, p);
+        s.apply_impulse(f.a, ra, -p);
+    }
 }
 
-/// The world inverse inertia of body `i` about the point at offset `r` from its centre
-/// of mass, `(I + m (|r|² 1 − r rᵀ))⁻¹`; zero for a body that does not move.
-fn about_anchor(s: &BodyStates, i: usize, r: Vec3A) -> Mat3A {
-    if !(s.inv_mass[i] > 0.0) {
-        return Mat3A::ZERO;
-    }
-    let Some(inertia) = invert(s.inv_inertia[i]) else {
-        return s.inv_inertia[i];
-    };
-    let m = 1.0 / s.inv_mass[i];
-    let shift = Mat3A::from_diagonal(glam::Vec3::splat(r.length_squared()))
-        - Mat3A::from_cols(r * r.x, r * r.y, r * r.z);
-    invert(inertia + shift * m).unwrap_or(s.inv_inertia[i])
+/// The cross-product matrix `r̂`, `r̂ x = r × x`.
+fn skew(r: Vec3A) -> Mat3A {
+    Mat3A::from_cols(
+        Vec3A::new(0.0, r.z, -r.y),
+        Vec3A::new(-r.z, 0.0, r.x),
+        Vec3A::new(r.y, -r.x, 0.0),
+    )
 }
 
 /// Wraps an angle into (−π, π].
