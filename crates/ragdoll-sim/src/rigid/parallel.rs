@@ -163,7 +163,7 @@ impl IslandTask {
         }
         clear_joints!(ball, hinge, universal, fixed, slider, spring);
         let j = &mut self.joints;
-        (j.lanes, j.direct, j.tree_points) = (None, false, 0);
+        (j.lanes, j.direct, j.tree_points, j.live_points) = (None, false, 0, 0);
         self.pairs.clear();
         self.pair_slots.clear();
     }
