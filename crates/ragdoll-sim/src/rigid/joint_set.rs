@@ -32,14 +32,24 @@ pub struct JointSet {
     pub slider: Vec<SliderJoint>,
     /// Springs.
     pub spring: Vec<SpringJoint>,
-    /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), built with the
-    /// set; `None` (and in the arrays gathered for one island) solves each joint alone.
+    /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), planned by the
+    /// first solve of the whole set that would use them ([`JointSet::prepare`]); `None`
+    /// (and in the arrays gathered for one island) solves each joint alone.
     pub lanes: Option<JointLanes>,
+    /// The static anchor's index while the lanes are still to be planned. A world whose
+    /// trees hold most point rows (a pile of humans, whose necks join light heads to
+    /// heavy chests) never solves in lanes, and the bundles cost about as many bytes as
+    /// the joints themselves; the lanes hold no state between steps (they take the
+    /// joints' impulses at each `prepare`), so planned late they are planned the same.
+    pub lanes_to_plan: Option<usize>,
     /// Some point rows are solved by [`super::joint_tree`] this solve: the lanes leave
     /// those rows to the trees (set by `JointTrees::build` before the substeps).
     pub direct: bool,
     /// How many joints' point rows the trees of this solve hold (set with `direct`).
     pub tree_points: usize,
+    /// How many ball joints, hinges and universal joints touch a moving body this solve
+    /// (set with `direct`).
+    pub live_points: usize,
 }
 
 /// Runs `$body` with `$j` bound to every joint, mutably (fields, not the solve trait).
@@ -221,7 +231,7 @@ impl JointSet {
                 }
             }
         }
-        set.lanes = JointLanes::plan(&set.ball, &set.hinge, s.len(), anchor);
+        set.lanes_to_plan = Some(anchor);
         set
     }
 
@@ -243,6 +253,12 @@ impl JointSet {
     /// The first substep's preparation of joints touching an awake body (the lanes also
     /// take the joints' impulses, see [`JointSet::end_substeps`]).
     pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
+        if self.live_points > 0
+            && !self.trees_own_most()
+            && let Some(anchor) = self.lanes_to_plan.take()
+        {
+            self.lanes = JointLanes::plan(&self.ball, &self.hinge, s.len(), anchor);
+        }
         let (balls, hinges) = self.in_lanes();
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
             lanes.prepare(&mut self.ball, &mut self.hinge, s, awake);
@@ -317,12 +333,13 @@ impl JointSet {
     }
 
     /// Whether the trees of this solve hold the point rows of most ball joints and
-    /// hinges (a pile of figures each with a heavy limb): the lanes then stand aside,
-    /// since the rows left to them (limits, alignments) do not pay for gathering and
-    /// scattering their bundles' bodies (measured on the pile of humans: 270 figures
-    /// ran about a quarter slower with the lanes around their trees).
+    /// hinges that move (a pile of figures each with a heavy limb, some of them
+    /// asleep): the lanes then stand aside, since the rows left to them (limits,
+    /// alignments) do not pay for gathering and scattering their bundles' bodies
+    /// (measured on the pile of humans: 270 figures ran about a quarter slower with the
+    /// lanes around their trees).
     pub(super) fn trees_own_most(&self) -> bool {
-        2 * self.tree_points > self.ball.len() + self.hinge.len()
+        2 * self.tree_points > self.live_points
     }
 
     /// Whether the ball joints and the hinges are solved in lanes: when there are lanes
@@ -343,6 +360,9 @@ impl JointSet {
             }
         };
         for_each_joint_mut!(self, j => fix(&mut j.frame.b));
+        if let Some(anchor) = &mut self.lanes_to_plan {
+            fix(anchor);
+        }
         if let Some(lanes) = &mut self.lanes {
             lanes.retarget_anchor(old, new);
         }

@@ -163,6 +163,9 @@ pub struct JointTrees {
     /// Whether the last factorisation was usable (finite); otherwise the joints of the
     /// trees fall back to Gauss–Seidel for the substep.
     ok: bool,
+    /// How many ball joints, hinges and universal joints touch a moving body (see
+    /// `JointSet::live_points`).
+    live_points: usize,
     /// What the trees were built from: per body, its inverse mass when it moves, zero
     /// otherwise; then, per ball joint, hinge and universal joint in that order, its two
     /// bodies. The trees depend on nothing else, so while this is unchanged (every
@@ -246,6 +249,7 @@ impl JointTrees {
             }
             joints.direct = !self.joints.is_empty();
             joints.tree_points = self.joints.len();
+            joints.live_points = self.live_points;
             self.ok = true;
             return;
         }
@@ -254,6 +258,7 @@ impl JointTrees {
         self.bodies = built.bodies;
         self.joints = built.joints;
         self.ok = built.ok;
+        self.live_points = built.live_points;
         self.built_from.clear();
         self.built_from.extend(masses);
         self.built_joints = pairs(joints);
@@ -272,6 +277,7 @@ impl JointTrees {
         };
         // Tree joints and, per moving body, the tree joints acting on it (in order).
         let mut chosen: Vec<(JointRef, usize, usize)> = Vec::new();
+        let mut live_points = 0;
         for r in all_refs(joints) {
             let (f, point) = match r {
                 JointRef::Ball(i) => (joints.ball[i].frame, &mut joints.ball[i].point),
@@ -283,6 +289,7 @@ impl JointTrees {
             point.direct = false;
             point.in_tree = false;
             let (ma, mb) = (moving(f.a), moving(f.b));
+            live_points += usize::from(ma || mb);
             let accept = match (ma, mb) {
                 (true, true) => {
                     let (ra, rb) = (sets.find(f.a), sets.find(f.b));
@@ -317,6 +324,7 @@ impl JointTrees {
         }
         let mut trees = JointTrees {
             ok: true,
+            live_points,
             ..JointTrees::default()
         };
         // Only trees with a large mass ratio across a joint are solved directly.
@@ -344,6 +352,7 @@ impl JointTrees {
         });
         joints.direct = !chosen.is_empty();
         joints.tree_points = chosen.len();
+        joints.live_points = live_points;
         if chosen.is_empty() {
             return trees;
         }

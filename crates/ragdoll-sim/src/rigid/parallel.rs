@@ -22,6 +22,7 @@ use super::body::{BodyMotion, BodyStates, Motions};
 use super::contact::ContactPair;
 use super::island::Islands;
 use super::joint_set::JointSet;
+use super::joint_tree::JointTrees;
 use super::substeps::{self, SolveBuffers, SolveParams};
 use rayon::prelude::*;
 
@@ -52,11 +53,79 @@ struct JointSlots {
     spring: Vec<usize>,
 }
 
-/// The batches of the last parallel solve, kept with their arrays so that the next
-/// step gathers into arrays already grown (and a batch holding the same islands keeps
-/// its joint trees, [`super::joint_tree::JointTrees::rebuild`]).
+/// What a parallel solve keeps between steps, so that once grown a step allocates
+/// little: the batches' contents, one gathered batch per thread, and each batch's joint
+/// trees.
+///
+/// The batches are solved in rounds of one batch per thread: a round gathers its
+/// batches into the threads' arrays, solves them at once and scatters them back. So the
+/// gathered copies (states, constraints, solve buffers) are as large as the largest
+/// batches, not as the world: a batch is a share of the step's work over
+/// `BATCHES_PER_THREAD` times the threads. Each round's batches are of about equal work
+/// (they were dealt so), so a round's threads finish at about the same time.
 #[derive(Default)]
-pub struct IslandTasks(Vec<IslandTask>);
+pub struct IslandTasks {
+    plan: BatchPlan,
+    /// One batch's arrays per thread of the pool, refilled every round.
+    scratch: Vec<IslandTask>,
+    /// Per batch: its joint trees, kept so that a batch holding the same islands next
+    /// step keeps them ([`super::joint_tree::JointTrees::rebuild`]); swapped into the
+    /// thread's arrays for its solve.
+    trees: Vec<JointTrees>,
+    /// Per world body: its index in its batch's arrays while the batch is gathered,
+    /// `NONE` for a body that does not move.
+    local_of_moving: Vec<u32>,
+}
+
+/// The step's batches: per batch, its moving bodies, joints and touching pairs in world
+/// order, each list `start[b]..start[b + 1]` of its array.
+#[derive(Default)]
+struct BatchPlan {
+    body_start: Vec<u32>,
+    bodies: Vec<u32>,
+    /// Joints numbered across the types in the order ball, hinge, universal, fixed,
+    /// slider, spring ([`JointSet::for_each_pair`]'s).
+    joint_start: Vec<u32>,
+    joints: Vec<u32>,
+    pair_start: Vec<u32>,
+    pairs: Vec<u32>,
+    /// Each item's batch (`NONE`: none), while one of the lists is made.
+    batch_of_item: Vec<u32>,
+}
+
+/// Lists the items of `batch_of_item` by batch (`batches` of them), each batch's items
+/// in ascending order: batch `b`'s are `out[start[b]..start[b + 1]]` (a counting sort).
+fn group_by_batch(batch_of_item: &[u32], batches: usize, start: &mut Vec<u32>, out: &mut Vec<u32>) {
+    start.clear();
+    start.resize(batches + 1, 0);
+    for &b in batch_of_item.iter().filter(|&&b| b != NONE) {
+        start[b as usize + 1] += 1;
+    }
+    for b in 0..batches {
+        start[b + 1] += start[b];
+    }
+    out.clear();
+    out.resize(start[batches] as usize, 0);
+    // `start[b]` serves as batch b's cursor, ending at batch b + 1's start...
+    for (i, &b) in batch_of_item.iter().enumerate() {
+        if b != NONE {
+            out[start[b as usize] as usize] = i as u32;
+            start[b as usize] += 1;
+        }
+    }
+    // ...and is moved back to where the batch starts.
+    for b in (1..=batches).rev() {
+        start[b] = start[b - 1];
+    }
+    start[0] = 0;
+}
+
+/// The `b`th list of a [`group_by_batch`] grouping.
+fn list(start: &[u32], items: &[u32], b: usize) -> impl Iterator<Item = usize> {
+    items[start[b] as usize..start[b + 1] as usize]
+        .iter()
+        .map(|&i| i as usize)
+}
 
 /// One batch of islands, gathered into local arrays.
 #[derive(Default)]
@@ -72,7 +141,7 @@ struct IslandTask {
     joints: JointSet,
     joint_slots: JointSlots,
     pairs: Vec<ContactPair>,
-    /// The batch's constraint arrays.
+    /// The batch's constraint arrays (its joint trees lent by [`IslandTasks::trees`]).
     buffers: SolveBuffers,
     /// Per local pair: its slot in the world's pair array and its world bodies.
     pair_slots: Vec<(usize, u32, u32)>,
@@ -94,7 +163,7 @@ impl IslandTask {
         }
         clear_joints!(ball, hinge, universal, fixed, slider, spring);
         let j = &mut self.joints;
-        (j.lanes, j.direct, j.tree_points) = (None, false, 0);
+        (j.lanes, j.direct, j.tree_points, j.live_points) = (None, false, 0, 0);
         self.pairs.clear();
         self.pair_slots.clear();
     }
@@ -213,131 +282,187 @@ pub fn solve_islands(
         return;
     }
     let batch_of_island = numbering.deal(joints, pairs);
-    let batch_of = |a: usize, b: usize| numbering.of(a, b).map(|t| batch_of_island[t] as usize);
-    let tasks = &mut tasks.0;
-    let local_of_moving = new_tasks(tasks, &numbering, &batch_of_island, n, s.len());
-    gather(tasks, &local_of_moving, joints, pairs, batch_of);
-    for task in tasks.iter_mut() {
-        for &i in &task.bodies {
-            task.states.push_copy(s, i);
+    let batches = batch_of_island.last().map_or(0, |&b| b as usize + 1);
+    let batch_of = |a: usize, b: usize| numbering.of(a, b).map_or(NONE, |t| batch_of_island[t]);
+    tasks.plan.make(
+        &numbering,
+        &batch_of_island,
+        batches,
+        joints,
+        pairs,
+        batch_of,
+    );
+    let IslandTasks {
+        plan,
+        scratch,
+        trees,
+        local_of_moving,
+    } = tasks;
+    local_of_moving.clear();
+    local_of_moving.resize(s.len(), NONE);
+    trees.resize_with(batches, JointTrees::default);
+    let threads = rayon::current_num_threads().clamp(1, batches);
+    scratch.resize_with(threads, IslandTask::default);
+    for round in (0..batches).step_by(threads) {
+        let round = round..(round + threads).min(batches);
+        let scratch = &mut scratch[..round.len()];
+        for (task, b) in scratch.iter_mut().zip(round.clone()) {
+            task.gather(plan, b, local_of_moving, s, motion, joints, pairs);
+            std::mem::swap(task.buffers.trees_mut(), &mut trees[b]);
         }
-        let moving = &task.bodies[..task.moving];
-        task.motion.extend(moving.iter().map(|&i| motion.bodies[i]));
-        task.awake
-            .extend((0..task.bodies.len()).map(|l| l < task.moving));
-    }
-
-    tasks.par_iter_mut().for_each(|t| {
-        substeps::solve(
-            &mut t.states,
-            Motions {
-                bodies: &t.motion,
-                full: motion.full,
-            },
-            &mut t.joints,
-            &mut t.pairs,
-            &t.awake,
-            &mut t.buffers,
-            p,
-        );
-    });
-    scatter(tasks, s, joints, pairs);
-}
-
-/// One task per batch (the last step's, emptied), holding the batch's moving bodies in
-/// ascending world order (its islands interleaved); returns each moving body's index in
-/// its task.
-fn new_tasks(
-    tasks: &mut Vec<IslandTask>,
-    numbering: &Numbering,
-    batch_of_island: &[u32],
-    n: usize,
-    len: usize,
-) -> Vec<u32> {
-    let batch_count = batch_of_island.last().map_or(0, |&b| b as usize + 1);
-    let mut local_of_moving = vec![NONE; len];
-    tasks.resize_with(batch_count, IslandTask::default);
-    for task in tasks.iter_mut() {
-        task.clear();
-    }
-    for (i, &island) in numbering.island_of_body[..n].iter().enumerate() {
-        if island == NONE {
-            continue;
-        }
-        let task = &mut tasks[batch_of_island[island as usize] as usize];
-        local_of_moving[i] = task.bodies.len() as u32;
-        task.bodies.push(i);
-    }
-    for task in tasks.iter_mut() {
-        task.moving = task.bodies.len();
-    }
-    local_of_moving
-}
-
-/// Copies every joint and touching pair into its batch's task (a constraint's batch is
-/// its island's), re-indexed to the task's bodies; a pair is moved out and put back by
-/// [`scatter`].
-fn gather(
-    tasks: &mut [IslandTask],
-    local_of_moving: &[u32],
-    joints: &JointSet,
-    pairs: &mut [ContactPair],
-    batch_of: impl Fn(usize, usize) -> Option<usize>,
-) {
-    macro_rules! gather_joints {
-        ($($kind:ident),*) => {$(
-            for (k, j) in joints.$kind.iter().enumerate() {
-                let Some(t) = batch_of(j.frame.a, j.frame.b) else { continue };
-                let task = &mut tasks[t];
-                let mut j = j.clone();
-                j.frame.a = task.local(j.frame.a, local_of_moving);
-                j.frame.b = task.local(j.frame.b, local_of_moving);
-                task.joints.$kind.push(j);
-                task.joint_slots.$kind.push(k);
-            }
-        )*};
-    }
-    gather_joints!(ball, hinge, universal, fixed, slider, spring);
-
-    for (k, pair) in pairs.iter_mut().enumerate() {
-        if !pair.touching() {
-            continue;
-        }
-        let Some(t) = batch_of(pair.a as usize, pair.b as usize) else {
-            continue;
+        let solve = |t: &mut IslandTask| {
+            substeps::solve(
+                &mut t.states,
+                Motions {
+                    bodies: &t.motion,
+                    full: motion.full,
+                },
+                &mut t.joints,
+                &mut t.pairs,
+                &t.awake,
+                &mut t.buffers,
+                p,
+            );
         };
-        let task = &mut tasks[t];
-        let mut local = std::mem::take(pair);
-        task.pair_slots.push((k, local.a, local.b));
-        local.a = task.local(local.a as usize, local_of_moving) as u32;
-        local.b = task.local(local.b as usize, local_of_moving) as u32;
-        task.pairs.push(local);
+        if let [task] = scratch {
+            solve(task);
+        } else {
+            scratch.par_iter_mut().for_each(solve);
+        }
+        for (task, b) in scratch.iter_mut().zip(round) {
+            std::mem::swap(task.buffers.trees_mut(), &mut trees[b]);
+            task.scatter(s, joints, pairs);
+        }
     }
 }
 
-/// Writes the solved tasks back: their moving bodies' states, their joints (keeping the
-/// world's body indices) and their pairs.
-fn scatter(
-    tasks: &mut [IslandTask],
-    s: &mut BodyStates,
-    joints: &mut JointSet,
-    pairs: &mut [ContactPair],
-) {
-    macro_rules! scatter_joints {
-        ($task:expr, $($kind:ident),*) => {$(
-            for (j, &k) in $task.joints.$kind.drain(..).zip(&$task.joint_slots.$kind) {
-                let frame = joints.$kind[k].frame;
-                joints.$kind[k] = j;
-                joints.$kind[k].frame = frame;
+impl BatchPlan {
+    /// Each batch's moving bodies (ascending world order, its islands interleaved),
+    /// joints and touching pairs; `batch_of(a, b)` is the batch of a constraint between
+    /// `a` and `b` (its island's), `NONE` for one that is not solved.
+    fn make(
+        &mut self,
+        numbering: &Numbering,
+        batch_of_island: &[u32],
+        batches: usize,
+        joints: &JointSet,
+        pairs: &[ContactPair],
+        batch_of: impl Fn(usize, usize) -> u32,
+    ) {
+        let items = &mut self.batch_of_item;
+        items.clear();
+        items.extend((numbering.island_of_body.iter()).map(|&t| {
+            if t == NONE {
+                NONE
+            } else {
+                batch_of_island[t as usize]
             }
-        )*};
+        }));
+        group_by_batch(items, batches, &mut self.body_start, &mut self.bodies);
+        items.clear();
+        joints.for_each_pair(|a, b| items.push(batch_of(a, b)));
+        group_by_batch(items, batches, &mut self.joint_start, &mut self.joints);
+        items.clear();
+        items.extend(pairs.iter().map(|pair| {
+            if pair.touching() {
+                batch_of(pair.a as usize, pair.b as usize)
+            } else {
+                NONE
+            }
+        }));
+        group_by_batch(items, batches, &mut self.pair_start, &mut self.pairs);
     }
-    for task in tasks {
-        for (l, &i) in task.bodies[..task.moving].iter().enumerate() {
-            s.copy_from(i, &task.states, l);
+}
+
+impl IslandTask {
+    /// Gathers batch `b` of `plan`: its moving bodies, then the static bodies its
+    /// constraints read; every joint and touching pair of it, re-indexed to the task's
+    /// bodies, in world order (a pair is moved out and put back by [`IslandTask::scatter`]).
+    #[allow(clippy::too_many_arguments)]
+    fn gather(
+        &mut self,
+        plan: &BatchPlan,
+        b: usize,
+        local_of_moving: &mut [u32],
+        s: &BodyStates,
+        motion: Motions<'_>,
+        joints: &JointSet,
+        pairs: &mut [ContactPair],
+    ) {
+        self.clear();
+        for i in list(&plan.body_start, &plan.bodies, b) {
+            local_of_moving[i] = self.bodies.len() as u32;
+            self.bodies.push(i);
         }
-        scatter_joints!(task, ball, hinge, universal, fixed, slider, spring);
-        for (mut pair, &(k, a, b)) in task.pairs.drain(..).zip(&task.pair_slots) {
+        self.moving = self.bodies.len();
+        let local_of_moving = &*local_of_moving;
+        // The joints numbered across the types: each type's first number.
+        let ends = [
+            joints.ball.len(),
+            joints.hinge.len(),
+            joints.universal.len(),
+            joints.fixed.len(),
+            joints.slider.len(),
+            joints.spring.len(),
+        ];
+        let mut first = [0usize; 6];
+        for t in 1..6 {
+            first[t] = first[t - 1] + ends[t - 1];
+        }
+        macro_rules! gather_joint {
+            ($kind:ident, $k:expr) => {{
+                let mut j = joints.$kind[$k].clone();
+                j.frame.a = self.local(j.frame.a, local_of_moving);
+                j.frame.b = self.local(j.frame.b, local_of_moving);
+                self.joints.$kind.push(j);
+                self.joint_slots.$kind.push($k);
+            }};
+        }
+        for g in list(&plan.joint_start, &plan.joints, b) {
+            let t = first.partition_point(|&f| f <= g) - 1;
+            let k = g - first[t];
+            match t {
+                0 => gather_joint!(ball, k),
+                1 => gather_joint!(hinge, k),
+                2 => gather_joint!(universal, k),
+                3 => gather_joint!(fixed, k),
+                4 => gather_joint!(slider, k),
+                _ => gather_joint!(spring, k),
+            }
+        }
+        for k in list(&plan.pair_start, &plan.pairs, b) {
+            let mut local = std::mem::take(&mut pairs[k]);
+            self.pair_slots.push((k, local.a, local.b));
+            local.a = self.local(local.a as usize, local_of_moving) as u32;
+            local.b = self.local(local.b as usize, local_of_moving) as u32;
+            self.pairs.push(local);
+        }
+        for &i in &self.bodies {
+            self.states.push_copy(s, i);
+        }
+        let moving = &self.bodies[..self.moving];
+        self.motion.extend(moving.iter().map(|&i| motion.bodies[i]));
+        self.awake
+            .extend((0..self.bodies.len()).map(|l| l < self.moving));
+    }
+
+    /// Writes the solved batch back: its moving bodies' states, its joints (keeping the
+    /// world's body indices) and its pairs.
+    fn scatter(&mut self, s: &mut BodyStates, joints: &mut JointSet, pairs: &mut [ContactPair]) {
+        macro_rules! scatter_joints {
+            ($($kind:ident),*) => {$(
+                for (j, &k) in self.joints.$kind.drain(..).zip(&self.joint_slots.$kind) {
+                    let frame = joints.$kind[k].frame;
+                    joints.$kind[k] = j;
+                    joints.$kind[k].frame = frame;
+                }
+            )*};
+        }
+        for (l, &i) in self.bodies[..self.moving].iter().enumerate() {
+            s.copy_from(i, &self.states, l);
+        }
+        scatter_joints!(ball, hinge, universal, fixed, slider, spring);
+        for (mut pair, &(k, a, b)) in self.pairs.drain(..).zip(&self.pair_slots) {
             pair.a = a;
             pair.b = b;
             pairs[k] = pair;

@@ -48,6 +48,13 @@ pub struct SolveBuffers {
     trees: JointTrees,
 }
 
+impl SolveBuffers {
+    /// The joint trees, for a caller that keeps them apart between solves.
+    pub fn trees_mut(&mut self) -> &mut JointTrees {
+        &mut self.trees
+    }
+}
+
 /// The velocity solve of one step over the bodies, joints and contact pairs given (the
 /// whole world, or one island gathered by [`parallel`]): the substeps, the restitution
 /// pass and the position projection. Reads contacts prepared by [`Contacts::update`].
