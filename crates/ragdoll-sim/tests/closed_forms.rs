@@ -512,11 +512,11 @@ fn f32_spacing(x: f32) -> f64 {
 /// at) carries one more such rounding. A frame's growth of the gap is therefore read
 /// against `limit × dt` to within one spacing of each position read: the returned rate
 /// is the largest `(growth − spacing) / dt`, at most `limit` for a solver that holds
-/// its setting to the f32 grid. This is the
-/// reading's resolution at the positions read (2.98e-8 m at 0.4 m, 1.8e-6 m/s at
-/// 1/60 s), not a margin: a solver whose bound carries f32 rounding from substep to
-/// substep moves many spacings a frame more than the setting (rigid frames, when its
-/// allowance chained from substep to substep: 12 spacings, 3.7e-7 m a frame) and fails.
+/// its setting to the f32 grid. This is the reading's resolution at the positions read
+/// (2.98e-8 m at 0.4 m, 1.8e-6 m/s at 1/60 s), not a margin: a solver whose allowance
+/// chains from substep to substep keeps the roundings that lift a body out and
+/// corrects the others, and moves many spacings a frame more than the setting (12
+/// spacings, 3.7e-7 m, measured on rigid frames chained so) and fails.
 fn push_out(
     make: Make,
     sc: &SceneDesc,
