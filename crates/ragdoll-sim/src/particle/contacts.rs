@@ -99,6 +99,11 @@ pub(crate) struct ContactPoint {
     /// substep's solves push out slowly. Anything deeper was pushed in after the last
     /// solve (by a joint) and is taken back in full.
     pub left_before: f32,
+    /// Overlap (m) of the point's two material points where the bones stood as the
+    /// frame began (≤ 0: apart), set at detection; `−∞` until then.
+    pub frame_overlap: f32,
+    /// Substeps of the frame up to and including the current one.
+    pub frame_substeps: u32,
 }
 
 impl ContactPoint {
@@ -114,6 +119,8 @@ impl ContactPoint {
             touched_at: None,
             left: f32::INFINITY,
             left_before: f32::INFINITY,
+            frame_overlap: f32::NEG_INFINITY,
+            frame_substeps: 0,
         }
     }
 }

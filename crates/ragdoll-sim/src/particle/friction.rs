@@ -63,6 +63,16 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3A) -> Vec3A {
 /// 300 m/s), more than the velocity pass takes back. Pushed out in full, the overlaps a
 /// detection found at 1000 substeps of 1/10 s frames threw the capsule human's limbs at
 /// up to 30 m/s.
+///
+/// The old overlap also never ends a substep shallower than the frame's allowance,
+/// [`ContactPoint::frame_overlap`] less `push_out` × the frame's substeps so far, one
+/// product measured from where the bones stood as the frame began. Without it the
+/// bound only chains from substep to substep (`old` is the lesser of the depth now and
+/// the last target), and that chain keeps every f32 rounding of a bone's centre that
+/// lifts it out and corrects every one that leaves it deeper: a 1 m cube rising out of
+/// the ground moved up to 12 ulp of its height (3.7e-7 m) a frame more than
+/// `max_push_out_speed` × dt. Measured against the frame's start, what is left is the
+/// rounding of the frame's last position, which the next frame measures from.
 fn normal_target(
     bones: &[Bone],
     m: &Manifold,
@@ -81,7 +91,8 @@ fn normal_target(
     }
     let approach = (bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb)).dot(m.n);
     let old = (depth - approach).min(c.left_before).max(0.0);
-    let left = (old - push_out).max(0.0);
+    let frame_left = c.frame_overlap - push_out * c.frame_substeps as f32;
+    let left = (old - push_out).max(frame_left).max(0.0);
     c.left = left;
     (pa, pb, depth - left)
 }

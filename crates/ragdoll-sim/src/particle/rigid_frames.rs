@@ -197,6 +197,29 @@ fn record_frame_starts(w: &mut ParticleWorld) {
     );
 }
 
+/// Each contact point's overlap where its bones stood as the frame began
+/// (`ContactPoint::frame_overlap`, from [`record_frame_starts`]), for a detection made
+/// after `sub` of the frame's substeps: the push-out allowance of an overlap is
+/// measured from there (`friction::normal_target`).
+fn overlaps_at_frame_start(w: &mut ParticleWorld, sub: u32) {
+    let starts = &w.frame_starts;
+    let at_start = |i: usize, local: Vec3| {
+        let (com, rot) = starts[i];
+        Vec3A::from(com) + rot * Vec3A::from(local)
+    };
+    let (manifolds, points) = (&w.contacts.manifolds, &mut w.contacts.points);
+    for m in manifolds {
+        for c in &mut points[m.range()] {
+            let pb = match m.b {
+                Some(j) => at_start(j, c.rb),
+                None => Vec3A::from(c.rb),
+            };
+            c.frame_overlap = (at_start(m.a, c.ra) - pb).dot(m.n);
+            c.frame_substeps = sub;
+        }
+    }
+}
+
 /// Wakes every sleeping figure a moving bone touches, before the substeps that would
 /// otherwise meet it as a static wall: a shot hitting a resting box would stop dead
 /// against it and the box, woken only at the end of the frame, would never feel the
@@ -442,6 +465,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 c.lambda_t = 0.0;
                 c.lambda_v = 0.0;
                 c.left_before = c.left;
+                c.frame_substeps += 1;
                 c.vn_before = if m.e > 0.0 {
                     let pa = p.bones[m.a].world(c.ra);
                     let pb = super::bone::side_world(p.bones, m.b, c.rb);
@@ -608,6 +632,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             tree.forget();
             detect(w, &mut tree, rest_of_frame);
         }
+        overlaps_at_frame_start(w, sub);
         clock.lap(&mut times, "detection");
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
