@@ -1,5 +1,7 @@
-//! The pile of humans in Rapier and in both of our methods, in turn, in one process:
-//! milliseconds per frame and our time over Rapier's.
+//! The pile of humans in Rapier and in our engines, in turn, in one process: the
+//! multibody method, the particle method's default solver (rigid frames) and its XPBD
+//! solver on particles (`--particle-solver xpbd`); milliseconds per frame and our time
+//! over Rapier's.
 //!
 //! ```text
 //! cargo bench -p peer-bench --bench pile                  # 1, 10, 100, 270, 1000 humans
@@ -13,14 +15,14 @@
 //! Beside each mean, the busy phase (`ragdoll_lab::bench::busy`): the 95th-percentile
 //! and slowest frame, the CPU time of the first and second simulated seconds with our
 //! time over Rapier's, and µs per awake body per step. `--no-sleep` turns sleeping off
-//! in all three engines, so the ratios compare solvers, not sleep policies.
+//! in all four engines, so the ratios compare solvers, not sleep policies.
 //!
-//! All three run single-threaded (Rapier without its `parallel` feature), the same
+//! All four run single-threaded (Rapier without its `parallel` feature), the same
 //! scene description, timestep and solver budget; see `rapier_scene.rs` for how the
 //! scene is carried over. Goals: our multibody at or below Rapier's time, the particle
 //! method at half of it (`docs/benchmarks.md`).
 //!
-//! `--rounds N` runs the three engines in turn N times and reports each engine's median
+//! `--rounds N` runs the four engines in turn N times and reports each engine's median
 //! mean and the median of the rounds' ratios, with their range: on a shared machine
 //! the CPU time of the same run of the same binary drifts with the load, so one round's
 //! ratio can be off by the drift between its engines' turns; engines taken in turn
@@ -98,6 +100,7 @@ struct Round {
     rapier: FrameCost,
     multibody: Result<FrameCost, String>,
     particle: Result<FrameCost, String>,
+    xpbd: Result<FrameCost, String>,
 }
 
 /// Which of our engines' runs of a round.
@@ -112,16 +115,20 @@ fn median_cost(mut runs: Vec<FrameCost>) -> FrameCost {
 
 /// CPU milliseconds each engine spends in each simulated second of the pile (`frames`
 /// frames at 1/60 s): where a mean per frame comes from, active phase or rest.
-fn timeline(scene: &ragdoll_sim::SceneDesc, frames: usize) -> Result<Vec<[f64; 3]>, String> {
+fn timeline(scene: &ragdoll_sim::SceneDesc, frames: usize) -> Result<Vec<[f64; 4]>, String> {
     let seconds = frames.div_ceil(60);
-    let mut out = vec![[0.0; 3]; seconds];
+    let mut out = vec![[0.0; 4]; seconds];
     let mut r = rapier_scene::build(scene);
     for f in 0..frames {
         let t0 = thread_cpu_seconds();
         r.world.step();
         out[f / 60][0] += 1e3 * (thread_cpu_seconds() - t0);
     }
-    for (k, flavor) in [(1, Flavor::Multibody), (2, Flavor::ParticleRigidFrames)] {
+    for (k, flavor) in [
+        (1, Flavor::Multibody),
+        (2, Flavor::ParticleRigidFrames),
+        (3, Flavor::ParticleXpbd),
+    ] {
         let ms = on_threads(1, || {
             let mut m = flavor.build(scene)?;
             let mut ms = vec![0.0; seconds];
@@ -175,11 +182,11 @@ fn main() {
     };
     println!(
         "Pile of humans, {frames} frames at 1/60 s, one thread, sleeping {}; ms per frame (mean CPU / median CPU){medians}",
-        if no_sleep { "off in all three" } else { "on" }
+        if no_sleep { "off in all four" } else { "on" }
     );
     println!(
-        "{:>6} {:>6} {:>17} {:>17} {:>6} {:>17} {:>6}",
-        "humans", "bones", "rapier", "multibody", "ratio", "particle", "ratio"
+        "{:>6} {:>6} {:>17} {:>17} {:>6} {:>17} {:>6} {:>17} {:>6}",
+        "humans", "bones", "rapier", "multibody", "ratio", "particle", "ratio", "xpbd", "ratio"
     );
     for n in humans {
         let mut scene = match scale::pile(n) {
@@ -190,7 +197,7 @@ fn main() {
             }
         };
         if no_sleep {
-            // In all three engines (Rapier: `can_sleep(false)`, rapier_scene.rs).
+            // In all four engines (Rapier: `can_sleep(false)`, rapier_scene.rs).
             scene.settings.sleep.disable();
         }
         let bones = scene.dynamic_body_count();
@@ -206,6 +213,7 @@ fn main() {
                 rapier,
                 multibody: ours(Flavor::Multibody),
                 particle: ours(Flavor::ParticleRigidFrames),
+                xpbd: ours(Flavor::ParticleXpbd),
             });
         }
         let rapier = median_cost(runs.iter().map(|r| r.rapier).collect());
@@ -238,18 +246,22 @@ fn main() {
             Err(e) => (format!("error: {e}"), "-".into()),
         };
         let (mb_ratios, pa_ratios) = (ratios(|r| &r.multibody), ratios(|r| &r.particle));
+        let xp_ratios = ratios(|r| &r.xpbd);
         let (mb_run, pa_run) = (of(|r| &r.multibody), of(|r| &r.particle));
+        let xp_run = of(|r| &r.xpbd);
         let (mb_cost, pa_cost) = (mb_run.clone().ok(), pa_run.clone().ok());
+        let xp_cost = xp_run.clone().ok();
         let (mb, mb_ratio) = cells(mb_run, mb_ratios);
         let (pa, pa_ratio) = cells(pa_run, pa_ratios);
+        let (xp, xp_ratio) = cells(xp_run, xp_ratios);
         println!(
-            "{n:>6} {bones:>6} {:>17} {mb:>17} {mb_ratio:>6} {pa:>17} {pa_ratio:>6}",
+            "{n:>6} {bones:>6} {:>17} {mb:>17} {mb_ratio:>6} {pa:>17} {pa_ratio:>6} {xp:>17} {xp_ratio:>6}",
             cell(&rapier)
         );
         if rounds > 1 {
             println!(
-                "  ratios over {rounds} rounds: multibody {:.2}-{:.2}, particle {:.2}-{:.2}",
-                mb_ratios.1, mb_ratios.2, pa_ratios.1, pa_ratios.2
+                "  ratios over {rounds} rounds: multibody {:.2}-{:.2}, particle {:.2}-{:.2}, xpbd {:.2}-{:.2}",
+                mb_ratios.1, mb_ratios.2, pa_ratios.1, pa_ratios.2, xp_ratios.1, xp_ratios.2
             );
         }
         let state = |name: &str, c: Option<FrameCost>| {
@@ -265,6 +277,7 @@ fn main() {
             state("rapier", Some(rapier)),
             state("multibody", mb_cost),
             state("particle", pa_cost),
+            state("xpbd", xp_cost),
         ]
         .into_iter()
         .flatten()
@@ -300,6 +313,7 @@ fn main() {
             busy("rapier", Some(rapier)),
             busy("multibody", mb_cost),
             busy("particle", pa_cost),
+            busy("xpbd", xp_cost),
         ]
         .into_iter()
         .flatten()
@@ -309,9 +323,11 @@ fn main() {
         if show_timeline {
             match timeline(&scene, frames) {
                 Ok(rows) => {
-                    println!("  CPU ms per simulated second (rapier / multibody / particle):");
-                    for (k, [r, m, p]) in rows.iter().enumerate() {
-                        println!("    {k:>2}-{:<2} s {r:9.1} {m:9.1} {p:9.1}", k + 1);
+                    println!(
+                        "  CPU ms per simulated second (rapier / multibody / particle / xpbd):"
+                    );
+                    for (k, [r, m, p, x]) in rows.iter().enumerate() {
+                        println!("    {k:>2}-{:<2} s {r:9.1} {m:9.1} {p:9.1} {x:9.1}", k + 1);
                     }
                 }
                 Err(e) => println!("  timeline: {e}"),
@@ -322,7 +338,7 @@ fn main() {
         }
     }
     println!(
-        "ratio = our mean CPU ms / Rapier's mean CPU ms{} (goal: multibody <= 1, particle <= 0.5); ! = state not finite at the end",
+        "ratio = our mean CPU ms / Rapier's mean CPU ms{} (goal: multibody <= 1, particle and xpbd <= 0.5); ! = state not finite at the end",
         if rounds > 1 {
             ", the median of the rounds' ratios"
         } else {
