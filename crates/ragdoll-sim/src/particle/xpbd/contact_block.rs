@@ -59,7 +59,7 @@ impl Body {
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: super::frame::inv_inertia_prev(b),
+                    inv_inertia: *p.inv_inertia_prev(i),
                     centre: p.centre_prev(i),
                 }
             }
@@ -134,10 +134,10 @@ pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bo
         any |= active[i];
         n[i] = ct.n.as_dvec3();
         if a.bone.is_some() {
-            ja[i] = (ct.a.prev_point64(p) - a.centre).cross(n[i]);
+            ja[i] = (ct.start[0] - a.centre).cross(n[i]);
         }
         if b.bone.is_some() {
-            jb[i] = (ct.b.prev_point64(p) - b.centre).cross(n[i]);
+            jb[i] = (ct.start[1] - b.centre).cross(n[i]);
         }
     }
     if !any {

@@ -59,7 +59,7 @@ impl Body {
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: super::frame::inv_inertia_prev(b),
+                    inv_inertia: *p.inv_inertia_prev(i),
                     lever: end.prev_point64(p) - p.centre_prev(i),
                 }
             }

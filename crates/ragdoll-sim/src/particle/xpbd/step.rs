@@ -154,6 +154,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 p.x[k] += p.v[k].as_dvec3() * h as f64;
             }
         }
+        p.fix_start(&w.bones);
         read_frames(w, st);
         for pass in 0..PASSES {
             for (j, ends) in w.joints.iter().zip(&st.anchors) {
