@@ -63,6 +63,11 @@ pub(crate) struct Contact {
     /// Its points' barycentric inverse mass, `Σ_a β² w + Σ_b β² w` (friction), fixed
     /// through the substep.
     pub inv_mass: f32,
+    /// Its normal row's angular Jacobians `r × n` on `a` and `b` and their `I⁻¹ (r × n)`
+    /// at the substep's start (`contact_block::begin_substep`); 0 on a side that takes
+    /// no correction.
+    pub turn: [DVec3; 2],
+    pub inv_turn: [DVec3; 2],
 }
 
 /// What a detection reuses from the last: candidate pairs and parry's manifolds.
@@ -161,6 +166,8 @@ pub(crate) fn detect(
                     floor: 0.0,
                     start: [DVec3::ZERO; 2],
                     inv_mass: 0.0,
+                    turn: [DVec3::ZERO; 2],
+                    inv_turn: [DVec3::ZERO; 2],
                 });
             },
         );
@@ -193,6 +200,8 @@ pub(crate) fn detect(
                         floor: 0.0,
                         start: [DVec3::ZERO; 2],
                         inv_mass: 0.0,
+                        turn: [DVec3::ZERO; 2],
+                        inv_turn: [DVec3::ZERO; 2],
                     });
                 },
             );

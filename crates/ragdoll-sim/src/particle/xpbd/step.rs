@@ -30,7 +30,9 @@ use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
-use super::{XpbdState, contacts, frame, friction, joint_block, shape_match, sleeping};
+use super::{
+    XpbdState, contact_block, contacts, frame, friction, joint_block, shape_match, sleeping,
+};
 use crate::method::Grab;
 
 /// Gauss–Seidel passes per substep over the joints, the contacts and the sticks'
@@ -155,11 +157,13 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             }
         }
         p.fix_start(&w.bones);
+        joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
+        contact_block::begin_substep(&mut st.contacts, p, &w.bones);
         read_frames(w, st);
         for pass in 0..PASSES {
-            for (j, ends) in w.joints.iter().zip(&st.anchors) {
+            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
                 if joint_block::blocks(j) {
-                    joint_block::solve(&mut st.particles, &mut w.bones, j, ends, h);
+                    joint_block::solve(&mut st.particles, &mut w.bones, j, ends, start, h);
                 } else {
                     solve_angular(&mut st.particles, &mut w.bones, j, h);
                     solve_point(&mut st.particles, &mut w.bones, j, ends, h);
