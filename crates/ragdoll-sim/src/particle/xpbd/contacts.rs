@@ -96,9 +96,12 @@ fn attach(bones: &[Bone], rest_inv: &[Mat3], i: usize, world: Vec3) -> Anchor {
     Anchor::Bone(i as u32, weights(&rest_inv[i], b.rest[0], local))
 }
 
-/// Finds the contacts of the next `span` seconds into `out` (module doc).
+/// Finds the contacts of the next `span` seconds into `out` (module doc). `tree` is
+/// the frame's broad phase, reused by its later detections (`Reused`: the same pairs
+/// as new trees give).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn detect(
+    tree: &mut Reused,
     p: &XParticles,
     bones: &[Bone],
     rest_inv: &[Mat3],
@@ -134,14 +137,7 @@ pub(crate) fn detect(
         scratch.speeds.push(speed);
         scratch.margins.push(speed * span + reach);
     }
-    let mut tree = Reused::default();
-    let boxes = broad_phase_on(
-        &mut tree,
-        bones,
-        &scratch.margins,
-        filter,
-        &mut scratch.pairs,
-    );
+    let boxes = broad_phase_on(tree, bones, &scratch.margins, filter, &mut scratch.pairs);
     for &(i, j) in &scratch.pairs {
         let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
         let mu = (bones[i].friction * bones[j].friction).sqrt();

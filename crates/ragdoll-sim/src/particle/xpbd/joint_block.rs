@@ -296,6 +296,7 @@ pub(crate) fn solve(
 /// `I⁻¹ J` per side, `w` the sides' summed inverse masses), then of its Cholesky
 /// factor in place, rows `..from` already factored; a row whose pivot vanishes
 /// against its diagonal depends on the rows before it and is marked not `live`.
+#[inline]
 fn fill_and_factor(
     k: &mut [[f64; MAX_ROWS]; MAX_ROWS],
     live: &mut [bool; MAX_ROWS],
