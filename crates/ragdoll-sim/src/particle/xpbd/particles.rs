@@ -139,8 +139,8 @@ impl XParticles {
             let x = &self.x_prev[f..f + PER_BONE];
             let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
             s.centre[i] = c;
-            for k in 0..PER_BONE {
-                s.arm[f + k] = x[k] - c;
+            for (arm, xk) in s.arm[f..f + PER_BONE].iter_mut().zip(x) {
+                *arm = *xk - c;
             }
             s.inv_inertia[i] = super::frame::inv_inertia_prev(b);
         }
