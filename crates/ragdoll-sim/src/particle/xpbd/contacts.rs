@@ -3,7 +3,8 @@
 //!
 //! **Detection** (a few times a frame): the broad phase of `crate::broadphase` over the
 //! bones' shapes posed at their read frames, each box loosened by how far the bone can
-//! travel before the next detection; parry3d's contact manifolds within the distance a
+//! travel before the next detection, its trees built once a frame (`Reused`, which
+//! gives the pairs new trees would); parry3d's contact manifolds within the distance a
 //! pair can close (speculative contacts). Each contact point becomes a point fixed in
 //! each bone, attached to its particles by barycentric weights, with the normal fixed
 //! until the next detection.
