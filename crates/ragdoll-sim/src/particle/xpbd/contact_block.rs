@@ -59,7 +59,7 @@ impl Body {
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: super::frame::inv_inertia_prev(b),
+                    inv_inertia: *p.inv_inertia_prev(i),
                     centre: p.centre_prev(i),
                 }
             }
@@ -110,6 +110,26 @@ pub(crate) fn block_len_back(contacts: &[Contact]) -> usize {
         .count()
 }
 
+/// Each contact's angular Jacobians and their `I⁻¹ J` at the substep's start
+/// ([`Contact::turn`]), with the arithmetic the passes used: the levers from the
+/// bodies' centres then (`joints::pull_rigid`), fixed through the substep. Once
+/// `contacts::begin_substep` and `XParticles::fix_start` ran.
+pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, bones: &[Bone]) {
+    for ct in contacts.iter_mut() {
+        let a = Body::of(p, bones, &ct.a);
+        let b = Body::of(p, bones, &ct.b);
+        let n = ct.n.as_dvec3();
+        ct.turn = [DVec3::ZERO; 2];
+        if a.bone.is_some() {
+            ct.turn[0] = (ct.start[0] - a.centre).cross(n);
+        }
+        if b.bone.is_some() {
+            ct.turn[1] = (ct.start[1] - b.centre).cross(n);
+        }
+        ct.inv_turn = [a.inv_inertia * ct.turn[0], b.inv_inertia * ct.turn[1]];
+    }
+}
+
 /// The normal pushes of the block `group` (one pair of bodies; module doc); marks each
 /// contact active where its total push is positive.
 pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bone]) {
@@ -120,10 +140,13 @@ pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bo
     if a.bone.is_none() && b.bone.is_none() {
         return;
     }
-    // Each point's error and angular Jacobians (`r × n`), and which rows take part.
+    // Each point's error and angular Jacobians (`r × n`, kept from the substep's
+    // start with their `I⁻¹ (r × n)`), and which rows take part.
     let mut c = [0.0f64; MAX_POINTS];
     let mut ja = [DVec3::ZERO; MAX_POINTS];
     let mut jb = [DVec3::ZERO; MAX_POINTS];
+    let mut ia = [DVec3::ZERO; MAX_POINTS];
+    let mut ib = [DVec3::ZERO; MAX_POINTS];
     let mut n = [DVec3::ZERO; MAX_POINTS];
     let mut active = [false; MAX_POINTS];
     let mut any = false;
@@ -133,19 +156,13 @@ pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bo
         active[i] = d < 0.0 || ct.lambda > 0.0;
         any |= active[i];
         n[i] = ct.n.as_dvec3();
-        if a.bone.is_some() {
-            ja[i] = (ct.a.prev_point64(p) - a.centre).cross(n[i]);
-        }
-        if b.bone.is_some() {
-            jb[i] = (ct.b.prev_point64(p) - b.centre).cross(n[i]);
-        }
+        [ja[i], jb[i]] = ct.turn;
+        [ia[i], ib[i]] = ct.inv_turn;
     }
     if !any {
         return;
     }
     let w = a.inv_mass + b.inv_mass;
-    let ia: [DVec3; MAX_POINTS] = std::array::from_fn(|i| a.inv_inertia * ja[i]);
-    let ib: [DVec3; MAX_POINTS] = std::array::from_fn(|i| b.inv_inertia * jb[i]);
     let mut k = [[0.0f64; MAX_POINTS]; MAX_POINTS];
     for i in 0..m {
         for j in 0..m {

@@ -3,7 +3,8 @@
 //!
 //! **Detection** (a few times a frame): the broad phase of `crate::broadphase` over the
 //! bones' shapes posed at their read frames, each box loosened by how far the bone can
-//! travel before the next detection; parry3d's contact manifolds within the distance a
+//! travel before the next detection, its trees built once a frame (`Reused`, which
+//! gives the pairs new trees would); parry3d's contact manifolds within the distance a
 //! pair can close (speculative contacts). Each contact point becomes a point fixed in
 //! each bone, attached to its particles by barycentric weights, with the normal fixed
 //! until the next detection.
@@ -57,6 +58,17 @@ pub(crate) struct Contact {
     /// The least separation the substep must reach (m, ≤ 0): 0, or for a contact
     /// that started the substep in penetration its depth less `max_push_out_speed · h`.
     pub floor: f32,
+    /// Its two points at the substep's start (`begin_substep`), `prev_point64` of `a`
+    /// and `b`: the levers of its block and the origin of its friction's slip.
+    pub start: [DVec3; 2],
+    /// Its points' barycentric inverse mass, `Σ_a β² w + Σ_b β² w` (friction), fixed
+    /// through the substep.
+    pub inv_mass: f32,
+    /// Its normal row's angular Jacobians `r × n` on `a` and `b` and their `I⁻¹ (r × n)`
+    /// at the substep's start (`contact_block::begin_substep`); 0 on a side that takes
+    /// no correction.
+    pub turn: [DVec3; 2],
+    pub inv_turn: [DVec3; 2],
 }
 
 /// What a detection reuses from the last: candidate pairs and parry's manifolds.
@@ -72,6 +84,10 @@ pub(crate) struct Scratch {
     friction: Vec<Vec3>,
     /// Per contact, the normal impulse of the velocity step so far.
     normal: Vec<f32>,
+    /// Per bone, its rigid body for the velocity step, taken at the first contact that
+    /// needs it (`Rigid::of`); `taken` says which are.
+    rigid: Vec<Rigid>,
+    taken: Vec<bool>,
 }
 
 /// A point given in world coordinates, attached to bone `i`'s particles.
@@ -81,9 +97,12 @@ fn attach(bones: &[Bone], rest_inv: &[Mat3], i: usize, world: Vec3) -> Anchor {
     Anchor::Bone(i as u32, weights(&rest_inv[i], b.rest[0], local))
 }
 
-/// Finds the contacts of the next `span` seconds into `out` (module doc).
+/// Finds the contacts of the next `span` seconds into `out` (module doc). `tree` is
+/// the frame's broad phase, reused by its later detections (`Reused`: the same pairs
+/// as new trees give).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn detect(
+    tree: &mut Reused,
     p: &XParticles,
     bones: &[Bone],
     rest_inv: &[Mat3],
@@ -119,14 +138,7 @@ pub(crate) fn detect(
         scratch.speeds.push(speed);
         scratch.margins.push(speed * span + reach);
     }
-    let mut tree = Reused::default();
-    let boxes = broad_phase_on(
-        &mut tree,
-        bones,
-        &scratch.margins,
-        filter,
-        &mut scratch.pairs,
-    );
+    let boxes = broad_phase_on(tree, bones, &scratch.margins, filter, &mut scratch.pairs);
     for &(i, j) in &scratch.pairs {
         let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
         let mu = (bones[i].friction * bones[j].friction).sqrt();
@@ -149,6 +161,10 @@ pub(crate) fn detect(
                     lambda: 0.0,
                     lambda_t: Vec3::ZERO,
                     floor: 0.0,
+                    start: [DVec3::ZERO; 2],
+                    inv_mass: 0.0,
+                    turn: [DVec3::ZERO; 2],
+                    inv_turn: [DVec3::ZERO; 2],
                 });
             },
         );
@@ -179,6 +195,10 @@ pub(crate) fn detect(
                         lambda: 0.0,
                         lambda_t: Vec3::ZERO,
                         floor: 0.0,
+                        start: [DVec3::ZERO; 2],
+                        inv_mass: 0.0,
+                        turn: [DVec3::ZERO; 2],
+                        inv_turn: [DVec3::ZERO; 2],
                     });
                 },
             );
@@ -197,40 +217,43 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
 /// `max_push_out_speed`, Box2D's contact push speed): pushed out at once, the
 /// particles' displacement would become their velocity (a box started 25 cm in the
 /// ground left it at 175 m/s).
+///
+/// Runs at the substep's start, before the prediction: the points now are the points
+/// at the start (`x_prev = x`), kept in [`Contact::start`].
 pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed: f32, h: f32) {
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.active = false;
         c.lambda = 0.0;
         c.lambda_t = Vec3::ZERO;
-        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n);
+        c.start = [c.a.point64(p), c.b.point64(p)];
+        let depth = (c.start[1] - c.start[0]).as_vec3().dot(c.n);
         c.floor = (depth + push_speed * h).min(0.0);
+        c.inv_mass = c.a.inv_mass(p) + c.b.inv_mass(p);
     }
 }
 
-/// One side of a contact at the velocity level: its bone as the rigid body the sticks
-/// make of its particles (`shape_match::project_velocities`), seen from the contact
-/// point.
+/// A bone at the velocity level: the rigid body the sticks make of its particles
+/// (`shape_match::project_velocities`). Positions stay put through the velocity
+/// passes, so it is taken once a bone and shared by its contacts.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Lever {
-    /// The bone's `1/M`; 0 for the world or a bone that takes no correction.
+struct Rigid {
+    /// The bone's `1/M`; 0 for a bone that takes no correction.
     inv_total: f32,
-    /// The point about the particles' centre, `r`.
-    arm: Vec3,
+    /// The particles' centre `c`.
+    centre: DVec3,
     /// `I⁻¹` (world) of the particles about their centre.
     inv_inertia: Mat3,
+    /// The particles about their centre, `r_k = x_k − c`.
+    arms: [Vec3; 4],
 }
 
-impl Lever {
-    /// The lever of `side`, with `I = Σ m_k (|r_k|² 1 − r_k r_kᵀ)` the particles' own
-    /// inertia about their centre (in f64, as their projection takes it).
-    fn of(side: &Anchor, p: &XParticles) -> Lever {
-        let Anchor::Bone(i, _) = *side else {
-            return Lever::default();
-        };
-        let i = i as usize;
+impl Rigid {
+    /// Bone `i`, with `I = Σ m_k (|r_k|² 1 − r_k r_kᵀ)` the particles' own inertia
+    /// about their centre (in f64, as their projection takes it).
+    fn of(i: usize, p: &XParticles) -> Rigid {
         if !p.moves(i) {
-            return Lever::default();
+            return Rigid::default();
         }
         let f = PER_BONE * i;
         let c = p.centre(i);
@@ -247,10 +270,56 @@ impl Lever {
         } else {
             Mat3::ZERO
         };
-        Lever {
+        Rigid {
             inv_total: 1.0 / p.mass[f..f + PER_BONE].iter().sum::<f32>(),
-            arm: (side.point64(p) - c).as_vec3(),
+            centre: c,
             inv_inertia,
+            arms: std::array::from_fn(|k| (p.x[f + k] - c).as_vec3()),
+        }
+    }
+}
+
+/// One side of a contact at the velocity level: its bone's [`Rigid`] body seen from
+/// the contact point.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Lever {
+    /// The bone (`u32::MAX` for the world).
+    bone: u32,
+    /// The bone's `1/M`; 0 for the world or a bone that takes no correction.
+    inv_total: f32,
+    /// The point about the particles' centre, `r`.
+    arm: Vec3,
+    /// `I⁻¹` (world) of the particles about their centre.
+    inv_inertia: Mat3,
+}
+
+impl Lever {
+    /// The lever of `side`, its bone's rigid body taken into `rigid` if not yet
+    /// (`taken`).
+    fn of(side: &Anchor, p: &XParticles, rigid: &mut [Rigid], taken: &mut [bool]) -> Lever {
+        let Anchor::Bone(i, _) = *side else {
+            return Lever {
+                bone: u32::MAX,
+                ..Lever::default()
+            };
+        };
+        let b = i as usize;
+        if !taken[b] {
+            rigid[b] = Rigid::of(b, p);
+            taken[b] = true;
+        }
+        let r = &rigid[b];
+        if r.inv_total == 0.0 {
+            return Lever {
+                bone: i,
+                ..Lever::default()
+            };
+        }
+        Lever {
+            bone: i,
+            inv_total: r.inv_total,
+            arm: (side.point64(p) - r.centre).as_vec3(),
+            inv_inertia: r.inv_inertia,
         }
     }
 
@@ -263,18 +332,15 @@ impl Lever {
 
     /// Changes the bone's velocities by the impulse `j` at the point: particle `k` by
     /// `j / M + (I⁻¹ (r × j)) × r_k`, a rigid velocity change.
-    fn kick(&self, side: &Anchor, p: &mut XParticles, j: Vec3) {
-        let Anchor::Bone(i, _) = *side else {
-            return;
-        };
+    fn kick(&self, rigid: &[Rigid], p: &mut XParticles, j: Vec3) {
         if self.inv_total == 0.0 {
             return;
         }
-        let f = PER_BONE * i as usize;
-        let c = p.centre(i as usize);
+        let f = PER_BONE * self.bone as usize;
+        let arms = &rigid[self.bone as usize].arms;
         let (dv, dw) = (j * self.inv_total, self.inv_inertia * self.arm.cross(j));
-        for k in f..f + PER_BONE {
-            p.v[k] += dv + dw.cross((p.x[k] - c).as_vec3());
+        for (v, r) in p.v[f..f + PER_BONE].iter_mut().zip(arms) {
+            *v += dv + dw.cross(*r);
         }
     }
 }
@@ -317,19 +383,29 @@ pub(crate) fn solve_velocities(
     h: f32,
     passes: u32,
 ) {
-    // Positions stay put through the passes: each side's lever is taken once.
+    // Positions stay put through the passes: each bone's rigid body and each side's
+    // lever are taken once.
+    let bones = p.len() / PER_BONE;
+    scratch.taken.clear();
+    scratch.taken.resize(bones, false);
+    scratch.rigid.resize(bones, Rigid::default());
     scratch.levers.clear();
-    scratch.levers.extend(contacts.iter().map(|c| {
-        if c.active {
-            [Lever::of(&c.a, p), Lever::of(&c.b, p)]
+    for c in contacts {
+        scratch.levers.push(if c.active {
+            let (rigid, taken) = (&mut scratch.rigid, &mut scratch.taken);
+            [
+                Lever::of(&c.a, p, rigid, taken),
+                Lever::of(&c.b, p, rigid, taken),
+            ]
         } else {
             [Lever::default(); 2]
-        }
-    }));
+        });
+    }
     scratch.friction.clear();
     scratch.friction.resize(contacts.len(), Vec3::ZERO);
     scratch.normal.clear();
     scratch.normal.resize(contacts.len(), 0.0);
+    let rigid = &scratch.rigid;
     let n = contacts.len();
     for pass in 0..passes {
         let backwards = pass % 2 == 1;
@@ -353,8 +429,8 @@ pub(crate) fn solve_velocities(
             if dv.abs() >= 1e-9 {
                 scratch.normal[k] += dv / w;
                 let j = c.n * (dv / w);
-                la.kick(&c.a, p, -j);
-                lb.kick(&c.b, p, j);
+                la.kick(rigid, p, -j);
+                lb.kick(rigid, p, j);
             }
             // The substep's net normal impulse is the position step's push `λ_n / h`
             // plus this step's so far (negative where it takes back a push-out): the
@@ -386,8 +462,8 @@ pub(crate) fn solve_velocities(
                 };
             }
             scratch.friction[k] = total;
-            la.kick(&c.a, p, old - total);
-            lb.kick(&c.b, p, total - old);
+            la.kick(rigid, p, old - total);
+            lb.kick(rigid, p, total - old);
         }
     }
 }
@@ -429,13 +505,12 @@ fn friction(c: &mut Contact, p: &mut XParticles) {
     if c.mu <= 0.0 || (total <= 0.0 && c.lambda_t == Vec3::ZERO) {
         return;
     }
-    let w = c.a.inv_mass(p) + c.b.inv_mass(p);
+    let w = c.inv_mass;
     if w <= 0.0 {
         return;
     }
     // Relative motion of the points over the substep, its tangential part.
-    let moved =
-        ((c.a.point64(p) - c.a.prev_point64(p)) - (c.b.point64(p) - c.b.prev_point64(p))).as_vec3();
+    let moved = ((c.a.point64(p) - c.start[0]) - (c.b.point64(p) - c.start[1])).as_vec3();
     let slip = moved - c.n * c.n.dot(moved);
     // Undo the slip (`Δλ_t = −slip / w`, moving `a` back along it) as far as the cone `|λ_t| ≤ μ λ_n` allows,
     // on the substep's totals: where the normal push is taken back, so is the

@@ -42,8 +42,12 @@ use glam::{DMat3, DVec3, Vec3};
 /// and its twist and axis limits.
 const MAX_ROWS: usize = 10;
 
+/// Rows of the point, first in every block.
+const POINT_ROWS: usize = 3;
+
 /// One side of a block: its bone (if it takes corrections), inverse mass and world
 /// inverse inertia at the substep's start, and the lever from its centre to the point.
+#[derive(Clone, Copy)]
 struct Body {
     bone: Option<usize>,
     inv_mass: f64,
@@ -59,7 +63,7 @@ impl Body {
                 Body {
                     bone: Some(i),
                     inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: super::frame::inv_inertia_prev(b),
+                    inv_inertia: *p.inv_inertia_prev(i),
                     lever: end.prev_point64(p) - p.centre_prev(i),
                 }
             }
@@ -82,6 +86,73 @@ struct Row {
     ang_b: DVec3,
     c: f64,
     alpha: f64,
+}
+
+/// What a joint's block keeps through a substep: its sides and its point rows depend
+/// only on the substep's start (the levers, the inverse inertias), so they, their
+/// `M⁻¹ Jᵀ` and the first [`POINT_ROWS`] rows of the Cholesky factor of `K` (which
+/// depend on nothing after them) are taken once a substep ([`begin_substep`]), with
+/// the same arithmetic the passes used, so the results are the same.
+#[derive(Clone, Copy)]
+pub(crate) struct Start {
+    a: Body,
+    b: Body,
+    /// The point rows' angular parts, their error left to the pass.
+    point: [Row; POINT_ROWS],
+    /// `I_a⁻¹ J_a` and `I_b⁻¹ J_b` of the point rows.
+    ia: [DVec3; POINT_ROWS],
+    ib: [DVec3; POINT_ROWS],
+    /// The point rows of the in-place factor (`solve_rows`) and whether each is live.
+    factor: [[f64; POINT_ROWS]; POINT_ROWS],
+    live: [bool; POINT_ROWS],
+}
+
+/// Each block joint's [`Start`] into `out` (a slot per joint; the others' stay unset
+/// and unread), once `x_prev`, the bones' `prev_rot` and the particles' own start
+/// (`XParticles::fix_start`) are the substep's.
+pub(crate) fn begin_substep(
+    p: &XParticles,
+    bones: &[Bone],
+    joints: &[Joint],
+    anchors: &[[Anchor; 2]],
+    out: &mut Vec<Option<Start>>,
+) {
+    out.clear();
+    out.extend(joints.iter().zip(anchors).map(|(j, [ea, eb])| {
+        if !blocks(j) {
+            return None;
+        }
+        let a = Body::of(p, bones, j.a, ea);
+        let b = Body::of(p, bones, j.b, eb);
+        if a.bone.is_none() && b.bone.is_none() {
+            return None;
+        }
+        let point: [Row; POINT_ROWS] = std::array::from_fn(|i| {
+            let e = [DVec3::X, DVec3::Y, DVec3::Z][i];
+            Row {
+                lin: e,
+                ang_a: -a.lever.cross(e),
+                ang_b: b.lever.cross(e),
+                c: 0.0,
+                alpha: 0.0,
+            }
+        });
+        let ia = point.map(|r| a.inv_inertia * r.ang_a);
+        let ib = point.map(|r| b.inv_inertia * r.ang_b);
+        let w = a.inv_mass + b.inv_mass;
+        let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
+        let mut live = [false; MAX_ROWS];
+        fill_and_factor(&mut k, &mut live, &point, &ia, &ib, w, 0);
+        Some(Start {
+            a,
+            b,
+            point,
+            ia,
+            ib,
+            factor: std::array::from_fn(|i| std::array::from_fn(|m| k[i][m])),
+            live: std::array::from_fn(|i| live[i]),
+        })
+    }));
 }
 
 /// The rows of one block.
@@ -121,26 +192,30 @@ pub(crate) fn blocks(j: &Joint) -> bool {
 }
 
 /// Joint `j` (a [`blocks`] kind) between its anchors `ends`, `h` the substep: its
-/// point, angular parts and violated limits as one block (module doc).
-pub(crate) fn solve(p: &mut XParticles, bones: &mut [Bone], j: &Joint, ends: &[Anchor; 2], h: f32) {
+/// point, angular parts and violated limits as one block (module doc); `start` its
+/// [`begin_substep`] (`None`: neither side takes corrections).
+pub(crate) fn solve(
+    p: &mut XParticles,
+    bones: &mut [Bone],
+    j: &Joint,
+    ends: &[Anchor; 2],
+    start: &Option<Start>,
+    h: f32,
+) {
     let [ea, eb] = ends;
-    let a = Body::of(p, bones, j.a, ea);
-    let b = Body::of(p, bones, j.b, eb);
-    if a.bone.is_none() && b.bone.is_none() {
+    let Some(start) = start else {
         return;
-    }
+    };
+    let (a, b) = (&start.a, &start.b);
     let mut rows = Rows {
         rows: [Row::default(); MAX_ROWS],
         n: 0,
     };
     let delta = eb.point64(p) - ea.point64(p);
-    for e in [DVec3::X, DVec3::Y, DVec3::Z] {
+    for (e, r) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().zip(start.point) {
         rows.push(Row {
-            lin: e,
-            ang_a: -a.lever.cross(e),
-            ang_b: b.lever.cross(e),
             c: e.dot(delta),
-            alpha: 0.0,
+            ..r
         });
     }
     let (qa, qb) = (rot(bones, j.a), rot(bones, j.b));
@@ -200,7 +275,7 @@ pub(crate) fn solve(p: &mut XParticles, bones: &mut [Bone], j: &Joint, ends: &[A
             rows.angle(grad / g, (target - phi) / g, alpha);
         }
     }
-    let dl = solve_rows(&rows, &a, &b);
+    let dl = solve_rows(&rows, start);
     let (mut lin, mut ang_a, mut ang_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
         lin += r.lin * *l;
@@ -217,38 +292,29 @@ pub(crate) fn solve(p: &mut XParticles, bones: &mut [Bone], j: &Joint, ends: &[A
     }
 }
 
-/// `Δλ` of `(J M⁻¹ Jᵀ + α̃) Δλ = −C` by Cholesky's factorisation (the matrix is
-/// symmetric positive semi-definite); a row whose pivot vanishes against its diagonal
-/// depends on the rows before it and takes no `Δλ`.
-fn solve_rows(rows: &Rows, a: &Body, b: &Body) -> [f64; MAX_ROWS] {
-    let n = rows.n;
-    let r = &rows.rows[..n];
-    let ia: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
-        if i < n {
-            a.inv_inertia * r[i].ang_a
-        } else {
-            DVec3::ZERO
-        }
-    });
-    let ib: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
-        if i < n {
-            b.inv_inertia * r[i].ang_b
-        } else {
-            DVec3::ZERO
-        }
-    });
-    let w = a.inv_mass + b.inv_mass;
-    // Lower triangle of K, then of its Cholesky factor in place.
-    let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
-    for i in 0..n {
+/// Rows `from..n` of `K = J M⁻¹ Jᵀ + α̃` (lower triangle; `ia`, `ib` the rows'
+/// `I⁻¹ J` per side, `w` the sides' summed inverse masses), then of its Cholesky
+/// factor in place, rows `..from` already factored; a row whose pivot vanishes
+/// against its diagonal depends on the rows before it and is marked not `live`.
+#[inline]
+fn fill_and_factor(
+    k: &mut [[f64; MAX_ROWS]; MAX_ROWS],
+    live: &mut [bool; MAX_ROWS],
+    r: &[Row],
+    ia: &[DVec3],
+    ib: &[DVec3],
+    w: f64,
+    from: usize,
+) {
+    let n = r.len();
+    for i in from..n {
         for jj in 0..=i {
             k[i][jj] =
                 r[i].lin.dot(r[jj].lin) * w + r[i].ang_a.dot(ia[jj]) + r[i].ang_b.dot(ib[jj]);
         }
         k[i][i] += r[i].alpha;
     }
-    let mut live = [false; MAX_ROWS];
-    for i in 0..n {
+    for i in from..n {
         let diag = k[i][i];
         for jj in 0..i {
             let mut s = k[i][jj];
@@ -269,6 +335,42 @@ fn solve_rows(rows: &Rows, a: &Body, b: &Body) -> [f64; MAX_ROWS] {
             }
         }
     }
+}
+
+/// `Δλ` of `(J M⁻¹ Jᵀ + α̃) Δλ = −C` by Cholesky's factorisation (the matrix is
+/// symmetric positive semi-definite); a row whose pivot vanishes against its diagonal
+/// depends on the rows before it and takes no `Δλ`. The point rows come factored
+/// from `start`.
+fn solve_rows(rows: &Rows, start: &Start) -> [f64; MAX_ROWS] {
+    let (a, b) = (&start.a, &start.b);
+    let n = rows.n;
+    let r = &rows.rows[..n];
+    let ia: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
+        if i < POINT_ROWS {
+            start.ia[i]
+        } else if i < n {
+            a.inv_inertia * r[i].ang_a
+        } else {
+            DVec3::ZERO
+        }
+    });
+    let ib: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
+        if i < POINT_ROWS {
+            start.ib[i]
+        } else if i < n {
+            b.inv_inertia * r[i].ang_b
+        } else {
+            DVec3::ZERO
+        }
+    });
+    let w = a.inv_mass + b.inv_mass;
+    let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
+    let mut live = [false; MAX_ROWS];
+    for i in 0..POINT_ROWS {
+        k[i][..POINT_ROWS].copy_from_slice(&start.factor[i]);
+        live[i] = start.live[i];
+    }
+    fill_and_factor(&mut k, &mut live, r, &ia[..n], &ib[..n], w, POINT_ROWS);
     // L y = −C, then Lᵀ Δλ = y.
     let mut y = [0.0f64; MAX_ROWS];
     for i in 0..n {

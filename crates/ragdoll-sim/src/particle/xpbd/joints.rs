@@ -180,9 +180,8 @@ pub(super) fn move_linear(
     omega: Vec3,
 ) {
     let f = PER_BONE * i;
-    let c0 = p.centre_prev(i);
     for k in f..f + PER_BONE {
-        let arm = (p.x_prev[k] - c0).as_vec3();
+        let arm = p.arm_prev(k).as_vec3();
         p.x[k] += (shift + omega.cross(arm)).as_dvec3();
     }
     let b = &mut bones[i];

@@ -43,6 +43,8 @@ pub(crate) struct XpbdState {
     pub rest_inv: Vec<Mat3>,
     /// Per joint, its point on each side.
     pub anchors: Vec<[Anchor; 2]>,
+    /// Per joint, what its block keeps through the current substep.
+    pub joint_start: Vec<Option<joint_block::Start>>,
     /// The contacts of the current detection.
     pub contacts: Vec<contacts::Contact>,
     /// What detections reuse.

@@ -11,7 +11,8 @@
 //! angular momentum in 10 s. Velocities and the corrections, differences of positions,
 //! stay f32.
 
-use glam::{DVec3, Vec3};
+use super::super::bone::Bone;
+use glam::{DMat3, DVec3, Vec3};
 
 /// Particles per bone.
 pub(crate) const PER_BONE: usize = 4;
@@ -33,6 +34,24 @@ pub(crate) struct XParticles {
     pub inv_mass: Vec<f32>,
     /// Inverse mass the solver sees: [`XParticles::inv_mass`], or 0 while the bone sleeps.
     pub w: Vec<f32>,
+    /// What stays fixed through a substep's passes, set by [`XParticles::fix_start`].
+    pub start: Start,
+}
+
+/// Each moving bone at the substep's start, where its particles are rigid: what the
+/// passes move it about (`joints::move_linear`, `shape_match::project`, the joint and
+/// contact blocks), the same all through the substep and so taken once. Each value is
+/// computed exactly as the passes computed it before it was kept, so keeping it
+/// changes no result.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Start {
+    /// Per bone, the centre of its particles, `¼ Σ x_prev_k`.
+    pub centre: Vec<DVec3>,
+    /// Per particle, its arm about its bone's centre, `x_prev_k − c`.
+    pub arm: Vec<DVec3>,
+    /// Per bone, its world inverse inertia `R I⁻¹ Rᵀ` at `prev_rot`
+    /// (`frame::inv_inertia_prev`).
+    pub inv_inertia: Vec<DMat3>,
 }
 
 impl XParticles {
@@ -84,11 +103,47 @@ impl XParticles {
         ]
     }
 
-    /// The centre of bone `i`'s particles at the start of the substep.
+    /// The centre of bone `i`'s particles at the start of the substep (kept by
+    /// [`XParticles::fix_start`]).
     #[inline]
     pub fn centre_prev(&self, i: usize) -> DVec3 {
-        let x = self.bone_prev(i);
-        (x[0] + x[1] + x[2] + x[3]) * 0.25
+        self.start.centre[i]
+    }
+
+    /// Particle `k`'s arm about its bone's centre at the start of the substep.
+    #[inline]
+    pub fn arm_prev(&self, k: usize) -> DVec3 {
+        self.start.arm[k]
+    }
+
+    /// Bone `i`'s world inverse inertia at the start of the substep.
+    #[inline]
+    pub fn inv_inertia_prev(&self, i: usize) -> &DMat3 {
+        &self.start.inv_inertia[i]
+    }
+
+    /// Keeps what stays fixed through the substep ([`Start`]) for every moving bone,
+    /// once `x_prev` and the bones' `prev_rot` are the substep's start. A bone that
+    /// takes no correction keeps stale values, which nothing reads.
+    pub fn fix_start(&mut self, bones: &[Bone]) {
+        let n = bones.len();
+        let s = &mut self.start;
+        s.centre.resize(n, DVec3::ZERO);
+        s.arm.resize(PER_BONE * n, DVec3::ZERO);
+        s.inv_inertia.resize(n, DMat3::ZERO);
+        for (i, b) in bones.iter().enumerate() {
+            let f = PER_BONE * i;
+            if self.w[f] <= 0.0 {
+                continue;
+            }
+            let x = &self.x_prev[f..f + PER_BONE];
+            let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
+            s.centre[i] = c;
+            for (arm, xk) in s.arm[f..f + PER_BONE].iter_mut().zip(x) {
+                *arm = *xk - c;
+            }
+            s.inv_inertia[i] = super::frame::inv_inertia_prev(b);
+        }
     }
 
     /// The centre of bone `i`'s particles (equal masses).

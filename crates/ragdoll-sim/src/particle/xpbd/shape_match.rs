@@ -33,10 +33,9 @@ pub(crate) fn project(p: &mut XParticles, bones: &mut [Bone]) {
             continue;
         }
         let f = PER_BONE * i;
-        let (x, old) = (p.bone64(i), p.bone_prev(i));
-        let centre = |v: &[DVec3; 4]| (v[0] + v[1] + v[2] + v[3]) * 0.25;
-        let (co, c) = (centre(&old), centre(&x));
-        let arms = old.map(|o| o - co);
+        let x = p.bone64(i);
+        let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
+        let arms: [DVec3; 4] = std::array::from_fn(|k| p.arm_prev(f + k));
         let off = x.map(|xk| xk - c);
         // The frame turned with every correction (`joints::move_linear`): a guess
         // within the second order of the answer.

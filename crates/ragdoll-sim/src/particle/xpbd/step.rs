@@ -30,7 +30,10 @@ use super::super::ParticleWorld;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
-use super::{XpbdState, contacts, frame, friction, joint_block, shape_match, sleeping};
+use super::{
+    XpbdState, contact_block, contacts, frame, friction, joint_block, shape_match, sleeping,
+};
+use crate::broadphase::Reused;
 use crate::method::Grab;
 
 /// Gauss–Seidel passes per substep over the joints, the contacts and the sticks'
@@ -67,6 +70,13 @@ pub(crate) const DETECTIONS_PER_FRAME: u32 = 4;
 /// against their joints and the figure gained 1500 J landing, a foot at 17.9 m/s; with
 /// spans of 1/240 s, the default frame's, it lands without gain, at most 5.9 m/s.
 pub(crate) const DETECTION_SPAN: f32 = 1.0 / 240.0;
+
+/// How much the first detection of a frame loosens the bones' boxes for the broad
+/// phase of all of the frame's detections (m, see `Reused`): each box is already
+/// loosened by how far its bone can move until the next detection; a later detection
+/// looks up again only the bones that left their loosened box. The pairs are the
+/// same whatever it is.
+const DETECTION_FAT: f32 = 0.01;
 
 /// Reads every moving bone's frame from its particles.
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
@@ -120,11 +130,15 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
     // Less a thousandth: 1/60 s is 4 spans of 1/240 s, not 4.0000002 in f32.
     let detections = DETECTIONS_PER_FRAME.max((dt / DETECTION_SPAN - 1e-3).ceil() as u32);
     let every = n.div_ceil(detections);
+    // The broad phase's trees from the first detection's boxes loosened by
+    // `DETECTION_FAT`, for all of the frame's detections.
+    let mut tree = Reused::fattened(DETECTION_FAT);
     for sub in 0..n {
         if sub % every == 0 {
             read_frames(w, st);
             let span = h * every.min(n - sub) as f32;
             contacts::detect(
+                &mut tree,
                 &st.particles,
                 &w.bones,
                 &st.rest_inv,
@@ -154,11 +168,14 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 p.x[k] += p.v[k].as_dvec3() * h as f64;
             }
         }
+        p.fix_start(&w.bones);
+        joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
+        contact_block::begin_substep(&mut st.contacts, p, &w.bones);
         read_frames(w, st);
         for pass in 0..PASSES {
-            for (j, ends) in w.joints.iter().zip(&st.anchors) {
+            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
                 if joint_block::blocks(j) {
-                    joint_block::solve(&mut st.particles, &mut w.bones, j, ends, h);
+                    joint_block::solve(&mut st.particles, &mut w.bones, j, ends, start, h);
                 } else {
                     solve_angular(&mut st.particles, &mut w.bones, j, h);
                     solve_point(&mut st.particles, &mut w.bones, j, ends, h);
