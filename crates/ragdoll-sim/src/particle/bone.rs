@@ -523,27 +523,6 @@ pub(crate) fn positional(
     mu * c2.sqrt()
 }
 
-/// [`positional`] along a known unit direction `n` by `c > 0`: `pa − pb` changes by
-/// `n c`. Returns λ.
-pub(crate) fn positional_along(
-    bones: &mut [Bone],
-    (a, pa): (Side, Vec3A),
-    (b, pb): (Side, Vec3A),
-    n: Vec3A,
-    c: f32,
-) -> f32 {
-    if c < 1e-9 {
-        return 0.0;
-    }
-    let corr = Correction::along(bones, (a, pa), (b, pb), n);
-    if corr.w <= 0.0 {
-        return 0.0;
-    }
-    let lambda = c / corr.w;
-    corr.apply(bones, lambda);
-    lambda
-}
-
 /// Which frame a joint's point correction (`bone_lanes::point`) takes its arms from.
 ///
 /// A projection at the substep's end — arms from the frame now, as position-based

@@ -21,7 +21,7 @@
 //! pull further: over a substep a contact's normal impulse is a push
 //! ([`solve_velocities`]).
 
-use super::bone::{Bone, Correction, Side, positional_along, rotate_local, side_world};
+use super::bone::{Bone, Correction, Side, rotate_local, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::{Vec3, Vec3A};
 
@@ -98,13 +98,47 @@ fn normal_target(
 }
 
 /// Normal position pass for one contact on its own: push the shapes apart as far as
-/// [`normal_target`] asks. Accumulates `lambda_n`. A manifold of more points than
-/// [`BLOCK`] solves them so, in turn.
+/// [`normal_target`] asks, or, for a point held in an old overlap that an earlier
+/// pass pushed past its allowance, take that push back down to it ([`lowest_push`]).
+/// Accumulates `lambda_n`. A manifold of more points than [`BLOCK`] solves them so, in
+/// turn.
 pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoint, push_out: f32) {
     let (pa, pb, correction) = normal_target(bones, m, c, push_out);
-    if correction > 0.0 {
-        c.lambda_n += positional_along(bones, (Some(m.a), pa), (m.b, pb), -m.n, correction);
+    let lowest = lowest_push(c);
+    // A correction under 1e-9 m is left: below the f32 rounding of any position read.
+    let moves = correction >= 1e-9 || (correction <= -1e-9 && lowest < 0.0);
+    if !moves {
+        return;
     }
+    let corr = Correction::along(bones, (Some(m.a), pa), (m.b, pb), -m.n);
+    if corr.w > 0.0 {
+        let lambda = (correction / corr.w).max(lowest);
+        corr.apply(bones, lambda);
+        c.lambda_n += lambda;
+    }
+}
+
+/// The least multiplier a pass may apply at point `c` after [`normal_target`] has set
+/// its target: `−lambda_n` (taking back the substep's earlier pushes, never pulling
+/// beyond them) for a point held in an old overlap (`c.left > 0`), zero otherwise.
+///
+/// The allowance of an old overlap ([`normal_target`]) is a bound on both sides: no
+/// deeper than `left`, and no shallower either, or the bone is pushed out faster than
+/// `max_push_out_speed`. Each pass reads the depth from the bones' f32 frames, and the
+/// turns a block applies leave the face tilted by a few 1e-8 rad, so the points'
+/// readings scatter by a few 1e-8 m about the target. A push that never comes back
+/// (`λ ≥ 0` a pass) keeps every reading that says too deep and ignores every one that
+/// says too shallow: pushing corner `A` of a face up by `e` lifts the centre by about
+/// `e / 4` (a cube: `K_AA = 1/M + |r × n|² / I = 4/M`) and the opposite corner sinks
+/// only by `e / 2`, so each pass after the first lifted the cube a little past its
+/// allowance, about 1.2 f32 spacings of its height a frame with five passes. Bounded
+/// on the substep's accumulated multiplier (`lambda_n ≥ 0`), a pressed point ends
+/// each pass at its target whichever side the reading fell, and the passes no longer
+/// add up. A point touching with no old overlap (`left = 0`) keeps `λ ≥ 0` a pass: its
+/// only target is "not inside", and a point pulled back to touching would fight its own
+/// friction, whose cone is spread by the points' pushes (`ManifoldSolve::pushed`).
+fn lowest_push(c: &ContactPoint) -> f32 {
+    if c.left > 0.0 { -c.lambda_n } else { 0.0 }
 }
 
 /// Most points of a manifold solved as one block ([`solve_normals`],
@@ -268,7 +302,9 @@ impl Block {
 
 /// Normal position pass for one manifold: its points pushed apart as one block, each as
 /// far as [`normal_target`] asks and none further (the multipliers of the linear
-/// complementarity problem `λ ≥ 0`, `K λ ≥ c`, complementary, by [`Block::solve`]).
+/// complementarity problem `λ ≥ lowest`, `K λ ≥ c`, complementary, by [`Block::solve`];
+/// `lowest` is zero but for a point held in an old overlap, which may take back the
+/// substep's earlier pushes, [`lowest_push`]).
 /// Accumulates each point's `lambda_n` and returns what each point took, `λ[..k]`;
 /// `points` holds at most [`BLOCK`].
 ///
@@ -296,17 +332,20 @@ pub(crate) fn solve_normals(
         return lambda;
     }
     let (mut pa, mut pb, mut need) = ([Vec3A::ZERO; BLOCK], [Vec3A::ZERO; BLOCK], [0.0; BLOCK]);
+    let mut lowest = [0.0; BLOCK];
     let mut pressed = false;
     for (i, c) in points.iter_mut().enumerate() {
         (pa[i], pb[i], need[i]) = normal_target(bones, m, c, push_out);
-        pressed |= need[i] > 0.0;
+        lowest[i] = lowest_push(c);
+        pressed |= need[i] > 0.0 || (need[i] < 0.0 && lowest[i] < 0.0);
     }
-    // No point needs pushing (a speculative manifold): `λ = 0` solves the block.
+    // No point needs pushing nor was pushed past its allowance (a speculative
+    // manifold): `λ = 0` solves the block.
     if !pressed {
         return lambda;
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
-    lambda = block.solve(&need[..k], &[0.0; BLOCK][..k]);
+    lambda = block.solve(&need[..k], &lowest[..k]);
     if let Some(s) = &block.a {
         s.apply(bones, -m.n, &lambda[..k]);
     }
