@@ -27,6 +27,8 @@ import subprocess
 import sys
 import time
 
+from results import replace_between_markers
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 TARGET = ROOT / "README.md"
 BEGIN, END = "<!-- comparison:begin -->", "<!-- comparison:end -->"
@@ -212,15 +214,6 @@ def table(binary):
     return head + "\n" + body
 
 
-def replace_between_markers(path, body):
-    text = path.read_text()
-    start, end = text.find(BEGIN), text.find(END)
-    if start < 0 or end < start:
-        sys.exit(f"error: {path}: no `{BEGIN}` ... `{END}` markers")
-    path.write_text(text[:start + len(BEGIN)] + "\n\n" + body + "\n\n" + text[end:])
-    log(f"wrote {path.relative_to(ROOT)}")
-
-
 def main():
     args = [a for a in sys.argv[1:] if a != "--print"]
     binary = args[0] if args else str(ROOT / "target" / "release" / "ragdoll-lab")
@@ -228,7 +221,7 @@ def main():
     if "--print" in sys.argv[1:]:
         print(body)
         return
-    replace_between_markers(TARGET, body)
+    replace_between_markers(TARGET, body, (BEGIN, END), "comparison")
 
 
 if __name__ == "__main__":

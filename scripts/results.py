@@ -57,14 +57,15 @@ def tables(binary):
     return "\n\n".join(parts)
 
 
-def replace_between_markers(path, body):
+def replace_between_markers(path, body, markers=(BEGIN, END), who="results"):
+    """Replaces what stands between the two marker lines of `path` by `body`."""
+    begin, end = markers
     text = path.read_text()
-    start, end = text.find(BEGIN), text.find(END)
-    if start < 0 or end < start:
-        sys.exit(f"error: {path}: no `{BEGIN}` ... `{END}` markers")
-    new = text[:start + len(BEGIN)] + "\n\n" + body + "\n\n" + text[end:]
-    path.write_text(new)
-    print(f"results: wrote {path.relative_to(ROOT)}", file=sys.stderr)
+    start, stop = text.find(begin), text.find(end)
+    if start < 0 or stop < start:
+        sys.exit(f"error: {path}: no `{begin}` ... `{end}` markers")
+    path.write_text(text[:start + len(begin)] + "\n\n" + body + "\n\n" + text[stop:])
+    print(f"{who}: wrote {path.relative_to(ROOT)}", file=sys.stderr)
 
 
 def main():

@@ -345,24 +345,20 @@ fn solve_rows(rows: &Rows, start: &Start) -> [f64; MAX_ROWS] {
     let (a, b) = (&start.a, &start.b);
     let n = rows.n;
     let r = &rows.rows[..n];
-    let ia: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
-        if i < POINT_ROWS {
-            start.ia[i]
-        } else if i < n {
-            a.inv_inertia * r[i].ang_a
-        } else {
-            DVec3::ZERO
-        }
-    });
-    let ib: [DVec3; MAX_ROWS] = std::array::from_fn(|i| {
-        if i < POINT_ROWS {
-            start.ib[i]
-        } else if i < n {
-            b.inv_inertia * r[i].ang_b
-        } else {
-            DVec3::ZERO
-        }
-    });
+    // `I⁻¹ Jᵀ` of one side: the point rows' from `start`, the others' formed here.
+    let side = |fixed: &[DVec3; POINT_ROWS], inv_inertia: DMat3, ang: fn(&Row) -> DVec3| {
+        std::array::from_fn::<DVec3, MAX_ROWS, _>(|i| {
+            if i < POINT_ROWS {
+                fixed[i]
+            } else if i < n {
+                inv_inertia * ang(&r[i])
+            } else {
+                DVec3::ZERO
+            }
+        })
+    };
+    let ia = side(&start.ia, a.inv_inertia, |row| row.ang_a);
+    let ib = side(&start.ib, b.inv_inertia, |row| row.ang_b);
     let w = a.inv_mass + b.inv_mass;
     let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
     let mut live = [false; MAX_ROWS];
