@@ -330,6 +330,28 @@ pub(crate) type Side = Option<usize>;
 
 /// World point and frame origin of a point given in a side's local frame (world: as is).
 #[inline]
+/// Where a capsule's surface faces `dir` (world, unit) nearest bone-frame point `local`,
+/// in the bone frame as it stands now: the point of its core
+/// segment nearest `local`, moved out by the radius along `dir`. `None` for a shape
+/// that is not round all over (a box, cylinder, cone or hull keeps its material
+/// points: they do not roll).
+pub(crate) fn rolled_point(b: &Bone, local: Vec3, dir: Vec3A) -> Option<Vec3> {
+    let BodyCollider::Capsule {
+        half_height,
+        radius,
+    } = b.shape
+    else {
+        return None;
+    };
+    let s = b.shape_in_bone;
+    let along = s
+        .inverse_transform_point(local)
+        .y
+        .clamp(-half_height, half_height);
+    let facing = s.inverse_transform_vector(Vec3::from(b.rot.inverse() * dir));
+    Some(s.transform_point(Vec3::new(0.0, along, 0.0) + facing * radius))
+}
+
 pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3A {
     match s {
         Some(i) => bones[i].world(local),
