@@ -206,7 +206,7 @@ const COMBINATIONS: [(f32, u32, u32, f32); 10] = [
 ];
 
 /// [`COMBINATIONS`] for the XPBD solver, whose substeps are iterations × substeps
-/// (capped at 1000 a frame), each of 16 constraint passes: the same ten (every pair of
+/// (capped at 1000 a frame), each a full round of constraint passes: the same ten (every pair of
 /// values of two settings), the expensive ones over fewer simulated seconds. At
 /// 1/1000 s, 400 substeps a frame for 0.35 s, past each figure's first landing
 /// (0.18–0.32 s), and 1000 (substeps of 1 µs) for 0.05 s; at 1/60 s, 1000 substeps for

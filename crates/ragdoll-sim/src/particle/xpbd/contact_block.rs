@@ -82,32 +82,29 @@ fn body_of(e: &Anchor) -> u32 {
     }
 }
 
+/// The length of the run of points between the same two bodies that `points` starts
+/// with, at most [`MAX_POINTS`].
+fn same_pair_run<'a>(mut points: impl Iterator<Item = &'a Contact>) -> usize {
+    let Some(first) = points.next() else {
+        return 0;
+    };
+    let pair = |c: &Contact| (body_of(&c.a), body_of(&c.b));
+    let key = pair(first);
+    1 + points
+        .take(MAX_POINTS - 1)
+        .take_while(|c| pair(c) == key)
+        .count()
+}
+
 /// How many contacts from the start of `contacts` form one block: the run of points
 /// between the same two bodies, at most [`MAX_POINTS`].
 pub(crate) fn block_len(contacts: &[Contact]) -> usize {
-    let Some(first) = contacts.first() else {
-        return 0;
-    };
-    let key = (body_of(&first.a), body_of(&first.b));
-    contacts
-        .iter()
-        .take(MAX_POINTS)
-        .take_while(|c| (body_of(&c.a), body_of(&c.b)) == key)
-        .count()
+    same_pair_run(contacts.iter())
 }
 
 /// How many contacts from the end of `contacts` form one block (as [`block_len`]).
 pub(crate) fn block_len_back(contacts: &[Contact]) -> usize {
-    let Some(last) = contacts.last() else {
-        return 0;
-    };
-    let key = (body_of(&last.a), body_of(&last.b));
-    contacts
-        .iter()
-        .rev()
-        .take(MAX_POINTS)
-        .take_while(|c| (body_of(&c.a), body_of(&c.b)) == key)
-        .count()
+    same_pair_run(contacts.iter().rev())
 }
 
 /// Each contact's angular Jacobians and their `I⁻¹ J` at the substep's start
