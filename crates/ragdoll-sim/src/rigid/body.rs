@@ -374,11 +374,6 @@ impl BodyInfo {
     pub fn inv_mass(&self) -> f32 {
         if self.fixed { 0.0 } else { 1.0 / self.mass }
     }
-
-    /// Smallest half extent of the shape: the radius of "resting on its flattest side".
-    pub fn min_half_extent(&self) -> f32 {
-        self.shape.local_half_extents().min_element()
-    }
 }
 
 /// Every body's scene name in one string (what a `String` per body would hold, without

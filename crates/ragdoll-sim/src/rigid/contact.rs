@@ -16,7 +16,7 @@
 use super::body::{BodyInfo, BodyStates};
 use crate::broadphase::{box_height_above_plane, moving_pairs_where, speculative_margin};
 use crate::scene::Collider;
-use crate::scene::Shape;
+use crate::scene::rolling_arm;
 use glam::{Quat, Vec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose as PPose;
@@ -32,16 +32,6 @@ use rayon::prelude::*;
 /// it settles where the spring carries the load, `F / (m_eff ω²)`. A slop there would
 /// add to that at every contact of a stack, half a millimetre per box.
 pub const LINEAR_SLOP: f32 = 0.0005;
-/// Rolling resistance coefficient (Box2D v3's `rollingResistance`): a contact of a round
-/// body (capsule, cylinder, cone) resists the relative rotation of its bodies with at
-/// most `ρ r λₙ` of angular impulse, r the round body's rolling radius (its smallest half
-/// extent) and λₙ the pair's normal impulse. It stands for the deformation of real
-/// contacts, which a rigid round body lacks: without it a capsule on a level floor never
-/// stops rolling and its island never sleeps. 0.005 is between a steel wheel on rail
-/// (0.001) and a tyre on concrete (0.01–0.02): it stops scene 9's rolling head and
-/// obstacle within seconds; larger values (0.01–0.03, measured) let the limbs land
-/// differently enough that a hard limit is pushed past 2°.
-pub const ROLLING_RESISTANCE: f32 = 0.005;
 
 /// What a contact point keeps between steps. It rides in the `data` slot of parry's
 /// tracked contact, next to the point's geometry (anchors in the shape frames,
@@ -72,7 +62,7 @@ pub struct ContactPair {
     pub friction: f32,
     /// Combined restitution.
     pub restitution: f32,
-    /// `ρ r`: rolling resistance times rolling radius (m).
+    /// `ρ r`: rolling resistance times rolling radius (m, [`crate::scene::rolling_arm`]).
     pub rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
     pub rolling_impulse: Vec3,
@@ -309,23 +299,17 @@ impl Contacts {
                 (Some(g), true) => (g.friction, g.restitution),
                 _ => (info[b as usize].friction, info[b as usize].restitution),
             };
-            // Only round bodies roll; a box's rotation is already resisted by its
-            // contact points' friction.
-            let rolling = |i: usize| match info[i].shape {
-                Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
-                    info[i].min_half_extent()
-                }
-                _ => 0.0,
-            };
-            let radius = if b == anchor {
-                rolling(a as usize)
+            // Only round bodies roll (`crate::scene::rolling`); the ground does not.
+            let radius = |i: usize| info[i].shape.rolling_radius();
+            let rolling_arm = if b == anchor {
+                rolling_arm(radius(a as usize), 0.0)
             } else {
-                rolling(a as usize).max(rolling(b as usize))
+                rolling_arm(radius(a as usize), radius(b as usize))
             };
             ContactPair {
                 a,
                 b,
-                rolling_arm: ROLLING_RESISTANCE * radius,
+                rolling_arm,
                 friction: (fa * fb).sqrt(),
                 restitution: ra.max(rb),
                 ..Default::default()

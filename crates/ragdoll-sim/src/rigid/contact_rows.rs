@@ -95,7 +95,7 @@ pub(super) struct PairRows<R> {
     inv_mass_a: R,
     inv_mass_b: R,
     friction: R,
-    /// `ρ r` (see [`super::contact::ROLLING_RESISTANCE`]); zero where the pair does not
+    /// `ρ r` (see [`crate::scene::ROLLING_RESISTANCE`]); zero where the pair does not
     /// roll or both bodies are held.
     rolling_arm: R,
     /// Accumulated rolling-resistance angular impulse on b.

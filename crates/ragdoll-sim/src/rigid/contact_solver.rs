@@ -71,7 +71,7 @@ pub(super) struct PairConstraint {
     pub(super) friction: f32,
     /// Combined restitution.
     pub(super) restitution: f32,
-    /// `ρ r` (see [`super::contact::ROLLING_RESISTANCE`]); zero when neither body rolls.
+    /// `ρ r` (see [`crate::scene::ROLLING_RESISTANCE`]); zero when neither body rolls.
     pub(super) rolling_arm: f32,
     /// Accumulated rolling-resistance angular impulse on b.
     pub(super) rolling_impulse: Vec3,

@@ -12,6 +12,8 @@
 //! - [`rig`]: skeleton joints from body poses (how a figure's bodies move its mesh).
 //! - [`skin`]: the skinned mesh on the CPU, segment casts against it, the body a hit
 //!   pushes.
+//! - `rolling`: rolling resistance, the contact material's one definition for every
+//!   solver ([`ROLLING_RESISTANCE`], [`Shape::rolling_radius`], [`rolling_arm`]).
 //! - [`takeover`]: a figure placed on an animation with the animation's velocities.
 //! - `transform`: moving a whole scene (or one body, one joint) by a rigid transform,
 //!   and putting its bodies in a new pose with the joints re-expressed (`repose`).
@@ -27,6 +29,7 @@ pub mod md5anim;
 pub mod md5mesh;
 mod pyramid;
 pub mod rig;
+mod rolling;
 pub mod skin;
 pub mod takeover;
 mod transform;
@@ -37,6 +40,7 @@ pub use desc::*;
 pub use file_error::AfError;
 pub use mass::{MassProps, collider, mass_props, scene_mass_props};
 pub use pyramid::pyramid_sides;
+pub use rolling::{ROLLING_RESISTANCE, rolling_arm};
 pub use validate::validate;
 
 use thiserror::Error;
