@@ -35,6 +35,9 @@ pub(crate) struct Manifold {
     pub mu: f32,
     /// Combined restitution.
     pub e: f32,
+    /// `ρ r` of its rolling resistance (m, `crate::scene::rolling_arm`): 0 when
+    /// neither side rolls.
+    pub roll: f32,
     /// First point.
     pub start: u32,
     /// One past the last point.
@@ -141,17 +144,17 @@ impl ContactSet {
         self.points.clear();
     }
 
-    /// Adds a point between sides `(a, b)` with normal `n` and materials `(μ, e)`: to the
-    /// last manifold if it was opened for this pair (index `first` or later) with the
-    /// same normal, else to a new one. Parry reports a pair's points manifold by
-    /// manifold, so a pair of convex shapes makes one manifold and a pair with no
-    /// points makes none.
+    /// Adds a point between sides `(a, b)` with normal `n` and materials `(μ, e, ρ r)`
+    /// ([`Manifold`]): to the last manifold if it was opened for this pair (index
+    /// `first` or later) with the same normal, else to a new one. Parry reports a pair's
+    /// points manifold by manifold, so a pair of convex shapes makes one manifold and a
+    /// pair with no points makes none.
     pub fn push(
         &mut self,
         first: usize,
         (a, b): (usize, Side),
         n: Vec3,
-        (mu, e): (f32, f32),
+        (mu, e, roll): (f32, f32, f32),
         point: ContactPoint,
     ) {
         let n = Vec3A::from(n);
@@ -165,6 +168,7 @@ impl ContactSet {
                 n,
                 mu,
                 e,
+                roll,
                 start: end,
                 end: end + 1,
             }),
@@ -526,13 +530,13 @@ mod tests {
         let mut set = ContactSet::default();
         let (up, side) = (Vec3::Y, Vec3::X);
         let first = set.manifolds.len();
-        set.push(first, (0, Some(1)), up, (0.5, 0.0), point(0.0));
-        set.push(first, (0, Some(1)), up, (0.5, 0.0), point(1.0));
-        set.push(first, (0, Some(1)), side, (0.5, 0.0), point(2.0));
+        set.push(first, (0, Some(1)), up, (0.5, 0.0, 0.0), point(0.0));
+        set.push(first, (0, Some(1)), up, (0.5, 0.0, 0.0), point(1.0));
+        set.push(first, (0, Some(1)), side, (0.5, 0.0, 0.0), point(2.0));
         // Pair (1, 2) brings no point; pair (2, None) one, with the same normal as the
         // last manifold, which must not absorb it.
         let first = set.manifolds.len();
-        set.push(first, (2, None), side, (0.3, 0.1), point(3.0));
+        set.push(first, (2, None), side, (0.3, 0.1, 0.0), point(3.0));
         let ranges: Vec<_> = set.manifolds.iter().map(|m| m.range()).collect();
         assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
         assert_eq!((set.manifolds[2].a, set.manifolds[2].b), (2, None));
@@ -552,7 +556,7 @@ mod tests {
                     first,
                     pairs[k],
                     n,
-                    (0.5, 0.1),
+                    (0.5, 0.1, 0.0),
                     point(p as f32 + 10.0 * k as f32),
                 );
             }

@@ -29,6 +29,7 @@ mod paper;
 mod particles;
 mod placement;
 mod rigid_frames;
+mod rolling;
 mod set_pose;
 mod sleeping;
 mod xpbd;

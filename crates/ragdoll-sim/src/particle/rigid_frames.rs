@@ -14,7 +14,8 @@
 //! 4. derive the velocities from the frames' motion over the substep, `v = Δc/h` and
 //!    the turn's angular momentum carried to the substep's end
 //!    ([`Bone::substep_velocity`]);
-//! 5. the velocity pass: restitution, joint friction, air friction.
+//! 5. the velocity pass: restitution, rolling resistance (`rolling`), joint friction,
+//!    air friction.
 //!
 //! Energy: a free bone keeps its energy and angular momentum (no damping of its own);
 //! every other step is a constraint correction or a dissipative velocity change. A
@@ -37,7 +38,7 @@ use super::joint_lanes::Lockstep;
 use super::joints::JointSet;
 use super::{ParticleWorld, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
-use crate::scene::{Ground, Settings};
+use crate::scene::{Ground, Settings, rolling_arm};
 use crate::timings::{PhaseClock, PhaseTimes};
 use glam::{Quat, Vec3, Vec3A};
 use parry3d::bounding_volume::Aabb;
@@ -88,13 +89,17 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
             let prediction = approach * dt + 2.0 * reach;
             let mu = (bones[i].friction * bones[j].friction).sqrt();
             let e = bones[i].restitution.max(bones[j].restitution);
+            let roll = rolling_arm(
+                bones[i].shape.rolling_radius(),
+                bones[j].shape.rolling_radius(),
+            );
             let first = set.manifolds.len();
             shape_pair(bones, i, j, prediction, scratch, |pa, pb, n, _| {
                 let point = ContactPoint::new(
                     bones[i].rot.inverse() * (pa - Vec3::from(bones[i].center())),
                     bones[j].rot.inverse() * (pb - Vec3::from(bones[j].center())),
                 );
-                set.push(first, (i, Some(j)), n, (mu, e), point);
+                set.push(first, (i, Some(j)), n, (mu, e, roll), point);
             });
         },
     );
@@ -123,10 +128,11 @@ fn ground_contacts(
         let b = &bones[i];
         let mu = (b.friction * ground.friction).sqrt();
         let e = b.restitution.max(ground.restitution);
+        let roll = rolling_arm(b.shape.rolling_radius(), 0.0);
         let first = set.manifolds.len();
         ground_pair(bones, i, ground, margins[i], scratch, |pa, pb, n, _| {
             let point = ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
-            set.push(first, (i, None), n, (mu, e), point);
+            set.push(first, (i, None), n, (mu, e, roll), point);
         });
     });
 }
@@ -510,6 +516,8 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 );
             }
         }
+        // Rolling resistance, on the substep's net normal impulses (`rolling`).
+        super::rolling::solve(p.bones, p.manifolds, p.points, h);
         // Joint friction, the file's `friction` of each joint that has one.
         for &(j, a, b) in p.joints {
             if j.friction_torque > 0.0 {
