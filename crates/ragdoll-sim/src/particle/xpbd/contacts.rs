@@ -21,17 +21,18 @@
 //! as far as the cone allows, which holds a static contact and slides a moving one at
 //! the kinetic rate `μ g cos θ` on a slope.
 
-use super::super::bone::Bone;
+use super::super::bone::{Bone, rolled_point};
 use super::super::contacts::{
     Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, shape_pair,
 };
+use super::super::rolling;
 use super::contact_block::{block_len, block_len_back, normals};
-use super::frame::weights;
+use super::frame::{combine, weights};
 use super::joints::Anchor;
 use super::particles::{PER_BONE, XParticles};
 use crate::broadphase::{Reused, speculative_margin};
-use crate::scene::Settings;
-use glam::{DMat3, DVec3, Mat3, Vec3};
+use crate::scene::{Settings, rolling_arm};
+use glam::{DMat3, DVec3, Mat3, Vec3, Vec3A};
 use parry3d::query::ContactManifold;
 
 /// One contact point between bone `a` and bone `b` or the ground.
@@ -47,6 +48,9 @@ pub(crate) struct Contact {
     pub mu: f32,
     /// Restitution, the larger of the two.
     pub restitution: f32,
+    /// `ρ r` of its rolling resistance (m, `crate::scene::rolling_arm`): 0 when
+    /// neither side rolls.
+    pub roll: f32,
     /// Relative normal velocity `(v_b − v_a) · n` before the substep (< 0: closing).
     pub vn_before: f32,
     /// Whether the contact pushed during the substep.
@@ -143,6 +147,10 @@ pub(crate) fn detect(
         let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
         let mu = (bones[i].friction * bones[j].friction).sqrt();
         let restitution = bones[i].restitution.max(bones[j].restitution);
+        let roll = rolling_arm(
+            bones[i].shape.rolling_radius(),
+            bones[j].shape.rolling_radius(),
+        );
         shape_pair(
             bones,
             i,
@@ -156,6 +164,7 @@ pub(crate) fn detect(
                     n,
                     mu,
                     restitution,
+                    roll,
                     vn_before: 0.0,
                     active: false,
                     lambda: 0.0,
@@ -177,6 +186,7 @@ pub(crate) fn detect(
             }
             let mu = (bones[i].friction * ground.friction).sqrt();
             let restitution = bones[i].restitution.max(ground.restitution);
+            let roll = rolling_arm(bones[i].shape.rolling_radius(), 0.0);
             ground_pair(
                 bones,
                 i,
@@ -190,6 +200,7 @@ pub(crate) fn detect(
                         n,
                         mu,
                         restitution,
+                        roll,
                         vn_before: 0.0,
                         active: false,
                         lambda: 0.0,
@@ -219,8 +230,17 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
 /// ground left it at 175 m/s).
 ///
 /// Runs at the substep's start, before the prediction: the points now are the points
-/// at the start (`x_prev = x`), kept in [`Contact::start`].
-pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed: f32, h: f32) {
+/// at the start (`x_prev = x`), kept in [`Contact::start`]. A capsule's ground points
+/// are first rolled to its bottom ([`roll_ground_points`]; `bones` hold the frames
+/// read from the particles now, `rest_inv` each bone's `D⁻¹`).
+pub(crate) fn begin_substep(
+    contacts: &mut [Contact],
+    p: &XParticles,
+    (bones, rest_inv): (&[Bone], &[Mat3]),
+    push_speed: f32,
+    h: f32,
+) {
+    roll_ground_points(contacts, bones, rest_inv);
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.active = false;
@@ -230,6 +250,29 @@ pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, push_speed
         let depth = (c.start[1] - c.start[0]).as_vec3().dot(c.n);
         c.floor = (depth + push_speed * h).min(0.0);
         c.inv_mass = c.a.inv_mass(p) + c.b.inv_mass(p);
+    }
+}
+
+/// Moves each ground contact's point on a capsule to where its surface faces the
+/// ground now (`bone::rolled_point`: the point of its core segment nearest the old one,
+/// out by the radius along the normal), its barycentric weights taken again. A point
+/// fixed in the bone from the detection has rolled off the bottom by `ω h` a substep
+/// when the passes push at it, up behind the centre on the way the capsule rolls, and
+/// the push spins it on: the closed forms' capsule rolling at 0.3 m/s on flat ground
+/// sped up at 0.027 m/s² (0.57 m/s after 12 s), where rolling resistance should stop it
+/// in 9 s. The rigid-frames solver rolls its ground points the same way
+/// (`rigid_frames::roll_contact`). Ground contacts only: between two bones the normal
+/// is no one side's.
+fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], rest_inv: &[Mat3]) {
+    for c in contacts.iter_mut() {
+        let (Anchor::Bone(i, w), Anchor::World(_)) = (c.a, c.b) else {
+            continue;
+        };
+        let b = &bones[i as usize];
+        let local = combine(&b.rest, &w);
+        if let Some(rolled) = rolled_point(b, local, Vec3A::from(c.n)) {
+            c.a = Anchor::Bone(i, weights(&rest_inv[i as usize], b.rest[0], rolled));
+        }
     }
 }
 
@@ -330,6 +373,45 @@ impl Lever {
         self.inv_total + rd.dot(self.inv_inertia * rd)
     }
 
+    /// The bone's angular velocity, `ω = I⁻¹ Σ m_k r_k × v_k` of its particles about
+    /// their centre (their velocities are rigid here); zero for the world or a bone
+    /// that takes no correction.
+    fn spin(&self, rigid: &[Rigid], p: &XParticles) -> Vec3 {
+        if self.inv_total == 0.0 {
+            return Vec3::ZERO;
+        }
+        let f = PER_BONE * self.bone as usize;
+        let arms = &rigid[self.bone as usize].arms;
+        let momentum: Vec3 = (0..PER_BONE)
+            .map(|k| arms[k].cross(p.v[f + k]) * p.mass[f + k])
+            .sum();
+        self.inv_inertia * momentum
+    }
+
+    /// The bone's `I⁻¹` (world), zero for the world or a bone that takes no
+    /// correction.
+    fn inv_inertia(&self) -> Mat3 {
+        if self.inv_total == 0.0 {
+            Mat3::ZERO
+        } else {
+            self.inv_inertia
+        }
+    }
+
+    /// Changes the bone's velocities by the angular impulse `l`: particle `k` by
+    /// `(I⁻¹ l) × r_k`, a turn that keeps the linear momentum.
+    fn twist(&self, rigid: &[Rigid], p: &mut XParticles, l: Vec3) {
+        if self.inv_total == 0.0 {
+            return;
+        }
+        let f = PER_BONE * self.bone as usize;
+        let arms = &rigid[self.bone as usize].arms;
+        let dw = self.inv_inertia * l;
+        for (v, r) in p.v[f..f + PER_BONE].iter_mut().zip(arms) {
+            *v += dw.cross(*r);
+        }
+    }
+
     /// Changes the bone's velocities by the impulse `j` at the point: particle `k` by
     /// `j / M + (I⁻¹ (r × j)) × r_k`, a rigid velocity change.
     fn kick(&self, rigid: &[Rigid], p: &mut XParticles, j: Vec3) {
@@ -366,6 +448,9 @@ impl Lever {
 /// (`(μ λ_n − |λ_t|) / h`), a resting contact's push-out, taken back as velocity by
 /// the normal step, still widened the cone: friction no normal impulse carried kept
 /// the human's hands and forearms trembling at 0.1 m/s, and it never fell asleep.
+///
+/// **Rolling**: after the passes, each manifold's rolling resistance, a capped couple
+/// on its bones' relative spin ([`roll`]).
 ///
 /// The velocities enter rigid (`shape_match::project_velocities`), so each change is
 /// an impulse `j` at the point on the rigid velocities, with the point's rigid
@@ -464,6 +549,39 @@ pub(crate) fn solve_velocities(
             scratch.friction[k] = total;
             la.kick(rigid, p, old - total);
             lb.kick(rigid, p, total - old);
+        }
+    }
+    roll(contacts, p, scratch, h);
+}
+
+/// Rolling resistance (`particle::rolling`), once the velocity passes have finished the
+/// substep's normal impulses: per run of points between the same two bodies (a
+/// manifold, `contact_block`), one angular impulse capped at `ρ r` times the run's net
+/// normal impulse, `Σ (λ_n / h + j_n)`, on the bones' rigid velocities.
+fn roll(contacts: &[Contact], p: &mut XParticles, scratch: &Scratch, h: f32) {
+    let mut start = 0;
+    while start < contacts.len() {
+        let run = start..start + block_len(&contacts[start..]);
+        start = run.end;
+        // Levers are taken for the active points only; a run with none pushed nothing.
+        let Some(first) = run.clone().find(|&k| contacts[k].active) else {
+            continue;
+        };
+        let arm = contacts[first].roll;
+        if arm <= 0.0 {
+            continue;
+        }
+        let normal: f32 = run
+            .filter(|&k| contacts[k].active)
+            .map(|k| contacts[k].lambda / h + scratch.normal[k])
+            .sum();
+        let [la, lb] = &scratch.levers[first];
+        let rigid = &scratch.rigid;
+        let spin = lb.spin(rigid, p) - la.spin(rigid, p);
+        let (inv_a, inv_b) = (la.inv_inertia(), lb.inv_inertia());
+        if let Some(l) = rolling::impulse(spin, inv_a, inv_b, arm * normal) {
+            la.twist(rigid, p, -l);
+            lb.twist(rigid, p, l);
         }
     }
 }

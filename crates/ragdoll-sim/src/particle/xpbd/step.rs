@@ -19,7 +19,8 @@
 //!    friction, a capped angular impulse keeping linear momentum (`friction`);
 //! 6. [`VELOCITY_PASSES`] passes of the contacts' velocity step (restitution, no
 //!    push-out kept as velocity, and the friction the position step's cone left
-//!    unused), impulses on the bones' rigid velocities (`contacts::solve_velocities`).
+//!    unused), impulses on the bones' rigid velocities (`contacts::solve_velocities`),
+//!    then each manifold's rolling resistance.
 //!
 //! Each substep ends by reading the frames from the particles (drawing, metrics, the
 //! next detection, the next substep's start); the frame ends by updating the sleep
@@ -152,6 +153,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         contacts::begin_substep(
             &mut st.contacts,
             &st.particles,
+            (&w.bones, &st.rest_inv),
             w.settings.max_push_out_speed,
             h,
         );
