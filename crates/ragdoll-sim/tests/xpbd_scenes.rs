@@ -1,7 +1,7 @@
 //! The XPBD particle solver on the scene files (assets/scenes): the thresholds of
 //! scenes 1–9 (energy gain ≤ 2 %, penetration ≤ 1 cm, joint gap ≤ 5 mm, limit excess
-//! ≤ 3°, bone stretch ≤ 1 %, the spider and the human asleep with no kinetic energy
-//! left), asserted on every variant of every scene.
+//! ≤ 3°, bone stretch ≤ 1 %, the spider, the human and the capsule human asleep with
+//! no kinetic energy left), asserted on every variant of every scene.
 
 mod common;
 
