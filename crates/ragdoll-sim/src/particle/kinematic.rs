@@ -94,7 +94,7 @@ impl ParticleWorld {
                     angular: states[i].angular_velocity,
                 };
                 self.wake_figure(i);
-                let particles = self.bones[i].particles.map(|k| k as usize);
+                let particles = self.particles.of_bone[i].map(|k| k as usize);
                 let inv_mass =
                     particles.map(|k| self.particles.inv_mass.get(k).copied().unwrap_or(0.0));
                 self.bones[i].fixed = true;
@@ -123,7 +123,7 @@ impl ParticleWorld {
                     }
                 }
                 if self.solver == super::ParticleSolver::Paper {
-                    for (p, inv) in self.bones[i].particles.into_iter().zip(k.inv_mass) {
+                    for (p, inv) in self.particles.of_bone[i].into_iter().zip(k.inv_mass) {
                         self.particles.inv_mass[p as usize] = inv;
                     }
                 }
@@ -178,7 +178,7 @@ impl ParticleWorld {
             self.wake_swept(i, next);
             // The paper's particles of the bone move as if they were free (`place_bone`
             // leaves held particles alone).
-            let held = self.bones[i].particles.map(|p| p as usize);
+            let held = self.particles.of_bone[i].map(|p| p as usize);
             if self.solver == super::ParticleSolver::Paper {
                 for (p, inv) in held.into_iter().zip(k.inv_mass) {
                     self.particles.inv_mass[p] = inv;
@@ -224,7 +224,7 @@ impl ParticleWorld {
         }
         if self.solver == super::ParticleSolver::Paper {
             let dt = self.settings.timestep;
-            for p in self.bones[i].particles {
+            for p in self.particles.of_bone[i] {
                 let p = p as usize;
                 let x = self.particles.x[p];
                 self.particles.x_prev[p] = x - rigid(x) * dt;
