@@ -160,7 +160,7 @@ impl ParticleWorld {
             }
             ParticleSolver::Paper => {
                 let mut st = paper::build(&mut w, scene, &masses);
-                st.sticks.shrink_to_fit();
+                st.shrink_to_fit();
                 w.paper = Some(st);
             }
         }
@@ -197,7 +197,13 @@ impl ParticleWorld {
         // their size from here on (a projectile is the only thing ever added).
         w.bones.shrink_to_fit();
         w.joints.shrink_to_fit();
+        // A joint's one or two angle limits would otherwise keep room for four (a
+        // `Vec`'s first growth), 256 bytes.
+        for j in &mut w.joints {
+            j.angle_limits.shrink_to_fit();
+        }
         w.particles.shrink_to_fit();
+        w.frame_starts.shrink_to_fit();
         Ok(w)
     }
 

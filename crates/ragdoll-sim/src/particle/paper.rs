@@ -104,6 +104,14 @@ pub(crate) struct PaperState {
 }
 
 impl PaperState {
+    /// Gives back the room the arrays grew beyond their length.
+    pub fn shrink_to_fit(&mut self) {
+        self.sticks.shrink_to_fit();
+        self.first_stick.shrink_to_fit();
+        self.hinges.shrink_to_fit();
+        self.cones.shrink_to_fit();
+    }
+
     /// Adds the six sticks (`EDGES`) of the next bone, whose particles are `ids`, of rest
     /// lengths `rest`.
     pub fn push_bone_sticks(&mut self, ids: [u32; 4], rest: &[f32; 6]) {

@@ -90,6 +90,8 @@ impl XpbdState {
             })
             .collect();
         st.particles.shrink_to_fit();
+        st.rest_inv.shrink_to_fit();
+        st.rest.shrink_to_fit();
         st
     }
 }
