@@ -26,12 +26,13 @@ pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (
 pub(crate) struct Bone {
     /// Index of the scene body.
     pub body: usize,
-    /// The four particles of the tetrahedron.
-    pub particles: [u32; 4],
-    /// Particle positions in the bone frame at rest.
+    /// Particle positions in the bone frame at rest. Its particles' indices and its
+    /// sticks' rest lengths are not kept here: the paper solver keeps its own
+    /// ([`Particles::of_bone`](super::particles::Particles::of_bone) and
+    /// [`paper::PaperState`](super::paper::PaperState)), XPBD's are `4i..4i + 4`, and the
+    /// rigid-frames solver's four corners are evaluated from `rest`, whose distances
+    /// are its sticks' lengths ([`Bone::rest_stick_lengths`]).
     pub rest: [Vec3; 4],
-    /// Rest lengths of the six sticks (`EDGES`).
-    pub stick_rest: [f32; 6],
     /// Bone frame: origin (the centre of mass in improved mode) at the start of the
     /// substep; the frame's origin is `com + dcom`.
     pub com: Vec3A,
@@ -67,9 +68,15 @@ pub(crate) struct Bone {
     pub asleep: bool,
     /// Seconds this bone has been below the sleep speeds.
     pub sleep_time: f32,
-    /// Where the bone was when it last moved more than the no-move bounds.
-    pub still_anchor: (Vec3, Quat),
-    /// Seconds the bone has stayed within the no-move bounds of `still_anchor`.
+    /// Where the bone's frame origin was when it last moved more than the no-move
+    /// bounds (its orientation then is `still_turn`; two fields, not a `(Vec3, Quat)`,
+    /// so the 12-byte position packs with the bone's 4-byte fields instead of padding
+    /// to 16).
+    pub still_at: Vec3,
+    /// The bone's orientation when it last moved more than the no-move bounds.
+    pub still_turn: Quat,
+    /// Seconds the bone has stayed within the no-move bounds of `still_at` and
+    /// `still_turn`.
     pub still_time: f32,
     /// Linear velocity of the frame origin (m/s), from the particles.
     pub lin_vel: Vec3A,
@@ -100,12 +107,13 @@ impl Bone {
         self.asleep = false;
         self.sleep_time = 0.0;
         self.still_time = 0.0;
-        self.still_anchor = (Vec3::from(self.center()), self.rot);
+        self.still_at = Vec3::from(self.center());
+        self.still_turn = self.rot;
     }
 
     /// Takes `from`'s motion: all that the rigid-frames solver's substeps write of a bone
-    /// (its frame, the substep's start and displacement, its velocities), a quarter of
-    /// its bytes. A batch of islands returns its bones to the world through this
+    /// (its frame, the substep's start and displacement, its velocities), about a
+    /// third of its bytes. A batch of islands returns its bones to the world through this
     /// (`islands`); `particle_threads` checks the result is the serial one bit for bit.
     pub fn take_motion(&mut self, from: &Bone) {
         self.com = from.com;
@@ -169,12 +177,21 @@ impl Bone {
         Vec3::from(self.lin_vel + self.ang_vel.cross(self.rot * Vec3A::from(self.rest[k])))
     }
 
-    /// Largest relative stick-length error of the bone whose particles are `corners`.
-    pub fn stretch(&self, corners: &[Vec3; 4]) -> f32 {
+    /// The rest lengths of the six sticks (`EDGES`) between the rest particles: the
+    /// rigid-frames and XPBD solvers' sticks, made from these same points (the paper
+    /// solver measures its sticks from the world positions it placed, `paper::add_bone`,
+    /// and keeps them in its own stick list).
+    pub fn rest_stick_lengths(&self) -> [f32; 6] {
+        EDGES.map(|(a, b)| self.rest[a].distance(self.rest[b]))
+    }
+
+    /// Largest relative stick-length error of the bone whose particles are `corners`,
+    /// sticks of rest lengths `stick_rest` (`EDGES`).
+    pub fn stretch(corners: &[Vec3; 4], stick_rest: &[f32; 6]) -> f32 {
         let mut worst = 0.0f32;
         for (k, &(i, j)) in EDGES.iter().enumerate() {
             let l = corners[i].distance(corners[j]);
-            let r = self.stick_rest[k];
+            let r = stick_rest[k];
             if r > 0.0 {
                 worst = worst.max((l - r).abs() / r);
             }
@@ -230,14 +247,12 @@ impl Bone {
         (self.dcom / h, self.rot * local * (1.0 / h))
     }
 
-    /// The paper's frame (section 3.1.2): origin at particle 0, X towards particle 1,
-    /// Y towards particle 2 orthogonalised, Z = X × Y.
-    pub fn paper_frame(&mut self, x: &[Vec3]) {
-        let p0 = x[self.particles[0] as usize];
-        let (r, ok) = gram_schmidt(
-            x[self.particles[1] as usize] - p0,
-            x[self.particles[2] as usize] - p0,
-        );
+    /// The paper's frame (section 3.1.2) of the bone whose particles are `ids`: origin
+    /// at particle 0, X towards particle 1, Y towards particle 2 orthogonalised, Z = X ×
+    /// Y.
+    pub fn paper_frame(&mut self, ids: [u32; 4], x: &[Vec3]) {
+        let p0 = x[ids[0] as usize];
+        let (r, ok) = gram_schmidt(x[ids[1] as usize] - p0, x[ids[2] as usize] - p0);
         if ok {
             self.rot = r;
         }

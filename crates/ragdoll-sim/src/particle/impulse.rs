@@ -167,7 +167,7 @@ impl ParticleWorld {
         }
         if self.solver == ParticleSolver::Paper {
             let dt = self.settings.timestep;
-            let ids = self.bones[i].particles.map(|p| p as usize);
+            let ids = self.particles.of_bone[i].map(|p| p as usize);
             let p = &mut self.particles;
             let x = ids.map(|k| p.x[k]);
             let m = ids.map(|k| if p.inv_mass[k] > 0.0 { p.mass[k] } else { 0.0 });

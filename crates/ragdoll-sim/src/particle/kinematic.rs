@@ -94,9 +94,11 @@ impl ParticleWorld {
                     angular: states[i].angular_velocity,
                 };
                 self.wake_figure(i);
-                let particles = self.bones[i].particles.map(|k| k as usize);
-                let inv_mass =
-                    particles.map(|k| self.particles.inv_mass.get(k).copied().unwrap_or(0.0));
+                // The paper's particles' inverse masses, given back on release (the other
+                // solvers keep none: zeros).
+                let inv_mass = self.particles.of_bone.get(i).map_or([0.0; 4], |ids| {
+                    ids.map(|k| self.particles.inv_mass[k as usize])
+                });
                 self.bones[i].fixed = true;
                 if let Some(st) = self.xpbd.as_mut() {
                     for k in PER_BONE * i..PER_BONE * (i + 1) {
@@ -105,8 +107,8 @@ impl ParticleWorld {
                     }
                 }
                 if self.solver == super::ParticleSolver::Paper {
-                    for k in particles {
-                        self.particles.inv_mass[k] = 0.0;
+                    for k in self.particles.of_bone[i] {
+                        self.particles.inv_mass[k as usize] = 0.0;
                     }
                 }
                 self.kinematic[i] = Some(KinematicBone { velocity, inv_mass });
@@ -123,7 +125,7 @@ impl ParticleWorld {
                     }
                 }
                 if self.solver == super::ParticleSolver::Paper {
-                    for (p, inv) in self.bones[i].particles.into_iter().zip(k.inv_mass) {
+                    for (p, inv) in self.particles.of_bone[i].into_iter().zip(k.inv_mass) {
                         self.particles.inv_mass[p as usize] = inv;
                     }
                 }
@@ -178,7 +180,14 @@ impl ParticleWorld {
             self.wake_swept(i, next);
             // The paper's particles of the bone move as if they were free (`place_bone`
             // leaves held particles alone).
-            let held = self.bones[i].particles.map(|p| p as usize);
+            // The paper solver's particles of the bone (the others keep none).
+            let held = self
+                .particles
+                .of_bone
+                .get(i)
+                .copied()
+                .unwrap_or_default()
+                .map(|p| p as usize);
             if self.solver == super::ParticleSolver::Paper {
                 for (p, inv) in held.into_iter().zip(k.inv_mass) {
                     self.particles.inv_mass[p] = inv;
@@ -224,7 +233,7 @@ impl ParticleWorld {
         }
         if self.solver == super::ParticleSolver::Paper {
             let dt = self.settings.timestep;
-            for p in self.bones[i].particles {
+            for p in self.particles.of_bone[i] {
                 let p = p as usize;
                 let x = self.particles.x[p];
                 self.particles.x_prev[p] = x - rigid(x) * dt;

@@ -9,7 +9,7 @@
 //! - Limit violation: excess of each limit's angle, measured from the bone frames.
 //! - Bone stretch: largest relative stick-length error.
 
-use super::bone::gram_schmidt;
+use super::bone::{Bone, gram_schmidt};
 use super::contacts::{broad_phase, ground_pair, shape_pair};
 use super::{ParticleSolver, ParticleWorld};
 use crate::method::{BodyState, Sample};
@@ -49,11 +49,9 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
         .iter()
         .map(|j| j.limit_violation(&w.bones))
         .fold(0.0, f32::max);
-    let stretch = w
-        .bones
-        .iter()
-        .filter(|b| !b.fixed)
-        .map(|b| b.stretch(&w.corners(b)))
+    let stretch = (0..w.bones.len())
+        .filter(|&i| !w.bones[i].fixed)
+        .map(|i| Bone::stretch(&w.corners(i), &w.stick_rest(i)))
         .fold(0.0, f32::max);
     let all_asleep =
         w.solver != ParticleSolver::Paper && w.bones.iter().all(|b| b.fixed || b.asleep);
@@ -114,7 +112,7 @@ fn energy_parts(w: &ParticleWorld) -> (f64, f64) {
 pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
     out.clear();
     let dt = w.settings.timestep;
-    for b in &w.bones {
+    for (i, b) in w.bones.iter().enumerate() {
         let pose = b.shape_pose();
         let com = pose.transform_point(b.shape_com);
         let (lin, ang) = match w.solver {
@@ -123,11 +121,9 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
             }
             ParticleSolver::Paper => {
                 let x = &w.particles.frame_start;
-                let p0 = x[b.particles[0] as usize];
-                let (r, _) = gram_schmidt(
-                    x[b.particles[1] as usize] - p0,
-                    x[b.particles[2] as usize] - p0,
-                );
+                let ids = w.particles.of_bone[i];
+                let p0 = x[ids[0] as usize];
+                let (r, _) = gram_schmidt(x[ids[1] as usize] - p0, x[ids[2] as usize] - p0);
                 let prev = crate::scene::Pose {
                     position: p0,
                     rotation: r,

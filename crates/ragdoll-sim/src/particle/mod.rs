@@ -161,7 +161,7 @@ impl ParticleWorld {
             }
             ParticleSolver::Paper => {
                 let mut st = paper::build(&mut w, scene, &masses);
-                st.sticks.shrink_to_fit();
+                st.shrink_to_fit();
                 w.paper = Some(st);
             }
         }
@@ -198,7 +198,13 @@ impl ParticleWorld {
         // their size from here on (a projectile is the only thing ever added).
         w.bones.shrink_to_fit();
         w.joints.shrink_to_fit();
+        // A joint's one or two angle limits would otherwise keep room for four (a
+        // `Vec`'s first growth), 256 bytes.
+        for j in &mut w.joints {
+            j.angle_limits.shrink_to_fit();
+        }
         w.particles.shrink_to_fit();
+        w.frame_starts.shrink_to_fit();
         Ok(w)
     }
 
@@ -206,9 +212,7 @@ impl ParticleWorld {
     fn make_bone(&self, body: usize, desc: &BodyDesc, mass: f32) -> Bone {
         Bone {
             body,
-            particles: [0; 4],
             rest: [Vec3::ZERO; 4],
-            stick_rest: [0.0; 6],
             com: desc.pose.position.into(),
             dcom: Vec3A::ZERO,
             rot: desc.pose.rotation,
@@ -223,7 +227,8 @@ impl ParticleWorld {
             fixed: desc.is_fixed(),
             asleep: false,
             sleep_time: 0.0,
-            still_anchor: (desc.pose.position, desc.pose.rotation),
+            still_at: desc.pose.position,
+            still_turn: desc.pose.rotation,
             still_time: 0.0,
             lin_vel: desc.linear_velocity.into(),
             ang_vel: desc.angular_velocity.into(),
@@ -249,7 +254,6 @@ impl ParticleWorld {
             rotation: p.bone_in_shape.rotation.inverse(),
         };
         bone.rest = p.rest;
-        bone.stick_rest = EDGES.map(|(a, b)| p.rest[a].distance(p.rest[b]));
         bone.inv_inertia_local = p
             .principal_inertia
             .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 })
@@ -278,31 +282,44 @@ impl ParticleWorld {
             // Its particles are made from the frame and velocities (`XpbdState::add_bone`).
             return Ok(bone);
         }
-        for k in 0..4 {
+        let ids = std::array::from_fn(|k| {
             let x = Vec3::from(bone.world(p.rest[k]));
             let v = desc.linear_velocity + desc.angular_velocity.cross(x - Vec3::from(bone.com));
-            bone.particles[k] = self.particles.push(
+            self.particles.push(
                 x,
                 v,
                 g,
                 dt,
                 if movable { mp.mass * 0.25 } else { 0.0 },
                 movable,
-            );
-        }
+            )
+        });
+        self.particles.of_bone.push(ids);
         Ok(bone)
     }
 
-    /// Where a bone's four particles are now: the paper's particles, or the corners of
+    /// Where bone `i`'s four particles are now: the paper's particles, or the corners of
     /// the improved bone's frame.
-    pub(crate) fn corners(&self, b: &Bone) -> [Vec3; 4] {
+    pub(crate) fn corners(&self, i: usize) -> [Vec3; 4] {
+        let b = &self.bones[i];
         match self.solver {
             ParticleSolver::RigidFrames => std::array::from_fn(|k| b.corner(k)),
-            ParticleSolver::Paper => b.particles.map(|p| self.particles.x[p as usize]),
+            ParticleSolver::Paper => {
+                self.particles.of_bone[i].map(|p| self.particles.x[p as usize])
+            }
             ParticleSolver::Xpbd => match &self.xpbd {
-                Some(st) => st.particles.bone(b.body),
+                Some(st) => st.particles.bone(i),
                 None => std::array::from_fn(|k| b.corner(k)),
             },
+        }
+    }
+
+    /// The rest lengths of bone `i`'s six sticks (`EDGES`): the paper solver's own
+    /// ([`paper::PaperState::bone_sticks`]), else those of its rest particles.
+    pub(crate) fn stick_rest(&self, i: usize) -> [f32; 6] {
+        match &self.paper {
+            Some(st) => st.bone_sticks(i),
+            None => self.bones[i].rest_stick_lengths(),
         }
     }
 
@@ -451,7 +468,7 @@ pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
     let local = w.bones[i].shape_in_bone.transform_point(g.local_point);
     let p = Vec3::from(w.bones[i].world(local));
     let d = (g.target - p) * 0.05;
-    for &k in &w.bones[i].particles {
+    for &k in &w.particles.of_bone[i] {
         if w.particles.inv_mass[k as usize] > 0.0 {
             w.particles.x[k as usize] += d;
         }
@@ -532,7 +549,7 @@ impl Method for ParticleWorld {
 
     fn snapshot(&self, out: &mut RenderSnapshot) {
         out.clear();
-        for b in &self.bones {
+        for (bone, b) in self.bones.iter().enumerate() {
             let role = if b.fixed {
                 BodyRole::Fixed
             } else if self.grab.is_some_and(|g| g.body.index() == b.body) {
@@ -550,7 +567,7 @@ impl Method for ParticleWorld {
                 pose: b.shape_pose(),
                 role,
             });
-            let corners = self.corners(b);
+            let corners = self.corners(bone);
             for &(i, j) in &EDGES {
                 out.sticks.push(StickInstance {
                     a: corners[i],
@@ -680,7 +697,7 @@ impl Method for ParticleWorld {
         out.clear();
         match self.solver {
             ParticleSolver::RigidFrames => {
-                out.extend(self.bones.iter().flat_map(|b| self.corners(b)))
+                out.extend((0..self.bones.len()).flat_map(|i| self.corners(i)))
             }
             ParticleSolver::Paper => out.extend_from_slice(&self.particles.x),
             ParticleSolver::Xpbd => {
@@ -755,34 +772,27 @@ impl Method for ParticleWorld {
         if let Ok(mut bone) = self.particulated_bone(id, desc) {
             bone.figure = id as u32;
             if let Some(st) = self.xpbd.as_mut() {
-                let i = self.bones.len();
-                bone.particles = std::array::from_fn(|k| (4 * i + k) as u32);
-                st.add_bone(i, &bone);
+                st.add_bone(self.bones.len(), &bone);
             }
             if self.solver == ParticleSolver::Paper {
                 // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it.
                 let x = &self.particles.x;
                 let shape_pose = bone.shape_pose();
-                bone.paper_frame(x);
+                let ids = self.particles.of_bone[self.bones.len()];
+                bone.paper_frame(ids, x);
                 let frame = Pose {
                     position: Vec3::from(bone.com),
                     rotation: bone.rot,
                 };
-                bone.rest = bone
-                    .particles
-                    .map(|p| frame.inverse_transform_point(x[p as usize]));
+                // Its sticks are as long as the placement's rest particles are apart.
+                let stick_rest = bone.rest_stick_lengths();
+                bone.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
                 bone.shape_in_bone = Pose {
                     position: frame.inverse_transform_point(shape_pose.position),
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
                 };
                 if let Some(st) = self.paper.as_mut() {
-                    for (k, &(a, b)) in EDGES.iter().enumerate() {
-                        st.sticks.push(paper::Stick {
-                            a: bone.particles[a],
-                            b: bone.particles[b],
-                            rest: bone.stick_rest[k],
-                        });
-                    }
+                    st.push_bone_sticks(ids, &stick_rest);
                 }
             }
             self.bones.push(bone);

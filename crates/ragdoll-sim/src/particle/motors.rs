@@ -48,7 +48,7 @@ impl ParticleWorld {
                 ))
             }
             ParticleSolver::Paper => {
-                let ids = self.bones[i].particles.map(|p| p as usize);
+                let ids = self.particles.of_bone[i].map(|p| p as usize);
                 let p = &self.particles;
                 Some((ids.map(|k| p.x[k]), ids.map(|k| p.mass[k])))
             }
@@ -92,7 +92,7 @@ impl ParticleWorld {
                     }
                 } else {
                     let dt = self.settings.timestep;
-                    for (p, dv) in self.bones[i].particles.into_iter().zip(dv) {
+                    for (p, dv) in self.particles.of_bone[i].into_iter().zip(dv) {
                         let p = p as usize;
                         if self.particles.inv_mass[p] == 0.0 {
                             continue;

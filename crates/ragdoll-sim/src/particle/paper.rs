@@ -95,10 +95,41 @@ pub(crate) struct ConeLimit {
 pub(crate) struct PaperState {
     /// Bone and tie sticks.
     pub sticks: Vec<Stick>,
+    /// Per bone, where its six sticks (`EDGES`, in that order) start in `sticks`.
+    pub first_stick: Vec<u32>,
     /// Hinge limits.
     pub hinges: Vec<HingeLimit>,
     /// Cone limits.
     pub cones: Vec<ConeLimit>,
+}
+
+impl PaperState {
+    /// Gives back the room the arrays grew beyond their length.
+    pub fn shrink_to_fit(&mut self) {
+        self.sticks.shrink_to_fit();
+        self.first_stick.shrink_to_fit();
+        self.hinges.shrink_to_fit();
+        self.cones.shrink_to_fit();
+    }
+
+    /// Adds the six sticks (`EDGES`) of the next bone, whose particles are `ids`, of rest
+    /// lengths `rest`.
+    pub fn push_bone_sticks(&mut self, ids: [u32; 4], rest: &[f32; 6]) {
+        self.first_stick.push(self.sticks.len() as u32);
+        for (k, &(a, b)) in EDGES.iter().enumerate() {
+            self.sticks.push(Stick {
+                a: ids[a],
+                b: ids[b],
+                rest: rest[k],
+            });
+        }
+    }
+
+    /// The rest lengths of bone `i`'s six sticks (`EDGES`).
+    pub fn bone_sticks(&self, i: usize) -> [f32; 6] {
+        let first = self.first_stick[i] as usize;
+        std::array::from_fn(|k| self.sticks[first + k].rest)
+    }
 }
 
 /// Builds the paper's particles, bones and limits: the joints' shared particles
@@ -277,19 +308,13 @@ fn add_bone(
         rotation: rot.inverse(),
     };
     let mut bone = w.make_bone(i, &scene.bodies[i], mass);
-    bone.particles = particles;
+    w.particles.of_bone.push(particles);
     bone.rest = pos.map(|p| frame.inverse_transform_point(p));
-    bone.stick_rest = EDGES.map(|(a, b)| pos[a].distance(pos[b]));
     bone.com = pos[0].into();
     bone.rot = rot;
     bone.shape_in_bone = inv.mul_pose(&body.pose);
-    for (k, &(a, b)) in EDGES.iter().enumerate() {
-        st.sticks.push(Stick {
-            a: particles[a],
-            b: particles[b],
-            rest: bone.stick_rest[k],
-        });
-    }
+    st.push_bone_sticks(particles, &EDGES.map(|(a, b)| pos[a].distance(pos[b])));
+    let x = &w.particles.x;
     for &s in satellites {
         for &p in &particles {
             let rest = x[s as usize].distance(x[p as usize]);
@@ -318,15 +343,15 @@ fn ties_and_limits(
         match &c.kind {
             JointKind::Fixed | JointKind::Slider { .. } => {
                 if let Some(b2) = b2 {
-                    for &p in &w.bones[b1].particles.clone() {
-                        for &q in &w.bones[b2].particles.clone() {
+                    for p in w.particles.of_bone[b1] {
+                        for q in w.particles.of_bone[b2] {
                             let rest =
                                 w.particles.x[p as usize].distance(w.particles.x[q as usize]);
                             st.sticks.push(Stick { a: p, b: q, rest });
                         }
                     }
                 } else {
-                    for &p in &w.bones[b1].particles.clone() {
+                    for p in w.particles.of_bone[b1] {
                         let x = w.particles.x[p as usize];
                         let anchor = w.particles.push(x, Vec3::ZERO, g, dt, 0.0, false);
                         st.sticks.push(Stick {
@@ -359,8 +384,7 @@ fn frame_rot(w: &ParticleWorld, bone: Option<usize>) -> Quat {
 
 fn farthest_from_line(w: &ParticleWorld, bone: usize, p1: Vec3, axis: Vec3, skip: &[u32]) -> u32 {
     let x = &w.particles.x;
-    *w.bones[bone]
-        .particles
+    *w.particles.of_bone[bone]
         .iter()
         .filter(|p| !skip.contains(p))
         .max_by(|&&a, &&b| {
@@ -368,7 +392,7 @@ fn farthest_from_line(w: &ParticleWorld, bone: usize, p1: Vec3, axis: Vec3, skip
             let db = (x[b as usize] - p1).reject_from(axis).length();
             da.total_cmp(&db)
         })
-        .unwrap_or(&w.bones[bone].particles[3])
+        .unwrap_or(&w.particles.of_bone[bone][3])
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -439,8 +463,7 @@ fn cone_limit(
     let xj = w.particles.x[joint as usize];
     let x = &w.particles.x;
     // Reference particle: the particle of B nearest the shaft's line (3.3.2).
-    let ref_b = *w.bones[b1]
-        .particles
+    let ref_b = *w.particles.of_bone[b1]
         .iter()
         .filter(|&&p| p != joint)
         .max_by(|&&a, &&b| {
@@ -448,11 +471,10 @@ fn cone_limit(
             let cb = (x[b as usize] - xj).normalize_or_zero().dot(shaft);
             ca.total_cmp(&cb)
         })
-        .unwrap_or(&w.bones[b1].particles[3]);
+        .unwrap_or(&w.particles.of_bone[b1][3]);
     let a_len = x[ref_b as usize].distance(xj);
     let other_a = match b2 {
-        Some(b) => *w.bones[b]
-            .particles
+        Some(b) => *w.particles.of_bone[b]
             .iter()
             .filter(|&&p| p != joint)
             .min_by(|&&a, &&b| {
@@ -460,7 +482,7 @@ fn cone_limit(
                     .dot(axis)
                     .total_cmp(&(x[b as usize] - xj).dot(axis))
             })
-            .unwrap_or(&w.bones[b].particles[3]),
+            .unwrap_or(&w.particles.of_bone[b][3]),
         None => w.particles.push(
             xj - axis * a_len.max(0.05),
             Vec3::ZERO,
@@ -499,8 +521,8 @@ fn satisfy(x: &mut [Vec3], inv: &[f32], a: u32, b: u32, rest: f32) {
 }
 
 fn update_frames(w: &mut ParticleWorld) {
-    for b in w.bones.iter_mut() {
-        b.paper_frame(&w.particles.x);
+    for (b, &ids) in w.bones.iter_mut().zip(&w.particles.of_bone) {
+        b.paper_frame(ids, &w.particles.x);
     }
 }
 
@@ -533,7 +555,7 @@ fn handle(
     };
     let friction = PAPER_FRICTION / iterations as f32;
     let apply = |w: &mut ParticleWorld, bone: usize, delta: Vec3| {
-        let ids = w.bones[bone].particles.map(|q| q as usize);
+        let ids = w.particles.of_bone[bone].map(|q| q as usize);
         let dist = ids.map(|i| p.distance(w.particles.x[i]));
         let total: f32 = dist.iter().sum();
         let c = if total > 1e-9 {
@@ -612,8 +634,8 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
                 deep.depth,
                 iterations,
             );
-            w.bones[i].paper_frame(&w.particles.x);
-            w.bones[j].paper_frame(&w.particles.x);
+            w.bones[i].paper_frame(w.particles.of_bone[i], &w.particles.x);
+            w.bones[j].paper_frame(w.particles.of_bone[j], &w.particles.x);
         }
     }
     if let Some(ground) = w.settings.ground {
@@ -636,7 +658,7 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
                     deep.depth,
                     iterations,
                 );
-                w.bones[i].paper_frame(&w.particles.x);
+                w.bones[i].paper_frame(w.particles.of_bone[i], &w.particles.x);
             }
         }
     }

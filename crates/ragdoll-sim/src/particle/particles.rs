@@ -24,6 +24,8 @@ pub(crate) struct Particles {
     pub inv_mass: Vec<f32>,
     /// Shared by two bones / a joint point (drawn green in the paper's figure 31).
     pub joint: Vec<bool>,
+    /// Each bone's four particles (the tetrahedron's corners `0..4`), by bone index.
+    pub of_bone: Vec<[u32; 4]>,
 }
 
 impl Particles {
@@ -65,6 +67,7 @@ impl Particles {
         self.mass.shrink_to_fit();
         self.inv_mass.shrink_to_fit();
         self.joint.shrink_to_fit();
+        self.of_bone.shrink_to_fit();
     }
 
     /// Number of particles.

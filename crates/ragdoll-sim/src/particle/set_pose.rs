@@ -96,13 +96,12 @@ impl ParticleWorld {
             return;
         }
         if let Some(paper) = self.paper.as_ref() {
-            let own = b.particles;
+            let own = self.particles.of_bone[i];
             let rest = b.rest;
-            let p = &mut self.particles;
             let past = |x: Vec3, v: Vec3| x - v * dt + g * (0.5 * dt * dt);
             // Joint particles tied to the bone by sticks, not among its four: moved
             // with it, once each.
-            let core = |k: u32| self.bones.iter().any(|b| b.particles.contains(&k));
+            let core = |k: u32| self.particles.of_bone.iter().any(|ids| ids.contains(&k));
             let mut tied: Vec<u32> = Vec::new();
             for stick in &paper.sticks {
                 for (end, other) in [(stick.a, stick.b), (stick.b, stick.a)] {
@@ -115,6 +114,7 @@ impl ParticleWorld {
                     }
                 }
             }
+            let p = &mut self.particles;
             for k in tied {
                 let k = k as usize;
                 if p.inv_mass[k] > 0.0 {
@@ -133,7 +133,7 @@ impl ParticleWorld {
                     p.frame_start[k] = p.x_prev[k];
                 }
             }
-            self.bones[i].paper_frame(&self.particles.x);
+            self.bones[i].paper_frame(self.particles.of_bone[i], &self.particles.x);
             return;
         }
         // Rigid frames.

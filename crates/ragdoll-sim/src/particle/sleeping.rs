@@ -61,7 +61,7 @@ pub(crate) fn update(
                 || (b.lin_vel.length() < s.linear_velocity
                     && b.ang_vel.length() < s.angular_velocity);
             b.sleep_time = if slow { b.sleep_time + dt } else { 0.0 };
-            let (p, q) = b.still_anchor;
+            let (p, q) = (b.still_at, b.still_turn);
             let turned = (b.rot * q.inverse()).to_axis_angle().1;
             let turned = turned.min(std::f32::consts::TAU - turned);
             if b.asleep
@@ -69,7 +69,8 @@ pub(crate) fn update(
             {
                 b.still_time += dt;
             } else {
-                b.still_anchor = (Vec3::from(b.center()), b.rot);
+                b.still_at = Vec3::from(b.center());
+                b.still_turn = b.rot;
                 b.still_time = 0.0;
             }
         });

@@ -74,7 +74,6 @@ impl XpbdState {
     pub fn new(bones: &mut [Bone], joints: &[Joint]) -> XpbdState {
         let mut st = XpbdState::default();
         for (i, b) in bones.iter_mut().enumerate() {
-            b.particles = std::array::from_fn(|k| (4 * i + k) as u32);
             st.add_bone(i, b);
         }
         st.anchors = joints
@@ -91,6 +90,8 @@ impl XpbdState {
             })
             .collect();
         st.particles.shrink_to_fit();
+        st.rest_inv.shrink_to_fit();
+        st.rest.shrink_to_fit();
         st
     }
 }
