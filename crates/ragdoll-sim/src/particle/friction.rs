@@ -102,28 +102,29 @@ fn normal_target(
 /// [`normal_target`] asks, or, for a point held in an old overlap that an earlier
 /// pass pushed past its allowance, take that push back down to it ([`lowest_push`]).
 /// Accumulates `lambda_n`. A manifold of more points than [`BLOCK`] solves them so, in
-/// turn. Returns whether it moved the bones.
+/// turn. Returns the point's two material points in the world, `(pa, pb)`, when it
+/// moved nothing (they are where the bones still stand), `None` when it moved the bones.
 pub(crate) fn solve_normal(
     bones: &mut [Bone],
     m: &Manifold,
     c: &mut ContactPoint,
     push_out: f32,
-) -> bool {
+) -> Option<(Vec3A, Vec3A)> {
     let (pa, pb, correction) = normal_target(bones, m, c, push_out);
     let lowest = lowest_push(c);
     // A correction under 1e-9 m is left: below the f32 rounding of any position read.
     let moves = correction >= 1e-9 || (correction <= -1e-9 && lowest < 0.0);
     if !moves {
-        return false;
+        return Some((pa, pb));
     }
     let corr = Correction::along(bones, (Some(m.a), pa), (m.b, pb), -m.n);
     if corr.w > 0.0 {
         let lambda = (correction / corr.w).max(lowest);
         corr.apply(bones, lambda);
         c.lambda_n += lambda;
-        return true;
+        return None;
     }
-    false
+    Some((pa, pb))
 }
 
 /// The least multiplier a pass may apply at point `c` after [`normal_target`] has set
@@ -371,7 +372,7 @@ pub(crate) fn solve_normals(
     let mut lambda = [0.0; BLOCK];
     if k == 1 {
         let before = points[0].lambda_n;
-        let moved = solve_normal(bones, m, &mut points[0], push_out);
+        let moved = solve_normal(bones, m, &mut points[0], push_out).is_none();
         lambda[0] = points[0].lambda_n - before;
         return (lambda, moved);
     }
@@ -442,7 +443,9 @@ const DRIFT_MAX: f32 = 1e-4;
 /// tangential slip during the substep (and half its drift since it came into touch,
 /// [`ANCHOR_PULL`]) entirely if that stays inside the Coulomb cone of the whole manifold
 /// (static), else as far as the cone allows (kinetic). Returns the tangential multiplier
-/// spent, `None` when it moved nothing.
+/// spent, `None` when it moved nothing. `at` is the point's two material points in the
+/// world, `(pa, pb)`, when the caller has just read them from the bones as they stand
+/// (the same bits as reading them here).
 ///
 /// The cone is the manifold's, `Σλ_t ≤ μ Σλ_n`, not each point's: Gauss–Seidel does not
 /// share the normal load evenly between a face's points within one pass, and a point
@@ -454,6 +457,7 @@ pub(crate) fn solve_friction(
     c: &mut ContactPoint,
     group_n: f32,
     group_t: f32,
+    at: Option<(Vec3A, Vec3A)>,
 ) -> Option<f32> {
     // Nothing to spend (a manifold not pressed yet, or its cone used up): return before
     // measuring the slip, four rotations of the contact's arms.
@@ -462,8 +466,7 @@ pub(crate) fn solve_friction(
         return None;
     }
     let a = Some(m.a);
-    let pa = bones[m.a].world(c.ra);
-    let pb = side_world(bones, m.b, c.rb);
+    let (pa, pb) = at.unwrap_or_else(|| (bones[m.a].world(c.ra), side_world(bones, m.b, c.rb)));
     let tangential = |d: Vec3A| d - m.n * d.dot(m.n);
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.

@@ -381,22 +381,24 @@ impl<'a> ManifoldSolve<'a> {
         if i >= self.points.len() {
             return;
         }
-        match &self.pushed {
+        // The point's material points when the top-up read them and moved nothing.
+        let at = match &self.pushed {
             // After a block, a top-up of the points after the first: only what the
             // earlier points' friction pressed this point back in since (see
             // `ManifoldSolve::pushed`). The first has had no friction before it.
             Some(pushed) => {
                 self.later -= pushed[i];
                 if i > 0 && !self.still {
-                    solve_normal(bones, self.m, &mut self.points[i], push_out);
+                    solve_normal(bones, self.m, &mut self.points[i], push_out)
+                } else {
+                    None
                 }
             }
-            None => {
-                solve_normal(bones, self.m, &mut self.points[i], push_out);
-            }
-        }
+            None => solve_normal(bones, self.m, &mut self.points[i], push_out),
+        };
         let normal: f32 = self.points.iter().map(|c| c.lambda_n).sum::<f32>() - self.later;
-        if let Some(spent) = solve_friction(bones, self.m, &mut self.points[i], normal, self.spent)
+        if let Some(spent) =
+            solve_friction(bones, self.m, &mut self.points[i], normal, self.spent, at)
         {
             self.spent += spent;
             self.still = false;
