@@ -24,6 +24,7 @@
 use super::bone::{Bone, Correction, Side, rotate_local, side_world};
 use super::contacts::{ContactPoint, Manifold};
 use glam::{Vec3, Vec3A};
+use wide::f32x4;
 
 fn side_displacement(bones: &[Bone], s: Side, local: Vec3) -> Vec3A {
     match s {
@@ -101,21 +102,29 @@ fn normal_target(
 /// [`normal_target`] asks, or, for a point held in an old overlap that an earlier
 /// pass pushed past its allowance, take that push back down to it ([`lowest_push`]).
 /// Accumulates `lambda_n`. A manifold of more points than [`BLOCK`] solves them so, in
-/// turn.
-pub(crate) fn solve_normal(bones: &mut [Bone], m: &Manifold, c: &mut ContactPoint, push_out: f32) {
+/// turn. Returns the point's two material points in the world, `(pa, pb)`, when it
+/// moved nothing (they are where the bones still stand), `None` when it moved the bones.
+pub(crate) fn solve_normal(
+    bones: &mut [Bone],
+    m: &Manifold,
+    c: &mut ContactPoint,
+    push_out: f32,
+) -> Option<(Vec3A, Vec3A)> {
     let (pa, pb, correction) = normal_target(bones, m, c, push_out);
     let lowest = lowest_push(c);
     // A correction under 1e-9 m is left: below the f32 rounding of any position read.
     let moves = correction >= 1e-9 || (correction <= -1e-9 && lowest < 0.0);
     if !moves {
-        return;
+        return Some((pa, pb));
     }
     let corr = Correction::along(bones, (Some(m.a), pa), (m.b, pb), -m.n);
     if corr.w > 0.0 {
         let lambda = (correction / corr.w).max(lowest);
         corr.apply(bones, lambda);
         c.lambda_n += lambda;
+        return None;
     }
+    Some((pa, pb))
 }
 
 /// The least multiplier a pass may apply at point `c` after [`normal_target`] has set
@@ -274,39 +283,75 @@ impl Block {
     }
 
     /// [`Block::solve`] of a block of `K` points (`K == self.k`).
+    ///
+    /// The multipliers are held in two `f32x4` registers, one lane a point, and row
+    /// `i`'s `Σ_j K_ij λ_j` adds its lanes' products in the order `j = 0, 1, …` from
+    /// −0, as `Iterator::sum` of the scalar products: the same bits as the scalar
+    /// sweep. Held in an array, each row's new `λ_i` was stored as one float and read
+    /// back with its neighbours as one vector by the next row, a load the processor
+    /// cannot forward from that store and waits for.
     #[inline(always)]
     fn solve_k<const K: usize>(&self, rhs: &[f32], lower: &[f32]) -> [f32; BLOCK] {
         debug_assert_eq!(K, self.k, "a block of {} points", self.k);
-        let k = K;
-        let (rhs, lower) = (&rhs[..k], &lower[..k]);
-        let mut lambda = [0.0f32; BLOCK];
+        let (rhs, lower) = (&rhs[..K], &lower[..K]);
+        let quarter = |row: &[f32; BLOCK], q: usize| {
+            f32x4::new([row[4 * q], row[4 * q + 1], row[4 * q + 2], row[4 * q + 3]])
+        };
+        let rows: [[f32x4; 2]; K] =
+            std::array::from_fn(|i| [quarter(&self.matrix[i], 0), quarter(&self.matrix[i], 1)]);
+        let mut lambda = [f32x4::ZERO; 2];
         for _ in 0..BLOCK_SWEEPS {
             let mut change = 0.0f32;
-            for i in 0..k {
+            for i in 0..K {
                 let kii = self.matrix[i][i];
                 if kii <= 0.0 {
                     continue;
                 }
-                let moved: f32 = (0..k).map(|j| self.matrix[i][j] * lambda[j]).sum();
-                let next = (lambda[i] + (rhs[i] - moved) / kii).max(lower[i]);
-                change = change.max((next - lambda[i]).abs() * kii);
-                lambda[i] = next;
+                let low = (rows[i][0] * lambda[0]).to_array();
+                let high = if K > 4 {
+                    (rows[i][1] * lambda[1]).to_array()
+                } else {
+                    [0.0; 4]
+                };
+                let mut moved = -0.0f32;
+                for j in 0..K {
+                    moved += if j < 4 { low[j] } else { high[j - 4] };
+                }
+                let old = lambda[i / 4].to_array()[i % 4];
+                let next = (old + (rhs[i] - moved) / kii).max(lower[i]);
+                change = change.max((next - old).abs() * kii);
+                lambda[i / 4] = LANE[i % 4].select(f32x4::splat(next), lambda[i / 4]);
             }
             if change <= BLOCK_TOLERANCE {
                 break;
             }
         }
-        lambda
+        let mut out = [0.0; BLOCK];
+        out[..4].copy_from_slice(&lambda[0].to_array());
+        out[4..].copy_from_slice(&lambda[1].to_array());
+        out
     }
 }
+
+/// Lane `i`'s mask of an `f32x4` (all bits set in lane `i`), for [`Block::solve_k`]'s
+/// update of one multiplier.
+const LANE: [f32x4; 4] = {
+    const ON: f32 = f32::from_bits(u32::MAX);
+    [
+        f32x4::new([ON, 0.0, 0.0, 0.0]),
+        f32x4::new([0.0, ON, 0.0, 0.0]),
+        f32x4::new([0.0, 0.0, ON, 0.0]),
+        f32x4::new([0.0, 0.0, 0.0, ON]),
+    ]
+};
 
 /// Normal position pass for one manifold: its points pushed apart as one block, each as
 /// far as [`normal_target`] asks and none further (the multipliers of the linear
 /// complementarity problem `λ ≥ lowest`, `K λ ≥ c`, complementary, by [`Block::solve`];
 /// `lowest` is zero but for a point held in an old overlap, which may take back the
 /// substep's earlier pushes, [`lowest_push`]).
-/// Accumulates each point's `lambda_n` and returns what each point took, `λ[..k]`;
-/// `points` holds at most [`BLOCK`].
+/// Accumulates each point's `lambda_n` and returns what each point took, `λ[..k]`, and
+/// whether it moved the bones; `points` holds at most [`BLOCK`].
 ///
 /// One point at a time, Gauss–Seidel over a face's four points is not symmetric: the
 /// first point takes the whole correction, three quarters of it as a turn of a cube,
@@ -321,15 +366,15 @@ pub(crate) fn solve_normals(
     m: &Manifold,
     points: &mut [ContactPoint],
     push_out: f32,
-) -> [f32; BLOCK] {
+) -> ([f32; BLOCK], bool) {
     let k = points.len();
     debug_assert!(k <= BLOCK, "a block of {k} points");
     let mut lambda = [0.0; BLOCK];
     if k == 1 {
         let before = points[0].lambda_n;
-        solve_normal(bones, m, &mut points[0], push_out);
+        let moved = solve_normal(bones, m, &mut points[0], push_out).is_none();
         lambda[0] = points[0].lambda_n - before;
-        return lambda;
+        return (lambda, moved);
     }
     let (mut pa, mut pb, mut need) = ([Vec3A::ZERO; BLOCK], [Vec3A::ZERO; BLOCK], [0.0; BLOCK]);
     let mut lowest = [0.0; BLOCK];
@@ -342,7 +387,7 @@ pub(crate) fn solve_normals(
     // No point needs pushing nor was pushed past its allowance (a speculative
     // manifold): `λ = 0` solves the block.
     if !pressed {
-        return lambda;
+        return (lambda, false);
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
     lambda = block.solve(&need[..k], &lowest[..k]);
@@ -355,7 +400,7 @@ pub(crate) fn solve_normals(
     for (c, l) in points.iter_mut().zip(lambda) {
         c.lambda_n += l;
     }
-    lambda
+    (lambda, true)
 }
 
 /// Tangential offset of a contact's two points at the start of the substep, `pa − pb`
@@ -398,7 +443,9 @@ const DRIFT_MAX: f32 = 1e-4;
 /// tangential slip during the substep (and half its drift since it came into touch,
 /// [`ANCHOR_PULL`]) entirely if that stays inside the Coulomb cone of the whole manifold
 /// (static), else as far as the cone allows (kinetic). Returns the tangential multiplier
-/// spent.
+/// spent, `None` when it moved nothing. `at` is the point's two material points in the
+/// world, `(pa, pb)`, when the caller has just read them from the bones as they stand
+/// (the same bits as reading them here).
 ///
 /// The cone is the manifold's, `Σλ_t ≤ μ Σλ_n`, not each point's: Gauss–Seidel does not
 /// share the normal load evenly between a face's points within one pass, and a point
@@ -410,16 +457,16 @@ pub(crate) fn solve_friction(
     c: &mut ContactPoint,
     group_n: f32,
     group_t: f32,
-) -> f32 {
+    at: Option<(Vec3A, Vec3A)>,
+) -> Option<f32> {
     // Nothing to spend (a manifold not pressed yet, or its cone used up): return before
     // measuring the slip, four rotations of the contact's arms.
     let allowed = m.mu * group_n - group_t;
     if allowed <= 0.0 {
-        return 0.0;
+        return None;
     }
     let a = Some(m.a);
-    let pa = bones[m.a].world(c.ra);
-    let pb = side_world(bones, m.b, c.rb);
+    let (pa, pb) = at.unwrap_or_else(|| (bones[m.a].world(c.ra), side_world(bones, m.b, c.rb)));
     let tangential = |d: Vec3A| d - m.n * d.dot(m.n);
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
@@ -453,7 +500,7 @@ pub(crate) fn solve_friction(
     };
     let len = len2.sqrt();
     if len < 1e-9 || corr.w <= 0.0 {
-        return 0.0;
+        return None;
     }
     // λ = |correction| / w_unit, the correction being the slip or as much as the cone
     // allows: per unit of the slip vector, `len / (len w_unit) = len² / W`, or
@@ -462,7 +509,7 @@ pub(crate) fn solve_friction(
     corr.apply(bones, mu);
     let lt = mu * len;
     c.lambda_t += lt;
-    lt
+    Some(lt)
 }
 
 /// Radius of the contact patch a point contact stands for (m): the lever arm of its
@@ -602,6 +649,88 @@ fn solve_twist(
             let cap = m.mu * PATCH_RADIUS * c.lambda_n / h;
             let l = spin.signum() * (spin.abs() / turn.w).min(cap);
             turn.apply_velocity(bones, -l);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sweep as written over plain arrays: `Σ_j K_ij λ_j` by `Iterator::sum`.
+    fn scalar_solve(block: &Block, rhs: &[f32], lower: &[f32]) -> [f32; BLOCK] {
+        let k = block.k;
+        let mut lambda = [0.0f32; BLOCK];
+        for _ in 0..BLOCK_SWEEPS {
+            let mut change = 0.0f32;
+            for i in 0..k {
+                let kii = block.matrix[i][i];
+                if kii <= 0.0 {
+                    continue;
+                }
+                let moved: f32 = (0..k).map(|j| block.matrix[i][j] * lambda[j]).sum();
+                let next = (lambda[i] + (rhs[i] - moved) / kii).max(lower[i]);
+                change = change.max((next - lambda[i]).abs() * kii);
+                lambda[i] = next;
+            }
+            if change <= BLOCK_TOLERANCE {
+                break;
+            }
+        }
+        lambda
+    }
+
+    /// The block sweep in SIMD lanes gives the scalar sweep's bits, block sizes 1 to
+    /// [`BLOCK`], on contact matrices `K_ij = 1/M + (r_i × n) · I⁻¹ (r_j × n)` of random
+    /// points, targets and bounds (some negative, as the velocity pass's), including
+    /// a zero multiplier's sign.
+    #[test]
+    fn lane_sweep_is_the_scalar_sweep_bit_for_bit() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let n = Vec3A::Y;
+        for trial in 0..2000 {
+            let k = 1 + trial % BLOCK;
+            let inv_mass = 0.5 + uniform().abs() * 4.0;
+            let inv_inertia = Vec3A::new(
+                1.0 + uniform().abs() * 30.0,
+                1.0 + uniform().abs() * 30.0,
+                1.0 + uniform().abs() * 30.0,
+            );
+            let arms: Vec<Vec3A> = (0..k)
+                .map(|_| Vec3A::new(uniform(), uniform() * 0.1, uniform()) * 0.3)
+                .collect();
+            let mut matrix = [[0.0f32; BLOCK]; BLOCK];
+            for i in 0..k {
+                for j in 0..k {
+                    let (ai, aj) = (arms[i].cross(n), arms[j].cross(n));
+                    matrix[i][j] = inv_mass + ai.dot(inv_inertia * aj);
+                }
+            }
+            let block = Block {
+                k,
+                a: None,
+                b: None,
+                matrix,
+            };
+            let rhs: Vec<f32> = (0..k).map(|_| uniform() * 1e-3).collect();
+            let lower: Vec<f32> = (0..k)
+                .map(|_| {
+                    if trial % 3 == 0 {
+                        uniform().min(0.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let lanes = block.solve(&rhs, &lower).map(f32::to_bits);
+            let scalar = scalar_solve(&block, &rhs, &lower).map(f32::to_bits);
+            assert_eq!(lanes, scalar, "block of {k} points, trial {trial}");
         }
     }
 }

@@ -344,6 +344,12 @@ struct ManifoldSolve<'a> {
     pushed: Option<[f32; BLOCK]>,
     /// The part of `pushed` the points after the next one to take friction took.
     later: f32,
+    /// Whether the block moved nothing (no point pressed) and nothing has moved the
+    /// manifold's bones since: then a point's top-up would read the depths the block
+    /// read, none of which asked for a push, and is skipped as the no-op it is (the
+    /// manifolds solved beside it share none of its bones). Most of a pile's manifolds
+    /// are speculative ones no pass presses.
+    still: bool,
 }
 
 impl<'a> ManifoldSolve<'a> {
@@ -355,6 +361,7 @@ impl<'a> ManifoldSolve<'a> {
             spent,
             pushed: None,
             later: 0.0,
+            still: false,
         }
     }
 
@@ -362,9 +369,10 @@ impl<'a> ManifoldSolve<'a> {
     #[inline(always)]
     fn normals(&mut self, bones: &mut [Bone], push_out: f32) {
         if self.points.len() <= BLOCK {
-            let pushed = solve_normals(bones, self.m, self.points, push_out);
+            let (pushed, moved) = solve_normals(bones, self.m, self.points, push_out);
             self.later = pushed.iter().sum();
             self.pushed = Some(pushed);
+            self.still = !moved;
         }
     }
 
@@ -379,20 +387,28 @@ impl<'a> ManifoldSolve<'a> {
         if i >= self.points.len() {
             return;
         }
-        match &self.pushed {
+        // The point's material points when the top-up read them and moved nothing.
+        let at = match &self.pushed {
             // After a block, a top-up of the points after the first: only what the
             // earlier points' friction pressed this point back in since (see
             // `ManifoldSolve::pushed`). The first has had no friction before it.
             Some(pushed) => {
                 self.later -= pushed[i];
-                if i > 0 {
-                    solve_normal(bones, self.m, &mut self.points[i], push_out);
+                if i > 0 && !self.still {
+                    solve_normal(bones, self.m, &mut self.points[i], push_out)
+                } else {
+                    None
                 }
             }
             None => solve_normal(bones, self.m, &mut self.points[i], push_out),
-        }
+        };
         let normal: f32 = self.points.iter().map(|c| c.lambda_n).sum::<f32>() - self.later;
-        self.spent += solve_friction(bones, self.m, &mut self.points[i], normal, self.spent);
+        if let Some(spent) =
+            solve_friction(bones, self.m, &mut self.points[i], normal, self.spent, at)
+        {
+            self.spent += spent;
+            self.still = false;
+        }
     }
 }
 
