@@ -158,7 +158,7 @@ impl Split {
             for found in &with_resting {
                 out.extend_from_slice(found);
             }
-            out[start..].par_sort_unstable();
+            out[start..].sort_unstable();
         }
         parts
     }
@@ -487,8 +487,7 @@ fn build_and_traverse(
         }
         parts
     };
-    // Plain keys: a parallel sort gives the same list.
-    out[start..].par_sort_unstable();
+    out[start..].sort_unstable();
     parts
 }
 

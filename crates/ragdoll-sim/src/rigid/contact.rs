@@ -232,19 +232,15 @@ impl Contacts {
         let n = info.len();
         let anchor = n as u32;
         // Broad phase on AABBs loosened by the speculative margin and this step's motion.
-        // Each box on its own, so on all cores (a pile's 16 000 bodies are a serial
-        // millisecond otherwise, every detection).
         self.aabbs.clear();
-        let hulls = &self.hulls;
-        self.aabbs
-            .par_extend((0..n).into_par_iter().with_min_len(256).map(|i| {
-                let motion = point_speed(s, info, i) * dt;
-                let aabb = info[i]
-                    .collider(hulls)
-                    .shape()
-                    .compute_aabb(&shape_pose(s, info, i));
-                aabb.loosened(margin + motion)
-            }));
+        for i in 0..n {
+            let motion = point_speed(s, info, i) * dt;
+            let aabb = info[i]
+                .collider(&self.hulls)
+                .shape()
+                .compute_aabb(&shape_pose(s, info, i));
+            self.aabbs.push(aabb.loosened(margin + motion));
+        }
         self.candidates.clear();
         // Bodies near the ground plane (the plane comes last: the anchor has the largest
         // index). Listed first, as the broad phase reserves its pairs' room once, after
@@ -278,8 +274,7 @@ impl Contacts {
                 self.candidates.push((p.a, p.b));
             }
         }
-        // Sorted on all cores: the pairs are plain keys, so any sort gives the same list.
-        self.candidates.par_sort_unstable();
+        self.candidates.sort_unstable();
         self.candidates.dedup();
 
         // Merge the sorted candidate list into the sorted cache in place (no second pair

@@ -247,12 +247,9 @@ impl ContactConstraints {
         }
         for color in &colors {
             for chunk in color.chunks(LANES) {
-                // On the stack: a step loads thousands of groups.
-                let index: [usize; LANES] =
-                    std::array::from_fn(|k| chunk.get(k).map_or(0, |&i| i as usize));
-                let lanes: [&PairConstraint; LANES] = index.map(|i| &self.pairs[i]);
-                let m = chunk.len();
-                self.bundles.load(&index[..m], &lanes[..m], &self.points);
+                let index: Vec<usize> = chunk.iter().map(|&i| i as usize).collect();
+                let lanes: Vec<&PairConstraint> = index.iter().map(|&i| &self.pairs[i]).collect();
+                self.bundles.load(&index, &lanes, &self.points);
             }
         }
     }
