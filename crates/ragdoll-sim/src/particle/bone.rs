@@ -134,6 +134,12 @@ impl Bone {
         }
     }
 
+    /// World inverse inertia `R I⁻¹ Rᵀ` at the bone's orientation now.
+    pub fn inv_inertia_world(&self) -> Mat3 {
+        let r = Mat3::from_quat(self.rot);
+        r * Mat3::from_diagonal(Vec3::from(self.inv_inertia_local)) * r.transpose()
+    }
+
     /// The frame origin now.
     pub fn center(&self) -> Vec3A {
         self.com + self.dcom
@@ -343,8 +349,6 @@ fn half_turn(q: Quat) -> Quat {
 /// A static-or-moving side of a two-body constraint: a bone, or the world/ground.
 pub(crate) type Side = Option<usize>;
 
-/// World point and frame origin of a point given in a side's local frame (world: as is).
-#[inline]
 /// Where a capsule's surface faces `dir` (world, unit) nearest bone-frame point `local`,
 /// in the bone frame as it stands now: the point of its core
 /// segment nearest `local`, moved out by the radius along `dir`. `None` for a shape
@@ -367,6 +371,8 @@ pub(crate) fn rolled_point(b: &Bone, local: Vec3, dir: Vec3A) -> Option<Vec3> {
     Some(s.transform_point(Vec3::new(0.0, along, 0.0) + facing * radius))
 }
 
+/// World point and frame origin of a point given in a side's local frame (world: as is).
+#[inline]
 pub(crate) fn side_world(bones: &[Bone], s: Side, local: Vec3) -> Vec3A {
     match s {
         Some(i) => bones[i].world(local),
