@@ -32,7 +32,7 @@ use super::xpbd::particles::PER_BONE;
 use super::xpbd::sleeping::Rest;
 use super::{ParticleSolver, ParticleWorld};
 use crate::scene::BodyId;
-use glam::{DMat3, DVec3, Mat3, Vec3, Vec3A};
+use glam::{DMat3, DVec3, Vec3, Vec3A};
 
 /// The mass, centre of mass and inertia about it (world axes) of particles of masses
 /// `m` at `x`; `None` when they have no mass.
@@ -180,8 +180,7 @@ impl ParticleWorld {
         }
         // Rigid frames: the frame's own velocities.
         let b = &mut self.bones[i];
-        let r = Mat3::from_quat(b.rot);
-        let inv_inertia = r * Mat3::from_diagonal(Vec3::from(b.inv_inertia_local)) * r.transpose();
+        let inv_inertia = b.inv_inertia_world();
         let arm = point - Vec3::from(b.center());
         b.lin_vel += Vec3A::from(impulse / b.mass);
         b.ang_vel += Vec3A::from(inv_inertia * arm.cross(impulse));

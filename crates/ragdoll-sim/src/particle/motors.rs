@@ -62,10 +62,7 @@ impl ParticleWorld {
             Mat3::ZERO
         } else {
             match self.bone_particles(i) {
-                None => {
-                    let r = Mat3::from_quat(b.rot);
-                    r * Mat3::from_diagonal(Vec3::from(b.inv_inertia_local)) * r.transpose()
-                }
+                None => b.inv_inertia_world(),
                 Some((x, m)) => particle_inertia(&x, &m)
                     .map_or(Mat3::ZERO, |(_, _, i)| inverse_inertia(&i).as_mat3()),
             }

@@ -44,11 +44,7 @@ pub(crate) fn impulse(spin: Vec3, inv_a: Mat3, inv_b: Mat3, cap: f32) -> Option<
 /// takes no correction.
 fn inv_inertia(bones: &[Bone], s: Side) -> Mat3 {
     match s {
-        Some(i) if !bones[i].is_static() => {
-            let b = &bones[i];
-            let r = Mat3::from_quat(b.rot);
-            r * Mat3::from_diagonal(Vec3::from(b.inv_inertia_local)) * r.transpose()
-        }
+        Some(i) if !bones[i].is_static() => bones[i].inv_inertia_world(),
         _ => Mat3::ZERO,
     }
 }
