@@ -151,7 +151,7 @@ fn hinge_pendulum_small_angle_period() {
 fn spinning_box_keeps_angular_momentum() {
     // A box spinning about an axis off its principal axes (near the major one, so the
     // motion is a stable precession), no gravity: L = R I Rᵀ ω is conserved exactly;
-    // the implicit gyroscopic term should keep it within 1 % for 10 s.
+    // the turn with L held should keep it within 1 % for 10 s.
     let mut b = BodyDesc::new(
         "spinner",
         Shape::Box {

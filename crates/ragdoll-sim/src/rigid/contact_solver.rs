@@ -347,6 +347,17 @@ impl ContactConstraints {
         }
     }
 
+    /// Sets `touching[i]` for both bodies of every pair of this solve.
+    pub fn mark_touching(&self, touching: &mut [bool]) {
+        for pc in &self.pairs {
+            for i in [pc.a, pc.b] {
+                if let Some(t) = touching.get_mut(i) {
+                    *t = true;
+                }
+            }
+        }
+    }
+
     /// One position-projection pass (see [`super::project`]): each point deeper than
     /// [`LINEAR_SLOP`] is pushed apart along its normal by a fraction of its depth,
     /// `P = −K⁻¹ C` with `C = β (s + slop)` clamped to `[−MAX_LINEAR_CORRECTION, 0]`

@@ -1,13 +1,14 @@
 //! Semi-implicit (symplectic) Euler integration of rigid bodies, one substep at a time.
 //!
-//! Velocities first (gravity, air friction, the gyroscopic term), then — after the
-//! constraints have corrected the velocities — positions from the new velocities. This
-//! is the integrator of Box2D v3's soft step and of Catto's GDC 2015 talk
-//! "Numerical methods".
+//! Velocities first (the gyroscopic term, gravity, air friction), then — after the
+//! constraints have corrected the velocities — positions from the new velocities, each
+//! body turned with its angular momentum held. This is the integrator of Box2D v3's soft
+//! step and of Catto's GDC 2015 talk "Numerical methods", with the gyroscopic term of
+//! an implicit midpoint rule ([`midpoint_spin`]).
 
 use super::body::{BodyStates, Motions};
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4};
-use glam::{Mat3A, Quat, Vec3, Vec3A};
+use glam::{Mat3, Mat3A, Quat, Vec3, Vec3A};
 use wide::f32x4;
 
 /// World inverse inertia `R I⁻¹ Rᵀ` for every awake body, refreshed before the
@@ -87,116 +88,32 @@ fn rotation_matrix(q: Quatx4) -> Mat3x4 {
     }
 }
 
-/// One implicit Euler step of Euler's equation `I ω̇ + ω × I ω = 0` in body space,
-/// linearised once (a single Newton step), as Catto recommends: explicit integration of
-/// the gyroscopic term adds energy to tumbling bodies, the implicit one removes a little.
-///
-/// `f(ω) = I (ω − ω₀) + h ω × I ω`, `J = I + h (ω̂ I − (Iω)^)`, `ω₁ = ω₀ − J⁻¹ f(ω₀)`.
-///
-/// Four bodies at a time, one per lane, each lane with glam's operations in their order
-/// (`Quat * Vec3`, `Mat3A * Vec3A` and `Mat3A * Mat3A` column by column, the cross
-/// product's products, `Mat3A::determinant` and `Mat3A::inverse` by their cofactors):
-/// a lane holds the bits of the one-body form in glam's types (`tests::one_body`), which
-/// the tests compare. A lane whose `J` is singular keeps its velocity.
-fn gyroscopic(w_world: Vec3x4, rot: Quatx4, inertia: Mat3x4, h: f32x4) -> Vec3x4 {
-    let w = rot.conjugate().rotate_as_glam(w_world);
-    let iw = inertia * w;
-    let f = w.cross(iw) * h;
-    let (sw, siw) = (Mat3x4::skew(w), Mat3x4::skew(iw));
-    let col = |c: usize| inertia.cols[c] + ((sw * inertia.cols[c]) - siw.cols[c]) * h;
-    let [x, y, z] = [col(0), col(1), col(2)];
-    // `Mat3A`'s columns are `Vec3A`s: their cross products are glam's `Vec3A` ones.
-    let (t0, t1, t2) = (y.cross_a(z), z.cross_a(x), x.cross_a(y));
-    let det = x.dot(t0);
-    let size = det.abs();
-    let ok = size.simd_gt(f32x4::splat(1e-12)) & size.simd_lt(f32x4::splat(f32::INFINITY));
-    let inv_det = f32x4::ONE / det;
-    // `J⁻¹`: the cofactor columns over the determinant, transposed.
-    let inverse = Mat3x4 {
-        cols: [t0 * inv_det, t1 * inv_det, t2 * inv_det],
-    }
-    .transpose();
-    let turned = rot.rotate_as_glam(w - inverse * f);
-    Vec3x4::select(ok, turned, w_world)
-}
-
-/// Puts back what the implicit gyroscopic step lost: `ω₁` (world) moved onto the
-/// angular velocities with the body-space |L| and kinetic energy of `ω₀`.
-///
-/// Without torque, Euler's equation `L̇_b = L_b × I⁻¹ L_b` keeps both |L_b|² and
-/// `L_bᵀ I⁻¹ L_b = 2 T` (two quadratic invariants). The linearised implicit step keeps
-/// neither: it dissipates (a box tumbling about a general axis lost 15 % of its kinetic
-/// energy and 8 % of |L| in 10 s at 240 Hz), which is damping the scene never asked for.
-/// The standard projection method (Hairer, Lubich & Wanner, "Geometric Numerical
-/// Integration", IV.4) moves the step's result back onto the invariant manifold:
-/// Gauss–Newton on `c₁ = |L|² − |L₀|²`, `c₂ = Lᵀ I⁻¹ L − L₀ᵀ I⁻¹ L₀` along their
-/// gradients `2L`, `2ω`, `δ = a L + b ω` with
-/// `[L·L  L·ω; ω·L  ω·ω] (a, b) = −½ (c₁, c₂)`. About a principal axis L ∥ ω and the
-/// two conditions coincide: |L| alone is restored by scaling. Only the gyroscopic term
-/// is corrected (gravity, air friction and constraints act after), so a body that
-/// should lose energy still does.
-fn keep_invariants(w0_world: Vec3, w1_world: Vec3, rot: Quat, inertia: glam::Mat3) -> Vec3 {
-    let inv = inertia.inverse();
-    if !inv.is_finite() || !w1_world.is_finite() {
-        return w1_world;
-    }
-    let l0 = inertia * (rot.inverse() * w0_world);
-    let (ll0, e0) = (l0.length_squared(), l0.dot(inv * l0));
-    if ll0 <= 1e-30 {
-        return w1_world;
-    }
-    let mut l = inertia * (rot.inverse() * w1_world);
-    for _ in 0..3 {
-        let w = inv * l;
-        let (c1, c2) = (l.length_squared() - ll0, l.dot(w) - e0);
-        let (a11, a12, a22) = (l.dot(l), l.dot(w), w.dot(w));
-        let det = a11 * a22 - a12 * a12;
-        if det > 1e-6 * a11 * a22 {
-            let a = -0.5 * (c1 * a22 - c2 * a12) / det;
-            let b = -0.5 * (a11 * c2 - a12 * c1) / det;
-            l += a * l + b * w;
-        } else if l.length_squared() > 0.0 {
-            l *= (ll0 / l.length_squared()).sqrt();
-        }
-    }
-    let w = rot * (inv * l);
-    if w.is_finite() { w } else { w1_world }
-}
-
-/// Velocity half of the substep: gravity, Doom 3 air friction (a fraction of the velocity
-/// lost per second, applied as exact exponential decay), the gyroscopic term.
+/// Velocity half of the substep: the gyroscopic term ([`midpoint_spin`]), then gravity
+/// and Doom 3 air friction (a fraction of the velocity lost per second, applied as exact
+/// exponential decay). `spin_offset[i]` receives what [`integrate_positions`] adds to
+/// `R I Rᵀ ω` to read body `i`'s angular momentum after the constraints.
 pub fn integrate_velocities(
     states: &mut BodyStates,
     motion: Motions<'_>,
     awake: &[bool],
     gravity: Vec3,
     h: f32,
+    spin_offset: &mut [Vec3],
 ) {
-    // The gyroscopic term of the awake bodies four at a time (see `gyroscopic`); a
-    // last group of fewer repeats its last body.
-    let awake = &awake[..motion.bodies.len()];
-    let hx4 = f32x4::splat(h);
-    for_each_group(awake, |group| {
-        let body = |k: usize| group[k.min(group.len() - 1)];
-        let w = gyroscopic(
-            Vec3x4::from_fn(|k| Vec3::from(states.ang_vel[body(k)])),
-            Quatx4::from_fn(|k| states.rot[body(k)]),
-            Mat3x4::from_fn(|k| motion.bodies[body(k)].inertia(motion.full)),
-            hx4,
-        );
-        for (k, &i) in group.iter().enumerate() {
-            let inertia = motion.bodies[i].inertia(motion.full);
-            let before = Vec3::from(states.ang_vel[i]);
-            states.ang_vel[i] =
-                Vec3A::from(keep_invariants(before, w.lane(k), states.rot[i], inertia));
-        }
-    });
     for (i, b) in motion.bodies.iter().enumerate() {
         if !awake[i] {
             continue;
         }
+        let (w, offset) = midpoint_spin(
+            states.rot[i],
+            Vec3::from(states.ang_vel[i]),
+            b.inertia(motion.full),
+            b.inv_inertia_local(motion.full),
+            h,
+        );
+        spin_offset[i] = offset;
         let mut v = states.lin_vel[i] + Vec3A::from(gravity * h);
-        let mut w = states.ang_vel[i];
+        let mut w = Vec3A::from(w);
         if b.linear_damping > 0.0 {
             v *= (1.0 - b.linear_damping.min(1.0)).max(0.0).powf(h);
         }
@@ -208,96 +125,201 @@ pub fn integrate_velocities(
     }
 }
 
-/// Position half of the substep: `x += h v`, `q += ½ h (ω, 0) q`, renormalised.
-pub fn integrate_positions(states: &mut BodyStates, awake: &[bool], h: f32) {
-    for (i, &moving) in awake.iter().enumerate() {
-        if !moving {
+/// Newton steps on the midpoint equation of [`midpoint_spin`]. From `M = L_b` the first
+/// step is the linearised implicit step; its Jacobian holds the gyroscopic stiffness of
+/// a thin limb (`½ h |ω| I_max/I_min` of order one), where a fixed-point iteration
+/// would not converge.
+const MIDPOINT_NEWTON_STEPS: usize = 3;
+
+/// The gyroscopic term of a body of orientation `q`, angular velocity `ω` (world) and
+/// body inertia `I`, as the velocity the substep turns it with: the implicit midpoint
+/// rule on Euler's equation `L̇_b = −ω_b × L_b` (body frame, no torque).
+///
+/// The rule, `L_b' = L_b − h ω_m × M` with `M = ½ (L_b + L_b')` and `ω_m = I⁻¹ M`, keeps
+/// both quadratic invariants `|L_b|` and `L_bᵀ I⁻¹ L_b = 2T` (Hairer, Lubich & Wanner,
+/// "Geometric Numerical Integration", IV.2, VII.5). It reads
+/// `(1 + ½ h ω̂_m) L_b' = (1 − ½ h ω̂_m) L_b`, so `L_b = Q L_b'` with the Cayley rotation
+/// `Q = (1 − ½ h ω̂_m)⁻¹ (1 + ½ h ω̂_m)`: turning the body by `Q` (`R' = R Q`, the
+/// quaternion step `q' = q + ½ h (R ω_m, 0) q` normalised, see [`integrate_positions`])
+/// gives `R' L_b' = R L_b`, the world momentum unchanged. So the midpoint velocity
+/// `R ω_m` is the velocity the body turns with, and it is what the constraints solve on.
+///
+/// `M` solves `g(M) = M + ½ h (I⁻¹ M) × M − L_b = 0` by Newton from `M = L_b`, with
+/// `∂g/∂M = 1 + ½ h ((I⁻¹M)^ − M̂ I⁻¹)`.
+///
+/// Returns `R ω_m` and the offset `L − R I Rᵀ (R ω_m)` (`L` the body's world momentum
+/// now): the constraints change the velocity by `R I⁻¹ Rᵀ (r × p)`, so after them the
+/// momentum is `R I Rᵀ ω + offset`. A body whose inverse inertia is singular keeps `ω`
+/// and has no offset.
+fn midpoint_spin(q: Quat, w: Vec3, inertia: Mat3, inv_inertia: Mat3, h: f32) -> (Vec3, Vec3) {
+    // False for NaN too.
+    let invertible = inv_inertia.determinant() > 0.0;
+    if !invertible || is_isotropic(inertia) {
+        return (w, Vec3::ZERO);
+    }
+    let skew = |a: Vec3| {
+        Mat3::from_cols(
+            Vec3::new(0.0, a.z, -a.y),
+            Vec3::new(-a.z, 0.0, a.x),
+            Vec3::new(a.y, -a.x, 0.0),
+        )
+    };
+    let l_body = inertia * (q.inverse() * w);
+    let mut m = l_body;
+    for _ in 0..MIDPOINT_NEWTON_STEPS {
+        let wm = inv_inertia * m;
+        let g = m + 0.5 * h * wm.cross(m) - l_body;
+        let jacobian = Mat3::IDENTITY + 0.5 * h * (skew(wm) - skew(m) * inv_inertia);
+        let det = jacobian.determinant();
+        if !(det.is_finite() && det.abs() > 1e-12) {
+            break;
+        }
+        m -= jacobian.inverse() * g;
+    }
+    // The midpoint of two points of the energy ellipsoid lies inside it: `Mᵀ I⁻¹ M ≤
+    // L_bᵀ I⁻¹ L_b`. A Newton iterate outside (a step far too long for the body's
+    // stiffness) is brought back onto it along itself, so the velocity the body turns
+    // with never carries more energy than the body has.
+    let (energy, at_m) = (l_body.dot(inv_inertia * l_body), m.dot(inv_inertia * m));
+    let inside = at_m <= energy;
+    if !inside {
+        m = if at_m > 0.0 && at_m.is_finite() {
+            m * (energy / at_m).sqrt()
+        } else {
+            l_body
+        };
+    }
+    let wm = inv_inertia * m;
+    let offset = q * (l_body - inertia * wm);
+    if wm.is_finite() && offset.is_finite() {
+        (q * wm, offset)
+    } else {
+        (w, Vec3::ZERO)
+    }
+}
+
+/// Position half of the substep: `x += h v`; each body turned by the quaternion step
+/// `q' = q + ½ h (ω, 0) q` normalised (the Cayley rotation by `h ω`), and its angular
+/// velocity then read from its angular momentum held through the turn,
+/// `ω' = R' I⁻¹ R'ᵀ L` with `L = R I Rᵀ ω + spin_offset` ([`midpoint_spin`]).
+///
+/// Holding each body's `L` through its turn makes every exchange of angular momentum
+/// between bodies go through the constraint impulses, equal and opposite at a shared
+/// point: a jointed figure flying free keeps its total `L`. (The gyroscopic step that
+/// gave the velocity at the substep's end before the constraints, with `ω` held through
+/// the turn, turned each body's `L` by its own pre-constraint `ω` while the orientation
+/// turned by the post-constraint one: a hit pair's `L` drifted 0.3 % a step.) A body
+/// flying free turns by its midpoint velocity and keeps `|L|` and its kinetic energy.
+pub fn integrate_positions(
+    states: &mut BodyStates,
+    motion: Motions<'_>,
+    awake: &[bool],
+    h: f32,
+    spin_offset: &[Vec3],
+) {
+    for (i, b) in motion.bodies.iter().enumerate() {
+        if !awake[i] {
             continue;
         }
         states.com[i] += Vec3::from(states.lin_vel[i] * h);
-        let w = states.ang_vel[i];
+        let w = Vec3::from(states.ang_vel[i]);
         let q = states.rot[i];
         let dq = Quat::from_xyzw(w.x, w.y, w.z, 0.0) * q;
-        states.rot[i] = (q + dq * (0.5 * h)).normalize();
+        let turned = (q + dq * (0.5 * h)).normalize();
+        states.rot[i] = turned;
+        let (inertia, inv_inertia) = (b.inertia(motion.full), b.inv_inertia_local(motion.full));
+        if inv_inertia.determinant() > 0.0 && !is_isotropic(inertia) {
+            let l = q * (inertia * (q.inverse() * w)) + spin_offset[i];
+            let w1 = turned * (inv_inertia * (turned.inverse() * l));
+            if w1.is_finite() {
+                states.ang_vel[i] = Vec3A::from(w1);
+            }
+        }
     }
+}
+
+/// Whether `inertia` is a multiple of the identity (a cube, a sphere): then `L ∥ ω`,
+/// there is no gyroscopic term, and turning with `L` held keeps `ω` exactly, which
+/// the arithmetic would only reproduce to its rounding.
+fn is_isotropic(inertia: Mat3) -> bool {
+    let d = inertia.x_axis.x;
+    inertia == Mat3::from_diagonal(Vec3::splat(d))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::particle::uniform;
-    use glam::Mat3;
 
-    /// The gyroscopic step of one body in glam's types: the form the lanes repeat.
-    fn one_body(w_world: Vec3, rot: Quat, inertia: Mat3, h: f32) -> Vec3 {
-        let skew = |a: Vec3| {
-            Mat3A::from_cols(
-                Vec3A::new(0.0, a.z, -a.y),
-                Vec3A::new(-a.z, 0.0, a.x),
-                Vec3A::new(a.y, -a.x, 0.0),
-            )
-        };
-        let inertia = Mat3A::from(inertia);
-        let w = rot.inverse() * w_world;
-        let iw = inertia * w;
-        let f = h * w.cross(iw);
-        let j = inertia + h * (skew(w) * inertia - skew(iw));
-        let det = j.determinant();
-        if !(det.is_finite() && det.abs() > 1e-12) {
-            return w_world;
-        }
-        rot * (w - j.inverse() * f)
-    }
-
-    /// Random bodies: tumbling fast and slow, diagonal and full inertia tensors, a
-    /// massless one (a singular `J`); every lane has the one-body bits, whatever its
-    /// neighbours hold, and so does the world inverse inertia.
+    /// Random rotations and inertia tensors (diagonal and full): every lane of the world
+    /// inverse inertia has the bits of glam's one-body form.
     // The lanes repeat glam's x86-64 (SSE2) code; elsewhere glam orders its sums otherwise
     // (every path uses the lanes there, so results still do not depend on threads).
     #[cfg(target_arch = "x86_64")]
     #[test]
-    fn lanes_give_the_one_body_bits() {
+    fn lanes_give_the_one_body_inertia_bits() {
         let mut r = uniform(0x9e37_79b9);
         let mut v = |scale: f32| Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * scale;
         for case in 0..500 {
-            let w: [Vec3; LANES] = std::array::from_fn(|_| v(40.0));
             let rot: [Quat; LANES] = std::array::from_fn(|_| {
                 let q = v(2.0);
                 Quat::from_xyzw(q.x, q.y, q.z, 0.7).normalize()
             });
             let inertia: [Mat3; LANES] = std::array::from_fn(|k| {
                 let d = Mat3::from_diagonal(v(1.0).abs() + Vec3::splat(0.01));
-                match (case + k) % 3 {
-                    0 => d,
-                    1 => {
-                        let q = Quat::from_scaled_axis(v(3.0));
-                        Mat3::from_quat(q) * d * Mat3::from_quat(q).transpose()
-                    }
-                    _ if case % 7 == 0 => Mat3::ZERO,
-                    _ => d,
+                if (case + k) % 2 == 0 {
+                    d
+                } else {
+                    let q = Quat::from_scaled_axis(v(3.0));
+                    Mat3::from_quat(q) * d * Mat3::from_quat(q).transpose()
                 }
             });
-            let h = 1.0 / 240.0;
-            let lanes = gyroscopic(
-                Vec3x4::from_fn(|k| w[k]),
-                Quatx4::from_fn(|k| rot[k]),
-                Mat3x4::from_fn(|k| inertia[k]),
-                f32x4::splat(h),
-            );
             let world = world_inertia(Quatx4::from_fn(|k| rot[k]), Mat3x4::from_fn(|k| inertia[k]));
             for k in 0..LANES {
-                let one = one_body(w[k], rot[k], inertia[k], h);
-                let got = lanes.lane(k);
-                assert!(
-                    got.to_array().map(f32::to_bits) == one.to_array().map(f32::to_bits),
-                    "case {case} lane {k}: {got} against {one}"
-                );
                 let r = Mat3A::from_quat(rot[k]);
                 let expected = r * Mat3A::from(inertia[k]) * r.transpose();
                 let got = Mat3A::from(world.lane(k));
                 let bits = |m: Mat3A| m.to_cols_array().map(f32::to_bits);
                 assert!(bits(got) == bits(expected), "case {case} lane {k}: inertia");
             }
+        }
+    }
+
+    /// A box tumbling about a general axis, 10 s at 240 Hz (`I = diag(1, 2, 3)`,
+    /// `ω = (2, 3, 4)` rad/s), and a thin rod (`I = diag(1, 0.01, 1)`) tumbling with
+    /// some roll, turned as [`integrate_positions`] turns them: the world angular
+    /// momentum stays where it started (the turn holds it; only f32 rounding moves it,
+    /// 0.06 % in 2400 turns) and the kinetic energy within 0.5 % (rounding again, 0.13 %;
+    /// turning by `h ω` with `L` held gains half of the box's in that time).
+    #[test]
+    fn the_midpoint_spin_keeps_angular_momentum_and_energy() {
+        for (diagonal, w0) in [
+            (Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 3.0, 4.0)),
+            (Vec3::new(1.0, 0.01, 1.0), Vec3::new(10.0, 3.0, 1.0)),
+        ] {
+            let inertia = Mat3::from_diagonal(diagonal);
+            let inv = inertia.inverse();
+            let (mut q, mut w) = (Quat::from_rotation_x(0.3), w0);
+            let momentum = |q: Quat, w: Vec3| q * (inertia * (q.inverse() * w));
+            let (l0, k0) = (momentum(q, w), 0.5 * w.dot(momentum(q, w)));
+            let (mut worst_l, mut worst_k) = (0.0f32, 0.0f32);
+            let h = 1.0 / 240.0;
+            for _ in 0..2400 {
+                let (wm, offset) = midpoint_spin(q, w, inertia, inv, h);
+                let dq = Quat::from_xyzw(wm.x, wm.y, wm.z, 0.0) * q;
+                let turned = (q + dq * (0.5 * h)).normalize();
+                let l = q * (inertia * (q.inverse() * wm)) + offset;
+                (q, w) = (turned, turned * (inv * (turned.inverse() * l)));
+                let l = momentum(q, w);
+                worst_l = worst_l.max((l - l0).length() / l0.length());
+                worst_k = worst_k.max((0.5 * w.dot(l) - k0).abs() / k0);
+            }
+            // f32 rounding of 2400 turns, a random walk, is all that moves them.
+            assert!(worst_l < 2e-3, "I {diagonal}: L off by {worst_l}");
+            assert!(
+                worst_k < 5e-3,
+                "I {diagonal}: kinetic energy off by {worst_k}"
+            );
         }
     }
 }

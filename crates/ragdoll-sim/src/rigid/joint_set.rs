@@ -2,7 +2,7 @@
 //! no virtual calls in the inner loops), built from the scene's constraints.
 
 use super::ball::BallJoint;
-use super::body::{BodyInfo, BodyStates};
+use super::body::{BodyInfo, BodyStates, Motions};
 use super::fixed::FixedJoint;
 use super::hinge::HingeJoint;
 use super::joint::{
@@ -10,6 +10,7 @@ use super::joint::{
 };
 use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
+use super::project::{PairPose, keep_pair_momentum};
 use super::slider::SliderJoint;
 use super::soft::StepContext;
 use super::spring::SpringJoint;
@@ -372,12 +373,25 @@ impl JointSet {
     /// that the pass has not made immobile ([`super::project`] holds resting bodies as
     /// static). A joint between two immobile bodies would measure its errors and build
     /// its effective masses only to find them singular; once a pile starts to settle
-    /// that is most of them.
-    pub fn project(&self, s: &mut BodyStates, awake: &[bool]) {
+    /// that is most of them. The update of a joint of a figure that touches nothing
+    /// (`touching` unset, per body) keeps its pair's angular momentum
+    /// ([`keep_pair_momentum`]).
+    pub fn project(
+        &self,
+        s: &mut BodyStates,
+        motion: Motions<'_>,
+        awake: &[bool],
+        touching: &[bool],
+    ) {
         for_each_joint_ref!(self, j => {
             let f = j.frame();
             if touches_awake(f, awake) && (s.is_mobile(f.a) || s.is_mobile(f.b)) {
-                j.project(s)
+                let free = !touching[f.a] && !touching[f.b];
+                let before = PairPose::of(s, f.a, f.b);
+                j.project(s);
+                if free {
+                    keep_pair_momentum(s, motion, f.a, f.b, &before);
+                }
             }
         });
     }

@@ -2,7 +2,8 @@
 //! joints and contacts solved with impulses by Box2D v3's soft step.
 //!
 //! - `body`: hot body arrays (SoA) and cold body data.
-//! - `integrate`: semi-implicit Euler with the implicit gyroscopic term.
+//! - `integrate`: semi-implicit Euler, the gyroscopic term by an implicit midpoint
+//!   rule, bodies turned with their angular momentum held.
 //! - `soft`: soft-constraint coefficients.
 //! - `joint`: building blocks every joint is made of; `limits`: swing, twist, ranges.
 //! - `ball`, `hinge`, `universal`, `fixed`, `slider`, `spring`: one file per

@@ -5,13 +5,14 @@
 //! substeps are split into windows, each starting with a detection of its own
 //! ([`MAX_TURN_PER_DETECTION`]). Then per substep of `h = dt/substeps`:
 //!
-//! 1. integrate velocities (gravity, air friction, gyroscopic term);
+//! 1. integrate velocities (the gyroscopic term by an implicit midpoint rule, gravity,
+//!    air friction);
 //! 2. warm start joints and contacts with last substep's impulses;
 //! 3. solve with bias (soft constraints push errors out at `contact_hertz` /
 //!    `joint_hertz`, damped by `damping_ratio`), `iterations` times; the point rows of
 //!    joint trees across a large mass ratio are solved exactly, after the other joint
 //!    rows of each iteration ([`super::joint_tree`]);
-//! 4. integrate positions;
+//! 4. integrate positions, each body turned with its angular momentum held;
 //! 5. relax: solve again without bias, removing the velocity the position feedback
 //!    added, so pushing out does not become bouncing (joints in
 //!    `substeps::RELAX_JOINT_PASSES` passes).

@@ -46,6 +46,12 @@ pub struct SolveParams<'a> {
 pub struct SolveBuffers {
     contacts: ContactConstraints,
     trees: JointTrees,
+    /// Per body, what the position half adds to `R I Rᵀ ω` to read its angular
+    /// momentum (see [`integrate_velocities`]).
+    spin_offset: Vec<Vec3>,
+    /// Per body, whether its figure touches anything this solve (see
+    /// [`project::project_positions`]).
+    touching: Vec<bool>,
 }
 
 impl SolveBuffers {
@@ -67,11 +73,18 @@ pub fn solve(
     buffers: &mut SolveBuffers,
     p: &SolveParams,
 ) {
-    let SolveBuffers { contacts, trees } = buffers;
+    let SolveBuffers {
+        contacts,
+        trees,
+        spin_offset,
+        touching,
+    } = buffers;
+    spin_offset.clear();
+    spin_offset.resize(motion.bodies.len(), Vec3::ZERO);
     contacts.rebuild(pairs, s, awake);
     trees.rebuild(joints, s, awake);
     for sub in 0..p.substeps {
-        integrate_velocities(s, motion, awake, p.gravity, p.ctx.h);
+        integrate_velocities(s, motion, awake, p.gravity, p.ctx.h, spin_offset);
         if sub == 0 {
             joints.prepare(s, awake);
         } else {
@@ -88,7 +101,7 @@ pub fn solve(
             trees.solve(joints, s, &p.ctx, true);
             contacts.solve(s, &p.ctx, true);
         }
-        integrate_positions(s, awake, p.ctx.h);
+        integrate_positions(s, motion, awake, p.ctx.h, spin_offset);
         for pass in 0..RELAX_JOINT_PASSES {
             // The first pass prepares the point rows on the moved pose.
             joints.solve(s, awake, &p.ctx, false);
@@ -107,6 +120,6 @@ pub fn solve(
         bias_rate: p.ctx.contact.bias_rate,
         dt: p.ctx.h * p.substeps as f32,
     };
-    project::project_positions(s, joints, contacts, awake, p.sleep, &push);
+    project::project_positions(s, motion, joints, contacts, awake, p.sleep, &push, touching);
     contacts.store_impulses(pairs);
 }
