@@ -60,7 +60,6 @@ impl JointSolve for BallJoint {
     }
 
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        self.friction.solve(&self.frame, s, ctx, &self.point);
         if let Some(sw) = &mut self.swing {
             sw.solve(&self.frame, s, ctx, use_bias);
         }

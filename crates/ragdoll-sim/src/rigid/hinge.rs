@@ -3,9 +3,10 @@
 //! hinge stops).
 
 use super::body::BodyStates;
-use super::joint::{AlignPart, FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint::{AlignPart, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::limits::{AngleGauge, AngleLimit};
 use super::soft::StepContext;
+use glam::Vec3A;
 
 /// A hinge joint.
 #[derive(Clone, Debug)]
@@ -25,6 +26,11 @@ pub struct HingeJoint {
 }
 
 impl HingeJoint {
+    /// The one turn a hinge leaves free: about its axis (world, as body a carries it).
+    pub(crate) fn free_turns(&self, s: &BodyStates) -> FreeTurns {
+        FreeTurns::Axis(Vec3A::from(s.rot[self.frame.a] * self.align.local_a).normalize())
+    }
+
     /// The range rows on the current pose and inertias.
     fn update_limit(&mut self, s: &BodyStates) {
         if let Some(l) = &mut self.limit {
@@ -65,7 +71,6 @@ impl JointSolve for HingeJoint {
         }
         self.align.solve(&self.frame, s, ctx, use_bias);
         self.point.solve(&self.frame, s, ctx, use_bias);
-        self.friction.solve(&self.frame, s, ctx, &self.point);
     }
 
     fn project(&self, s: &mut BodyStates) {

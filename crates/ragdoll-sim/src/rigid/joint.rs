@@ -594,14 +594,47 @@ impl AxisRow {
     }
 }
 
+/// The relative rotations a joint leaves free, the only ones its friction acts on: the
+/// others are held by the joint's own rows (a hinge's alignment, a universal joint's
+/// cross row), and a couple along them would only take over part of those rows' load,
+/// spending the friction's cap on it (see [`FrictionMotor`]).
+#[derive(Clone, Copy, Debug)]
+pub enum FreeTurns {
+    /// All three (a ball-and-socket joint).
+    All,
+    /// About one world axis, a unit vector (a hinge).
+    Axis(Vec3A),
+    /// In the plane normal to a world unit vector (a universal joint, whose cross row
+    /// holds the turn about `shaft₁ × shaft₂`).
+    Plane(Vec3A),
+}
+
 /// Joint friction as a capped motor (Doom 3 `friction`): drives the relative angular
-/// velocity to zero with at most `max_torque · h` angular impulse per substep, so the
-/// joint holds still under small loads and slips under large ones.
+/// velocity of the turns the joint leaves free ([`FreeTurns`]) to zero with at most
+/// `max_torque · h` angular impulse per substep, so the joint holds still under small
+/// loads and slips under large ones.
+///
+/// Coulomb's law for a joint: the impulse `λ` makes the free turns' relative angular
+/// velocity zero (static friction) when that takes `|λ| ≤ max_torque · h`, and is
+/// `λ = −max_torque · h · ŵ` along the slip otherwise; clamping the accumulated impulse
+/// to that ball is the projected Gauss–Seidel step of this complementarity problem. The
+/// cap is a constant ([`FrictionMotor::new`]), not the joint's load of the last
+/// iteration, so it does not move with the friction's own answer.
+///
+/// Every joint's friction is solved before the joints' hard rows (limits, alignments,
+/// points) in each iteration ([`super::joint_set::JointSet::solve`]), as Box2D orders a
+/// joint's motor before its limit and point: the hard rows have the last word, and the
+/// friction holds only what they leave free. Solved after them, a hinge's friction took
+/// back up to its cap of the push its own stop had just given (both act about the hinge
+/// axis), and on a resting limb answered each iteration's leftover of the rows before
+/// it, landing on one end of its cap and then on the other from substep to substep (the
+/// lab humanoid's forearm, whose spin then changed faster than `suspendSpeed` allows, so
+/// the figure never slept).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FrictionMotor {
     /// Largest friction torque (N·m); 0 disables the motor.
     pub max_torque: f32,
-    /// Accumulated angular impulse on a.
+    /// Accumulated angular impulse on a (in the free turns of the last update).
     pub impulse: Vec3A,
     /// Whether the last update held the joint (impulse below the cap: sticking).
     pub holding: bool,
@@ -627,9 +660,8 @@ impl FrictionMotor {
         }
     }
 
-    /// One update; friction is solved without bias, the same in both passes. Inlined so
-    /// that a joint without friction (most) pays only the test, not a call, in every
-    /// iteration.
+    /// One update of the turns `free`; friction is solved without bias, the same in
+    /// both passes.
     #[inline]
     pub fn solve(
         &mut self,
@@ -637,27 +669,72 @@ impl FrictionMotor {
         s: &mut BodyStates,
         ctx: &StepContext,
         point: &PointPart,
+        free: FreeTurns,
     ) {
         if self.max_torque > 0.0 {
-            self.hold(f, s, ctx, point);
+            self.hold(f, s, ctx, point, free);
         }
     }
 
     /// [`FrictionMotor::solve`] of a motor with a positive cap. The impulse is a couple,
     /// `l` on a and `−l` on b; a joint whose point rows are solved by Gauss–Seidel gets
-    /// it about the centres of mass, with the effective mass `(I_a⁻¹ + I_b⁻¹)⁻¹`.
-    fn hold(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, point: &PointPart) {
+    /// it about the centres of mass, with the inverse effective mass `I_a⁻¹ + I_b⁻¹`.
+    fn hold(
+        &mut self,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        point: &PointPart,
+        free: FreeTurns,
+    ) {
         if point.direct {
-            self.hold_with_point(f, s, ctx, point);
+            self.hold_with_point(f, s, ctx, free);
             return;
         }
-        let Some(k_inv) = invert(f.inv_inertia_sum(s)) else {
+        let Some(dl) = self.update(f.inv_inertia_sum(s), f.rel_ang_vel(s), ctx, free) else {
             return;
         };
+        f.apply_angular(s, dl);
+    }
+
+    /// The new impulse for the relative spin `w` of the free turns, given the couple's
+    /// inverse effective mass `k` (3×3, over all turns); returns the change to apply,
+    /// `None` when the free turns do not move (both bodies static).
+    ///
+    /// Over the free turns' orthonormal basis `B` (3×d) the row is `Bᵀ w` with inverse
+    /// effective mass `Bᵀ k B` (d×d), and `λ = −(Bᵀ k B)⁻¹ Bᵀ w`: for a hinge's axis `a`
+    /// that is `−(a·w) / (aᵀ k a)`, for a plane a 2×2 solve. The accumulated impulse
+    /// is taken in the free turns (a hinge's axis turns with its bodies; what lay
+    /// outside them is let go).
+    fn update(&mut self, k: Mat3A, w: Vec3A, ctx: &StepContext, free: FreeTurns) -> Option<Vec3A> {
         let old = self.impulse;
-        let new = self.clamped(old - k_inv * f.rel_ang_vel(s), ctx);
+        let (kept, delta) = match free {
+            FreeTurns::All => (old, -(invert(k)? * w)),
+            FreeTurns::Axis(a) => {
+                let kaa = a.dot(k * a);
+                if !(kaa > 1e-20) {
+                    return None;
+                }
+                (a * a.dot(old), a * (-a.dot(w) / kaa))
+            }
+            FreeTurns::Plane(n) => {
+                let (u, v) = orthonormal_pair(one(n));
+                let (u, v) = (Vec3A::from(u.lane(0)), Vec3A::from(v.lane(0)));
+                let (ku, kv) = (k * u, k * v);
+                let (k11, k12, k22) = (u.dot(ku), u.dot(kv), v.dot(kv));
+                let det = k11 * k22 - k12 * k12;
+                if !(det.abs() > 1e-20) {
+                    return None;
+                }
+                let (ru, rv) = (u.dot(w), v.dot(w));
+                let lu = -(k22 * ru - k12 * rv) / det;
+                let lv = -(k11 * rv - k12 * ru) / det;
+                (u * u.dot(old) + v * v.dot(old), u * lu + v * lv)
+            }
+        };
+        let new = self.clamped(kept + delta, ctx);
         self.impulse = new;
-        f.apply_angular(s, new - old);
+        Some(new - old)
     }
 
     /// `new` within the cap `max_torque · h`; whether it was already is `holding`.
@@ -680,8 +757,8 @@ impl FrictionMotor {
     ///
     /// With `K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b` (the anchor's
     /// response to `p`) and `C = r̂_b I_b⁻¹ + r̂_a I_a⁻¹` (its response to `l`), `p =
-    /// −K⁻¹ C l`, and the friction row's effective mass is the Schur complement's
-    /// inverse, `(I_a⁻¹ + I_b⁻¹ − Cᵀ K⁻¹ C)⁻¹`. For a joint to a static body that is
+    /// −K⁻¹ C l`, and the friction row's inverse effective mass is the Schur complement,
+    /// `I_a⁻¹ + I_b⁻¹ − Cᵀ K⁻¹ C`. For a joint to a static body that is the inverse of
     /// the body's inertia about the anchor, `I + m (|r|² 1 − r rᵀ)` (parallel axes): a
     /// bob on a frictional hinge (`I_cm ≪ m r²`) is held in one update, where the
     /// inertias about the centres of mass took a few hundred alternations of couple and
@@ -690,19 +767,18 @@ impl FrictionMotor {
     /// A couple alone, weighed with the inertias about the anchor, would turn each body
     /// about its centre of mass until the tree solve: the limit rows and the other
     /// joints' friction of the same iteration would read a relative spin up to
-    /// `m r² / I_cm` times the one meant (a thin limb's roll) and answer it. On a resting
-    /// figure of bone-model limbs (the lab humanoid, `tests/doom3_mod.rs`) the friction
-    /// then flips from one side of its cap to the other within a substep and the limbs'
-    /// spins change by ~0.02 rad/s a frame, above `suspendSpeed`'s 60°/s²: the figure
-    /// never sleeps.
+    /// `m r² / I_cm` times the one meant (a thin limb's roll) and answer it.
     fn hold_with_point(
         &mut self,
         f: &JointFrame,
         s: &mut BodyStates,
         ctx: &StepContext,
-        point: &PointPart,
+        free: FreeTurns,
     ) {
-        let (ra, rb) = (point.ra(), point.rb());
+        // The offsets now: in the relax pass the positions have moved since the point
+        // rows were last prepared.
+        let (ra, rb) = f.offsets(s);
+        let (ra, rb) = (Vec3A::from(ra), Vec3A::from(rb));
         let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);
         let (sa, sb) = (skew(ra), skew(rb));
         // K = (m_a⁻¹ + m_b⁻¹) 1 − r̂_a I_a⁻¹ r̂_a − r̂_b I_b⁻¹ r̂_b: the anchor's response.
@@ -716,14 +792,10 @@ impl FrictionMotor {
         // response to an impulse at the anchor.
         let c = sb * ib + sa * ia;
         let schur = ia + ib - c.transpose() * k_inv * c;
-        let Some(m) = invert(schur) else {
+        let Some(dl) = self.update(schur, f.rel_ang_vel(s), ctx, free) else {
             return;
         };
-        let old = self.impulse;
-        let new = self.clamped(old - m * f.rel_ang_vel(s), ctx);
-        let dl = new - old;
         let p = -(k_inv * (c * dl));
-        self.impulse = new;
         f.apply_angular(s, dl);
         s.apply_impulse(f.b, rb, p);
         s.apply_impulse(f.a, ra, -p);

@@ -6,7 +6,8 @@ use super::body::{BodyInfo, BodyStates, Motions};
 use super::fixed::FixedJoint;
 use super::hinge::HingeJoint;
 use super::joint::{
-    AlignPart, AngularLock3, AxisRow, FrictionMotor, JointFrame, JointSolve, PointPart, RowKind,
+    AlignPart, AngularLock3, AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart,
+    RowKind,
 };
 use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
@@ -302,8 +303,10 @@ impl JointSet {
         warm_start_each(&self.spring, s, awake);
     }
 
-    /// One iteration over joints touching an awake body, type by type.
+    /// One iteration over joints touching an awake body: every joint's friction first,
+    /// then the rows type by type (see [`FrictionMotor`] for why in this order).
     pub fn solve(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext, use_bias: bool) {
+        self.solve_friction(s, awake, ctx);
         let (balls, hinges) = self.in_lanes();
         let trees = self.direct;
         match self.lanes.as_mut().filter(|_| balls) {
@@ -318,6 +321,28 @@ impl JointSet {
         solve_each(&mut self.fixed, s, awake, ctx, use_bias);
         solve_each(&mut self.slider, s, awake, ctx, use_bias);
         solve_each(&mut self.spring, s, awake, ctx, use_bias);
+    }
+
+    /// One update of every joint friction touching an awake body, in the turns its
+    /// joint leaves free. Most joints have none (the test on the cap comes first).
+    fn solve_friction(&mut self, s: &mut BodyStates, awake: &[bool], ctx: &StepContext) {
+        for j in &mut self.ball {
+            if j.friction.max_torque > 0.0 && touches_awake(&j.frame, awake) {
+                j.friction.solve(&j.frame, s, ctx, &j.point, FreeTurns::All);
+            }
+        }
+        for j in &mut self.hinge {
+            if j.friction.max_torque > 0.0 && touches_awake(&j.frame, awake) {
+                let free = j.free_turns(s);
+                j.friction.solve(&j.frame, s, ctx, &j.point, free);
+            }
+        }
+        for j in &mut self.universal {
+            if j.friction.max_torque > 0.0 && touches_awake(&j.frame, awake) {
+                let free = j.free_turns(s);
+                j.friction.solve(&j.frame, s, ctx, &j.point, free);
+            }
+        }
     }
 
     /// After a solve's substeps: the lanes hand their accumulated impulses back to the

@@ -3,7 +3,7 @@
 //! Doom 3 swing limit on shaft1 and PyODE lo/hi stops about each shaft.
 
 use super::body::BodyStates;
-use super::joint::{AxisRow, FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint::{AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::limits::{AngleLimit, Swing};
 use super::soft::StepContext;
 use glam::Vec3;
@@ -32,6 +32,18 @@ pub struct UniversalJoint {
 }
 
 impl UniversalJoint {
+    /// The turns a universal joint leaves free: about either shaft, the plane normal to
+    /// `shaft₁ × shaft₂` (all three if the shafts were ever parallel, where the cross
+    /// row has no axis either).
+    pub(crate) fn free_turns(&self, s: &BodyStates) -> FreeTurns {
+        let f = &self.frame;
+        let n = (s.rot[f.a] * self.shaft_a).cross(s.rot[f.b] * self.shaft_b);
+        match n.try_normalize() {
+            Some(n) => FreeTurns::Plane(n.into()),
+            None => FreeTurns::All,
+        }
+    }
+
     /// The cross row measured on the current pose (impulse kept).
     fn cross_row_now(&self, s: &BodyStates) -> AxisRow {
         let f = &self.frame;
@@ -91,7 +103,6 @@ impl JointSolve for UniversalJoint {
 
     fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let f = &self.frame;
-        self.friction.solve(f, s, ctx, &self.point);
         if let Some(sw) = &mut self.swing {
             sw.solve(f, s, ctx, use_bias);
         }
