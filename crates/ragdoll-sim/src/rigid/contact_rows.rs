@@ -426,15 +426,20 @@ impl<R: Real> PairRows<R> {
                         *wa -= p.ia_n * d;
                         *wb += p.ib_n * d;
                     }
-                    // Lanes already solved keep their bits.
+                    // Lanes already solved keep their bits: each velocity is moved by
+                    // subtracting a step that is +0 in those lanes (`x − (+0) = x` for
+                    // every x, −0 included), so one mask per term replaces a blend of
+                    // old and new velocity. An added step `x + y` is written
+                    // `x − (−y)`, the same operation in IEEE 754.
                     Some(m) => {
                         change = change.max((vn - p.block_velocity).abs());
                         p.block_velocity = R::select(m, vn, p.block_velocity);
                         p.normal_impulse = R::select(m, new, p.normal_impulse);
-                        *va = V3::select(m, *va - n * (d * ma), *va);
-                        *vb = V3::select(m, *vb + n * (d * mb), *vb);
-                        *wa = V3::select(m, *wa - p.ia_n * d, *wa);
-                        *wb = V3::select(m, *wb + p.ib_n * d, *wb);
+                        let open = |step: V3<R>| V3::select(m, step, V3::default());
+                        *va -= open(n * (d * ma));
+                        *vb -= open(-(n * (d * mb)));
+                        *wa -= open(p.ia_n * d);
+                        *wb -= open(-(p.ib_n * d));
                     }
                 }
             }

@@ -247,9 +247,11 @@ impl ContactConstraints {
         }
         for color in &colors {
             for chunk in color.chunks(LANES) {
-                let index: Vec<usize> = chunk.iter().map(|&i| i as usize).collect();
-                let lanes: Vec<&PairConstraint> = index.iter().map(|&i| &self.pairs[i]).collect();
-                self.bundles.load(&index, &lanes, &self.points);
+                let index: [usize; LANES] =
+                    std::array::from_fn(|k| chunk.get(k).map_or(0, |&i| i as usize));
+                let lanes: [&PairConstraint; LANES] = index.map(|i| &self.pairs[i]);
+                let n = chunk.len();
+                self.bundles.load(&index[..n], &lanes[..n], &self.points);
             }
         }
     }
