@@ -42,34 +42,42 @@ const BLOCK_TOLERANCE: f32 = 1e-4;
 const BLOCK_SWEEPS: usize = 32;
 
 /// One point's rows in each lane: non-penetration along the normal, friction along the
-/// two tangents (see [`PointConstraint`] for each field's meaning).
+/// two tangents (see [`PointConstraint`] for each field's meaning). What the block
+/// solve's sweeps read comes first, so a sweep, made two or three times per pass, reads
+/// the leading cache lines of each row; the friction rows follow. What only
+/// [`ContactLanes::refresh`] reads is apart, in [`PointAnchors`].
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PointRows<R> {
     /// `r_a × n`, `r_b × n`.
     ja_n: V3<R>,
     jb_n: V3<R>,
-    /// `r_a × t_k`, `r_b × t_k`.
-    ja_t: [V3<R>; 2],
-    jb_t: [V3<R>; 2],
     /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia.
     ia_n: V3<R>,
     ib_n: V3<R>,
-    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`, likewise.
-    ia_t: [V3<R>; 2],
-    ib_t: [V3<R>; 2],
     normal_mass: R,
     /// `1 / normal_mass` (zero for an empty slot): the row velocity an impulse changes.
     normal_stiffness: R,
     /// The row's normal velocity when the block solve last reached it.
     block_velocity: R,
-    tangent_mass: [R; 2],
     normal_impulse: R,
-    tangent_impulse: [R; 2],
-    max_normal_impulse: R,
     /// Separation at the last [`ContactLanes::refresh`].
     separation: R,
-    /// The anchors in the bodies' frames and the separation at build time less
-    /// `n·(p_b − p_a)`, for the separation now.
+    /// `r_a × t_k`, `r_b × t_k`.
+    ja_t: [V3<R>; 2],
+    jb_t: [V3<R>; 2],
+    /// `I_a⁻¹ (r_a × t_k)`, `I_b⁻¹ (r_b × t_k)`, likewise.
+    ia_t: [V3<R>; 2],
+    ib_t: [V3<R>; 2],
+    tangent_mass: [R; 2],
+    tangent_impulse: [R; 2],
+    max_normal_impulse: R,
+}
+
+/// The anchors in the bodies' frames and the separation at build time less
+/// `n·(p_b − p_a)`, for the separation now: per point, what only
+/// [`ContactLanes::refresh`] reads, kept out of the rows the passes stream through.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PointAnchors<R> {
     local_a: V3<R>,
     local_b: V3<R>,
     base_separation: R,
@@ -111,6 +119,8 @@ pub(super) struct PairRows<R> {
 pub(super) struct ContactLanes<R> {
     groups: Vec<PairRows<R>>,
     rows: Vec<PointRows<R>>,
+    /// Each row's anchors, at the row's index.
+    anchors: Vec<PointAnchors<R>>,
 }
 
 /// The velocities `v_a, ω_a, v_b, ω_b` of each lane's bodies.
@@ -179,10 +189,12 @@ impl<R: Real> ContactLanes<R> {
                 tangent_mass: [s(|p| p.tangent_mass[0]), s(|p| p.tangent_mass[1])],
                 normal_impulse: s(|p| p.normal_impulse),
                 tangent_impulse: [s(|p| p.tangent_impulse[0]), s(|p| p.tangent_impulse[1])],
+                ..PointRows::default()
+            });
+            self.anchors.push(PointAnchors {
                 local_a: v3(|p| p.local_a),
                 local_b: v3(|p| p.local_b),
                 base_separation: s(|p| p.base_separation),
-                ..PointRows::default()
             });
         }
         self.groups.push(group);
@@ -204,10 +216,10 @@ impl<R: Real> ContactLanes<R> {
                 Q::<R>::from_fn(|k| s.rot[g.b[k]]),
             );
             let rows = &mut self.rows[g.rows..g.rows + g.slots];
-            for w in rows.iter_mut() {
-                let pa = com_a + rot_a.rotate(w.local_a);
-                let pb = com_b + rot_b.rotate(w.local_b);
-                w.separation = w.base_separation + g.normal.dot(pb - pa);
+            for (w, c) in rows.iter_mut().zip(&self.anchors[g.rows..g.rows + g.slots]) {
+                let pa = com_a + rot_a.rotate(c.local_a);
+                let pb = com_b + rot_b.rotate(c.local_b);
+                w.separation = c.base_separation + g.normal.dot(pb - pa);
             }
             if !inertia {
                 continue;
@@ -360,6 +372,7 @@ impl<R: Real> ContactLanes<R> {
         }
         self.groups.clear();
         self.rows.clear();
+        self.anchors.clear();
     }
 }
 
