@@ -239,10 +239,14 @@ fn link_islands(
             link(p.a as usize, p.b as usize, islands);
         }
     }
-    for p in &contacts.pairs {
-        let (a, b) = (p.a as usize, p.b as usize);
-        if p.touching() && b < n && (awake[a] != awake[b]) && dynamic[a] && dynamic[b] {
-            islands.request_wake(if awake[a] { b } else { a });
+    // Only a dynamic body at rest can be woken: when there is none, as in a pile's busy
+    // frames, the pairs are not walked again.
+    if (0..n).any(|i| dynamic[i] && !awake[i]) {
+        for p in &contacts.pairs {
+            let (a, b) = (p.a as usize, p.b as usize);
+            if p.touching() && b < n && (awake[a] != awake[b]) && dynamic[a] && dynamic[b] {
+                islands.request_wake(if awake[a] { b } else { a });
+            }
         }
     }
     if islands.apply_wakes() {
