@@ -275,6 +275,10 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 ///
 /// `push_out` is how far an old overlap may be pushed out in a substep
 /// ([`solve_normals`]).
+///
+/// Every pass reads every manifold, also one an earlier pass found apart: a resting
+/// contact left a fraction of a millimetre apart is pressed again once a later pass's
+/// joints have moved its bones.
 fn contact_pass(
     bones: &mut [Bone],
     manifolds: &[Manifold],

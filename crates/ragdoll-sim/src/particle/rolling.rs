@@ -69,6 +69,12 @@ pub(crate) fn solve(bones: &mut [Bone], manifolds: &[Manifold], points: &[Contac
             .iter()
             .map(|c| c.lambda_n / h + c.lambda_v)
             .sum();
+        // No normal impulse, no rolling resistance (`impulse`'s cap is zero): most
+        // manifolds of a busy pile are speculative ones no pass pressed, and forming
+        // their world inverse inertias was most of this pass's cost.
+        if normal <= 0.0 {
+            continue;
+        }
         let (a, b) = (Some(m.a), m.b);
         let (inv_a, inv_b) = (inv_inertia(bones, a), inv_inertia(bones, b));
         let spin = spin_of(bones, b) - spin_of(bones, a);
