@@ -1,9 +1,10 @@
-//! A scene's particle method (improved), or its multibody method, from 72 nearby starts:
+//! A scene's particle method (rigid frames or XPBD), or its multibody method, from 72
+//! nearby starts:
 //! every body and joint anchor shifted by 0–23 mm along x, y and z in turn, 10 simulated
 //! seconds each.
 //!
 //! ```text
-//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM] [--multibody]
+//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM] [--multibody | --xpbd]
 //! ```
 //!
 //! The name `lab-human` runs our Doom 3-style mod's humanoid (assets/doom3, entity
@@ -17,7 +18,8 @@
 //! fall asleep and the largest joint gap, limit excess and penetration, with the medians
 //! over the starts. `--each` prints every start too; `--from MM` shifts by
 //! MM … MM + 23 mm instead, another 72 starts; `--multibody` runs the multibody method
-//! instead, whose state energy is the sample's (its velocities are the state's own).
+//! instead, whose state energy is the sample's (its velocities are the state's own);
+//! `--xpbd` the particle method's XPBD solver instead of its rigid frames.
 
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
@@ -73,13 +75,17 @@ fn lab_human() -> Result<SceneDesc, String> {
 
 /// The metrics of one start (docs/metrics.md), and the largest rise of the state's own
 /// energy above its running minimum as a fraction of the energy scale.
-fn run(s: &SceneDesc, multibody: bool) -> Result<(MethodStats, f64), String> {
+fn run(
+    s: &SceneDesc,
+    multibody: bool,
+    solver: ParticleSolver,
+) -> Result<(MethodStats, f64), String> {
     if multibody {
         // Its sample's energy is the state's: the velocities are the bodies' own.
         let w = MultibodyWorld::new(s).map_err(|e| e.to_string())?;
         measure(w, s, |w| w.sample().energy)
     } else {
-        let w = ParticleWorld::new(s, ParticleSolver::RigidFrames).map_err(|e| e.to_string())?;
+        let w = ParticleWorld::new(s, solver).map_err(|e| e.to_string())?;
         measure(w, s, ParticleWorld::state_energy)
     }
 }
@@ -108,6 +114,11 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let each = args.iter().any(|a| a == "--each");
     let multibody = args.iter().any(|a| a == "--multibody");
+    let solver = if args.iter().any(|a| a == "--xpbd") {
+        ParticleSolver::Xpbd
+    } else {
+        ParticleSolver::RigidFrames
+    };
     let from = match args
         .iter()
         .position(|a| a == "--from")
@@ -152,7 +163,7 @@ fn main() -> ExitCode {
             d[axis] = mm as f32 * 1e-3;
             let mut start = base.clone();
             start.transform(&Pose::from_position(d));
-            let (st, state_gain) = match run(&start, multibody) {
+            let (st, state_gain) = match run(&start, multibody, solver) {
                 Ok(r) => r,
                 Err(e) => {
                     eprintln!("error: {label} {mm} mm: {e}");
