@@ -182,9 +182,10 @@ impl ParticleWorld {
             }
         }
         w.links = w.joints.iter().map(Link::of).collect();
-        if solver == ParticleSolver::RigidFrames {
+        if matches!(solver, ParticleSolver::RigidFrames | ParticleSolver::Xpbd) {
             // A pose that starts outside a limit is brought in at a bounded speed and
-            // by position only (`rigid_frames::close_start_slack`), not in one substep.
+            // by position only (`rigid_frames::close_start_slack`,
+            // `xpbd::step::close_start_slack`), not in one substep.
             for j in &mut w.joints {
                 j.slack = j.limit_violation(&w.bones);
             }

@@ -258,7 +258,7 @@ pub(crate) fn solve(
     }
     let alpha = j.limit_compliance / (h * h);
     if let Some(s) = &j.swing
-        && let Some(dphi) = swing_correction(s, bones, j.a, j.b)
+        && let Some(dphi) = swing_correction(s, bones, j.a, j.b, j.slack)
     {
         let l = dphi.length();
         if l > 1e-9 && l.is_finite() {
@@ -266,10 +266,11 @@ pub(crate) fn solve(
         }
     }
     for l in &j.angle_limits {
-        // `C = φ − clamp(φ)` along its gradient `g` (per unit turn of body1): a turn of
+        // `C = φ − clamp(φ)` along its gradient `g` (per unit turn of body1), the range
+        // widened by the joint's slack (`step::close_start_slack`): a turn of
         // `(target − φ) / |g|` about `g / |g|` restores it.
         let (phi, grad) = l.angle(bones, j.a, j.b);
-        let target = phi.clamp(l.min, l.max);
+        let target = phi.clamp(l.min - j.slack, l.max + j.slack);
         let g = grad.length();
         if target != phi && g > 1e-6 {
             rows.angle(grad / g, (target - phi) / g, alpha);

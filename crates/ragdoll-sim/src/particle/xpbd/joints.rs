@@ -310,15 +310,15 @@ pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h
     }
     let alpha = j.limit_compliance / (h * h);
     if let Some(s) = &j.swing
-        && let Some(dphi) = swing_correction(s, bones, a, b)
+        && let Some(dphi) = swing_correction(s, bones, a, b, j.slack)
     {
         turn(p, bones, a, b, dphi, alpha);
     }
     for l in &j.angle_limits {
-        // `C = φ − clamp(φ)` along its gradient `J` (per unit turn of body1): a turn
-        // `J (target − φ) / |J|²` restores it.
+        // `C = φ − clamp(φ)` along its gradient `J` (per unit turn of body1), the range
+        // widened by the joint's slack: a turn `J (target − φ) / |J|²` restores it.
         let (phi, grad) = l.angle(bones, a, b);
-        let target = phi.clamp(l.min, l.max);
+        let target = phi.clamp(l.min - j.slack, l.max + j.slack);
         let g2 = grad.length_squared();
         if target != phi && g2 > 1e-12 {
             turn(p, bones, a, b, grad * ((target - phi) / g2), alpha);
@@ -326,15 +326,22 @@ pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h
     }
 }
 
-/// The turn of body1 that brings a swing limit's shaft back onto its cone or pyramid,
-/// if it is outside: about `s × t` by the angle between the shaft `s` and the nearest
-/// allowed direction `t`.
-pub(super) fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side) -> Option<Vec3> {
+/// The turn of body1 that brings a swing limit's shaft back onto its cone or pyramid
+/// widened by `slack` (rad, [`Joint::slack`]), if it is outside: about `s × t` by the
+/// angle between the shaft `s` and the nearest allowed direction `t`.
+pub(super) fn swing_correction(
+    s: &SwingLimit,
+    bones: &[Bone],
+    a: Side,
+    b: Side,
+    slack: f32,
+) -> Option<Vec3> {
     let qb = rot(bones, b);
     let shaft = rot(bones, a) * s.shaft_a;
     let axis = qb * s.axis_b;
     let t = match s.kind {
         Swing::Cone { half_angle, .. } => {
+            let half_angle = half_angle + slack;
             let phi = shaft.dot(axis).clamp(-1.0, 1.0).acos();
             if phi <= half_angle {
                 return None;
@@ -347,6 +354,7 @@ pub(super) fn swing_correction(s: &SwingLimit, bones: &[Bone], a: Side, b: Side)
             Quat::from_axis_angle(n.normalize(), half_angle) * axis
         }
         Swing::Pyramid { h1, h2, u, v } => {
+            let (h1, h2) = (h1 + slack, h2 + slack);
             // Angles in the planes (axis, u) and (axis, v), each clamped to its range;
             // the allowed direction with the clamped angles.
             let (u, v) = (qb * u, qb * v);
