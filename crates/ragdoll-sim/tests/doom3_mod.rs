@@ -1,7 +1,7 @@
 //! The Doom 3-style mod under `assets/doom3/` (written by `scripts/make_doom3_mod.py`):
 //! its declarations resolve as the engine resolves them, its mesh and animations read,
-//! the figure is built from the `af_pose` frame, and both methods run it within the
-//! scene thresholds.
+//! the figure is built from the `af_pose` frame, and both methods (the particle method
+//! with its rigid-frames and its XPBD solver) run it within the scene thresholds.
 //!
 //! Gaps a method does not yet close are listed in `KNOWN_GAPS` with the figure measured
 //! when the list was written; the test fails when a listed gap starts passing.
@@ -148,7 +148,17 @@ fn the_figure_is_built_from_the_af_pose_frame() {
 /// median (worst): rigid-frames energy gain 0.7 % (7.0 %), joint gap 3.1 mm (7.2),
 /// penetration 2.7 mm (4.5), asleep in 72 of 72; multibody energy gain 0.2 % (2.0 %),
 /// joint gap 2.3 mm (5.0), penetration 6.0 mm (20.3), asleep in 64 of 72.
-const KNOWN_GAPS: [(&str, &str, f64); 1] = [("multibody", "max_joint_gap_m", 0.0050)];
+///
+/// XPBD brings the knee in as rigid frames does (`xpbd::step::close_start_slack`) and
+/// keeps its contacts, joints and limits at this start, but gains 3.2 % of the energy
+/// scale about a second in, as the figure rolls: the right forearm, on the ground,
+/// leaves it at 3 m/s within a frame and the arm then spins at 64 rad/s. Over the
+/// 72 starts (`ensemble -- lab-human --xpbd`) median (worst): energy gain 0.5 %
+/// (18.7 %), joint gap 5.5 mm (12.1), penetration 0.2 mm (12.7), asleep in 72 of 72.
+const KNOWN_GAPS: [(&str, &str, f64); 2] = [
+    ("multibody", "max_joint_gap_m", 0.0050),
+    ("xpbd", "energy_gain", 0.0320),
+];
 
 /// Runs 10 s from the load pose, which is recorded too (as `stats` does): energy the
 /// first step puts in counts. The limit excess is the largest after the start, the
@@ -175,10 +185,16 @@ fn both_methods_hold_the_scene_thresholds_on_the_mod_humanoid() {
     let sc = figure(true);
     let mut failures = Vec::new();
     let mut report = Vec::new();
-    let methods: [(&str, Box<dyn Method>, f64, f64); 2] = [
+    let methods: [(&str, Box<dyn Method>, f64, f64); 3] = [
         (
             "particle",
             Box::new(ParticleWorld::new(&sc, ParticleSolver::RigidFrames).unwrap()),
+            0.005,
+            3.0,
+        ),
+        (
+            "xpbd",
+            Box::new(ParticleWorld::new(&sc, ParticleSolver::Xpbd).unwrap()),
             0.005,
             3.0,
         ),
