@@ -2,7 +2,7 @@
 //!
 //! Velocities first (the gyroscopic term, gravity, air friction), then — after the
 //! constraints have corrected the velocities — positions from the new velocities, each
-//! body turned with its angular momentum held. This is the integrator of Box2D v3's soft
+//! body without a contact turned with its angular momentum held. This is the integrator of Box2D v3's soft
 //! step and of Catto's GDC 2015 talk "Numerical methods", with the gyroscopic term of
 //! an implicit midpoint rule ([`midpoint_spin`]).
 
@@ -210,12 +210,23 @@ fn midpoint_spin(q: Quat, w: Vec3, inertia: Mat3, inv_inertia: Mat3, h: f32) -> 
 /// the turn, turned each body's `L` by its own pre-constraint `ω` while the orientation
 /// turned by the post-constraint one: a hit pair's `L` drifted 0.3 % a step.) A body
 /// flying free turns by its midpoint velocity and keeps `|L|` and its kinetic energy.
+///
+/// A body with a contact this solve (`in_contact[i]`) keeps `ω` through the turn
+/// instead. Holding `L` while turning by the velocity the constraints left, `ω_c`,
+/// changes it by `ω' − ω_c = −h I⁻¹ (ω_c × I ω_c)` to first order: the gyroscopic term
+/// in its explicit form, which gains energy (Catto, GDC 2015), on a velocity the
+/// midpoint step never balanced. A body in contact exchanges angular momentum with what
+/// it touches anyway, so holding its own `L` keeps nothing, and the gain keeps resting
+/// bodies turning: on the pile of 1000 humans, six arms resting on the pile turned their
+/// fists about the wrists at a slowly growing 0.13–0.16 rad/s with it, and their islands
+/// stayed awake for ten seconds (all asleep within 1.5 s without it).
 pub fn integrate_positions(
     states: &mut BodyStates,
     motion: Motions<'_>,
     awake: &[bool],
     h: f32,
     spin_offset: &[Vec3],
+    in_contact: &[bool],
 ) {
     for (i, b) in motion.bodies.iter().enumerate() {
         if !awake[i] {
@@ -228,7 +239,8 @@ pub fn integrate_positions(
         let turned = (q + dq * (0.5 * h)).normalize();
         states.rot[i] = turned;
         let (inertia, inv_inertia) = (b.inertia(motion.full), b.inv_inertia_local(motion.full));
-        if inv_inertia.determinant() > 0.0 && !is_isotropic(inertia) {
+        let held = in_contact.get(i).copied().unwrap_or(false);
+        if !held && inv_inertia.determinant() > 0.0 && !is_isotropic(inertia) {
             let l = q * (inertia * (q.inverse() * w)) + spin_offset[i];
             let w1 = turned * (inv_inertia * (turned.inverse() * l));
             if w1.is_finite() {

@@ -3,7 +3,7 @@
 //!
 //! - `body`: hot body arrays (SoA) and cold body data.
 //! - `integrate`: semi-implicit Euler, the gyroscopic term by an implicit midpoint
-//!   rule, bodies turned with their angular momentum held.
+//!   rule, bodies without a contact turned with their angular momentum held.
 //! - `soft`: soft-constraint coefficients.
 //! - `joint`: building blocks every joint is made of; `limits`: swing, twist, ranges.
 //! - `ball`, `hinge`, `universal`, `fixed`, `slider`, `spring`: one file per

@@ -12,7 +12,8 @@
 //!    `joint_hertz`, damped by `damping_ratio`), `iterations` times; the point rows of
 //!    joint trees across a large mass ratio are solved exactly, after the other joint
 //!    rows of each iteration ([`super::joint_tree`]);
-//! 4. integrate positions, each body turned with its angular momentum held;
+//! 4. integrate positions, each body without a contact turned with its angular
+//!    momentum held;
 //! 5. relax: solve again without bias, removing the velocity the position feedback
 //!    added, so pushing out does not become bouncing (joints in
 //!    `substeps::RELAX_JOINT_PASSES` passes).

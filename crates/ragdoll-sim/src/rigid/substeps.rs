@@ -52,6 +52,8 @@ pub struct SolveBuffers {
     /// Per body, whether its figure touches anything this solve (see
     /// [`project::project_positions`]).
     touching: Vec<bool>,
+    /// Per body, whether it has a contact this solve (see [`integrate_positions`]).
+    in_contact: Vec<bool>,
 }
 
 impl SolveBuffers {
@@ -78,10 +80,14 @@ pub fn solve(
         trees,
         spin_offset,
         touching,
+        in_contact,
     } = buffers;
     spin_offset.clear();
     spin_offset.resize(motion.bodies.len(), Vec3::ZERO);
     contacts.rebuild(pairs, s, awake);
+    in_contact.clear();
+    in_contact.resize(motion.bodies.len(), false);
+    contacts.mark_touching(in_contact);
     trees.rebuild(joints, s, awake);
     for sub in 0..p.substeps {
         integrate_velocities(s, motion, awake, p.gravity, p.ctx.h, spin_offset);
@@ -101,7 +107,7 @@ pub fn solve(
             trees.solve(joints, s, &p.ctx, true);
             contacts.solve(s, &p.ctx, true);
         }
-        integrate_positions(s, motion, awake, p.ctx.h, spin_offset);
+        integrate_positions(s, motion, awake, p.ctx.h, spin_offset, in_contact);
         for pass in 0..RELAX_JOINT_PASSES {
             // The first pass prepares the point rows on the moved pose.
             joints.solve(s, awake, &p.ctx, false);
