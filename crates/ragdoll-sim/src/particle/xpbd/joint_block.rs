@@ -193,7 +193,10 @@ pub(crate) fn blocks(j: &Joint) -> bool {
 
 /// Joint `j` (a [`blocks`] kind) between its anchors `ends`, `h` the substep: its
 /// point, angular parts and violated limits as one block (module doc); `start` its
-/// [`begin_substep`] (`None`: neither side takes corrections).
+/// [`begin_substep`] (`None`: neither side takes corrections). Inlined into both of
+/// its callers, the substep's passes and the start's slack passes: the passes' hot loop
+/// is built around it.
+#[inline(always)]
 pub(crate) fn solve(
     p: &mut XParticles,
     bones: &mut [Bone],
@@ -342,6 +345,7 @@ fn fill_and_factor(
 /// symmetric positive semi-definite); a row whose pivot vanishes against its diagonal
 /// depends on the rows before it and takes no `Δλ`. The point rows come factored
 /// from `start`.
+#[inline(always)]
 fn solve_rows(rows: &Rows, start: &Start) -> [f64; MAX_ROWS] {
     let (a, b) = (&start.a, &start.b);
     let n = rows.n;
