@@ -35,7 +35,7 @@ use super::friction::{
 };
 use super::islands::{self, Part};
 use super::joint_lanes::Lockstep;
-use super::joints::JointSet;
+use super::joints::{JointSet, close_slack_of_figures, in_figures};
 use super::{ParticleWorld, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::{Ground, Settings, rolling_arm};
@@ -600,24 +600,16 @@ const SLACK_GAP: f32 = 1e-6;
 /// energy scale. It runs before the frame's start is recorded, so the energy metric's
 /// velocities do not see it either. The joint pass holds the widened limits meanwhile.
 fn close_start_slack(w: &mut ParticleWorld, h: f32) {
-    let push_out = w.settings.max_push_out_speed;
-    let dt = w.settings.timestep;
-    let mut figures: Vec<u32> = Vec::new();
-    for j in &mut w.joints {
-        if j.close_slack(push_out, dt)
-            && let Some(i) = j.a.or(j.b)
-        {
-            figures.push(w.bones[i].figure);
-        }
-    }
+    let figures = close_slack_of_figures(
+        &mut w.joints,
+        &w.bones,
+        w.settings.max_push_out_speed,
+        w.settings.timestep,
+    );
     if figures.is_empty() {
         return;
     }
-    figures.sort_unstable();
-    figures.dedup();
-    let in_figure = |bones: &[Bone], i: Option<usize>| {
-        i.is_some_and(|i| figures.binary_search(&bones[i].figure).is_ok())
-    };
+    let in_figure = |bones: &[Bone], i: Option<usize>| in_figures(&figures, bones, i);
     for _ in 0..SLACK_PASSES {
         let mut gap = 0.0f32;
         for j in &w.joints {

@@ -28,6 +28,8 @@
 //! the only source, the push-out of a penetration, is cancelled by step 6.
 
 use super::super::ParticleWorld;
+use super::super::bone::Bone;
+use super::super::joints::{close_slack_of_figures, in_figures};
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
@@ -101,24 +103,16 @@ const SLACK_GAP: f64 = 1e-6;
 /// rad/s): after one frame the lower leg moved at 4.5 m/s and 24 rad/s and the
 /// figure had gained 88 J, 13 % of its energy scale.
 fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
-    let push_out = w.settings.max_push_out_speed;
-    let dt = w.settings.timestep;
-    let mut figures: Vec<u32> = Vec::new();
-    for j in &mut w.joints {
-        if j.close_slack(push_out, dt)
-            && let Some(i) = j.a.or(j.b)
-        {
-            figures.push(w.bones[i].figure);
-        }
-    }
+    let figures = close_slack_of_figures(
+        &mut w.joints,
+        &w.bones,
+        w.settings.max_push_out_speed,
+        w.settings.timestep,
+    );
     if figures.is_empty() {
         return;
     }
-    figures.sort_unstable();
-    figures.dedup();
-    let in_figure = |bones: &[super::super::bone::Bone], i: Option<usize>| {
-        i.is_some_and(|i| figures.binary_search(&bones[i].figure).is_ok())
-    };
+    let in_figure = |bones: &[Bone], i: Option<usize>| in_figures(&figures, bones, i);
     for _ in 0..SLACK_PASSES {
         let p = &mut st.particles;
         p.x_prev.copy_from_slice(&p.x);
