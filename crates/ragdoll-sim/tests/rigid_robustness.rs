@@ -7,6 +7,8 @@ use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::*;
 use ragdoll_sim::{BodyState, Method};
 
+mod common;
+
 fn boxed(name: &str, half: Vec3, pos: Vec3, mass: f32) -> BodyDesc {
     BodyDesc::new(
         name,
@@ -443,15 +445,8 @@ fn hinge_angle_after_release(friction: f32, reach: f32, along: f32) -> f32 {
     };
     sc.settings.ground = None;
     sc.constraints.push(ConstraintDesc {
-        name: "hinge".into(),
-        body1: BodyId(0),
-        body2: BodyRef::World,
-        kind: JointKind::Hinge {
-            anchor: pivot,
-            axis: Vec3::Z,
-            limit: None,
-        },
         friction,
+        ..common::hinge("hinge", 0, None, pivot, Vec3::Z, None)
     });
     let (w, st) = run(&sc, 1.0);
     assert!(st.finite);

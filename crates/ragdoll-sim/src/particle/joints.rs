@@ -528,29 +528,6 @@ impl<'a> JointSet<'a> {
     }
 }
 
-/// Narrows every joint's slack by what `dt` allows ([`Joint::close_slack`]) and returns
-/// the figures that had some, sorted, each once: the figures a solver's start passes
-/// move onto their narrowed limits this frame (`rigid_frames::close_start_slack`,
-/// `xpbd::step::close_start_slack`).
-pub(crate) fn close_slack_of_figures(
-    joints: &mut [Joint],
-    bones: &[Bone],
-    push_out_speed: f32,
-    dt: f32,
-) -> Vec<u32> {
-    let mut figures: Vec<u32> = Vec::new();
-    for j in joints {
-        if j.close_slack(push_out_speed, dt)
-            && let Some(i) = j.a.or(j.b)
-        {
-            figures.push(bones[i].figure);
-        }
-    }
-    figures.sort_unstable();
-    figures.dedup();
-    figures
-}
-
 /// Whether the bone `i` (none: the world) is in one of `figures` (sorted).
 pub(crate) fn in_figures(figures: &[u32], bones: &[Bone], i: Option<usize>) -> bool {
     i.is_some_and(|i| figures.binary_search(&bones[i].figure).is_ok())

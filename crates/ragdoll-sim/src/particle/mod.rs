@@ -118,6 +118,25 @@ pub struct ParticleWorld {
 }
 
 impl ParticleWorld {
+    /// Narrows every joint's slack by what a frame allows ([`Joint::close_slack`] at
+    /// `max_push_out_speed`) and returns the figures that had some, sorted, each once:
+    /// the figures a solver's start passes move onto their narrowed limits this frame
+    /// (`rigid_frames::close_start_slack`, `xpbd::step::close_start_slack`).
+    pub(crate) fn close_slack_of_figures(&mut self) -> Vec<u32> {
+        let (push_out, dt) = (self.settings.max_push_out_speed, self.settings.timestep);
+        let mut figures: Vec<u32> = Vec::new();
+        for j in &mut self.joints {
+            if j.close_slack(push_out, dt)
+                && let Some(i) = j.a.or(j.b)
+            {
+                figures.push(self.bones[i].figure);
+            }
+        }
+        figures.sort_unstable();
+        figures.dedup();
+        figures
+    }
+
     /// Builds the world for a scene with the given solver. Fails with a [`SceneError`]
     /// saying what and where when the description cannot be simulated.
     pub fn new(scene: &SceneDesc, solver: ParticleSolver) -> Result<ParticleWorld, SceneError> {

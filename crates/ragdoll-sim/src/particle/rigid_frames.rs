@@ -35,7 +35,7 @@ use super::friction::{
 };
 use super::islands::{self, Part};
 use super::joint_lanes::Lockstep;
-use super::joints::{JointSet, close_slack_of_figures, in_figures};
+use super::joints::{JointSet, in_figures};
 use super::{ParticleWorld, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::{Ground, Settings, rolling_arm};
@@ -594,18 +594,13 @@ const SLACK_GAP: f32 = 1e-6;
 /// Such a joint's limits are widened to the pose it started in (`Joint::slack`); each
 /// frame narrows them at a bounded speed (`Joint::close_slack`) and moves its figure
 /// onto the narrowed limits with [`SLACK_PASSES`] passes over the figure's joints
-/// (anchors, axes and limits) until their anchors meet, folded into the frames as where the bones are, not as a
-/// motion of a substep: no velocity comes of it. Held in one substep instead, a door
+/// (anchors, axes and limits) until their anchors meet, folded into the frames as where
+/// the bones are, not as a motion of a substep: no velocity comes of it. Held in one substep instead, a door
 /// hinge 10° outside its range turned at 200 rad/s and gained four times the scene's
 /// energy scale. It runs before the frame's start is recorded, so the energy metric's
 /// velocities do not see it either. The joint pass holds the widened limits meanwhile.
 fn close_start_slack(w: &mut ParticleWorld, h: f32) {
-    let figures = close_slack_of_figures(
-        &mut w.joints,
-        &w.bones,
-        w.settings.max_push_out_speed,
-        w.settings.timestep,
-    );
+    let figures = w.close_slack_of_figures();
     if figures.is_empty() {
         return;
     }

@@ -2,9 +2,9 @@
 //!
 //! Velocities first (the gyroscopic term, gravity, air friction), then — after the
 //! constraints have corrected the velocities — positions from the new velocities, each
-//! body without a contact turned with its angular momentum held. This is the integrator of Box2D v3's soft
-//! step and of Catto's GDC 2015 talk "Numerical methods", with the gyroscopic term of
-//! an implicit midpoint rule ([`midpoint_spin`]).
+//! body without a contact turned with its angular momentum held. This is the integrator
+//! of Box2D v3's soft step and of Catto's GDC 2015 talk "Numerical methods", with the
+//! gyroscopic term of an implicit midpoint rule ([`midpoint_spin`]).
 
 use super::body::{BodyStates, Motions};
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4};

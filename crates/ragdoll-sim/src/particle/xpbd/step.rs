@@ -29,7 +29,7 @@
 
 use super::super::ParticleWorld;
 use super::super::bone::Bone;
-use super::super::joints::{close_slack_of_figures, in_figures};
+use super::super::joints::in_figures;
 use super::super::rigid_frames::substeps;
 use super::joints::{Anchor, pull, solve_angular, solve_point};
 use super::particles::PER_BONE;
@@ -103,12 +103,7 @@ const SLACK_GAP: f64 = 1e-6;
 /// rad/s): after one frame the lower leg moved at 4.5 m/s and 24 rad/s and the
 /// figure had gained 88 J, 13 % of its energy scale.
 fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
-    let figures = close_slack_of_figures(
-        &mut w.joints,
-        &w.bones,
-        w.settings.max_push_out_speed,
-        w.settings.timestep,
-    );
+    let figures = w.close_slack_of_figures();
     if figures.is_empty() {
         return;
     }
