@@ -6,9 +6,9 @@
 
 use super::SceneError;
 use super::desc::{BodyDesc, MassSpec, SceneDesc, Shape};
-use glam::{Mat3, Vec3};
+use glam::{DMat3, DVec3, Mat3, Vec3};
 use parry3d::mass_properties::MassProperties;
-use parry3d::shape::{ConvexPolyhedron, Shape as _, SharedShape};
+use parry3d::shape::SharedShape;
 
 /// The parry3d collider of a body's shape, shared by both methods so they collide the
 /// same geometry. Round shapes in parry3d are Y-aligned like ours; a cone's base is at
@@ -65,8 +65,20 @@ impl MassProps {
     }
 }
 
-/// Volume (m³) and unit-density mass properties of a shape.
-fn unit_density(shape: &Shape) -> Option<MassProperties> {
+/// Unit-density mass properties of a shape: volume (m³), centre of mass and inertia
+/// about it (shape frame).
+struct UnitMass {
+    volume: f32,
+    local_com: Vec3,
+    inertia: Mat3,
+}
+
+/// Volume (m³) and unit-density mass properties of a shape. The round shapes and the box
+/// take parry3d's, whose principal frame is the shape's own; a convex hull's are
+/// integrated here ([`hull_mass`]): parry3d 0.31 returns a hull's principal moments with
+/// a wrong principal frame (Doom 3's `bone`, a bipyramid along Y, came back with its
+/// smallest moment about X, its long axis's moment on a transverse axis).
+fn unit_density(shape: &Shape) -> Option<UnitMass> {
     let mp = match shape {
         Shape::Box { half_extents } => MassProperties::from_cuboid(1.0, *half_extents),
         Shape::Capsule {
@@ -88,16 +100,51 @@ fn unit_density(shape: &Shape) -> Option<MassProperties> {
             radius,
             ..
         } => MassProperties::from_cone(1.0, *half_height, *radius),
-        Shape::ConvexHull { points } => {
-            ConvexPolyhedron::from_convex_hull(points)?.mass_properties(1.0)
-        }
+        Shape::ConvexHull { points } => return hull_mass(points),
     };
-    Some(mp)
+    Some(UnitMass {
+        volume: mp.mass(),
+        local_com: mp.local_com,
+        inertia: mp.reconstruct_inertia_matrix(),
+    })
+}
+
+/// A convex hull's unit-density mass properties from its boundary triangles: each
+/// triangle `(a, b, c)` (outward) spans with the origin a tetrahedron of signed volume
+/// `d / 6`, `d = det[a b c]`, first moment `d (a + b + c) / 24` and second moment
+/// `∫ x xᵀ = d A C₀ Aᵀ`, `A = [a b c]`, `C₀ = (1 + δ_ij) / 120` (Tonon 2004). Summed,
+/// they give the hull's volume `V`, centroid `c` and covariance `C` about the origin;
+/// about the centroid `C_c = C − V c cᵀ`, and the inertia is `tr(C_c) 1 − C_c`.
+/// `None` for a hull parry3d cannot build or without volume.
+fn hull_mass(points: &[Vec3]) -> Option<UnitMass> {
+    let (vertices, triangles) = parry3d::transformation::try_convex_hull(points).ok()?;
+    let v: Vec<DVec3> = vertices.iter().map(|p| p.as_dvec3()).collect();
+    let (mut volume, mut moment, mut cov) = (0.0f64, DVec3::ZERO, DMat3::ZERO);
+    for t in &triangles {
+        let a = DMat3::from_cols(v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]);
+        let d = a.determinant();
+        volume += d / 6.0;
+        moment += (a.x_axis + a.y_axis + a.z_axis) * (d / 24.0);
+        let c0 = DMat3::from_cols_array(&[2.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 2.0]) / 120.0;
+        cov += a * c0 * a.transpose() * d;
+    }
+    if !(volume.is_finite() && volume > 0.0) {
+        return None;
+    }
+    let com = moment / volume;
+    let about = cov - DMat3::from_cols(com * com.x, com * com.y, com * com.z) * volume;
+    let trace = about.x_axis.x + about.y_axis.y + about.z_axis.z;
+    let inertia = DMat3::from_diagonal(DVec3::splat(trace)) - about;
+    Some(UnitMass {
+        volume: volume as f32,
+        local_com: com.as_vec3(),
+        inertia: inertia.as_mat3(),
+    })
 }
 
 /// Volume of a shape (m³); `None` for a degenerate hull.
 pub fn volume(shape: &Shape) -> Option<f32> {
-    unit_density(shape).map(|mp| mp.mass())
+    unit_density(shape).map(|mp| mp.volume)
 }
 
 /// Mass properties of a body. With [`MassSpec::Mass`] the inertia is that of the shape at
@@ -107,7 +154,7 @@ pub fn mass_props(body: &BodyDesc) -> Result<MassProps, SceneError> {
         body: body.name.clone(),
         what: "its convex hull has no volume".into(),
     })?;
-    let volume = unit.mass();
+    let volume = unit.volume;
     if !(volume.is_finite() && volume > 0.0) {
         return Err(SceneError::Degenerate {
             body: body.name.clone(),
@@ -125,7 +172,7 @@ pub fn mass_props(body: &BodyDesc) -> Result<MassProps, SceneError> {
         });
     }
     // Inertia scales linearly with density at fixed shape.
-    let mut inertia = unit.reconstruct_inertia_matrix() * (mass / volume);
+    let mut inertia = unit.inertia * (mass / volume);
     if let Some(s) = body.inertia_scale {
         // Doom 3 post-multiplies the tensor by the scale matrix (`I *= S`). For the usual
         // diagonal S and a tensor in principal axes that is symmetric; otherwise we keep
@@ -211,6 +258,74 @@ mod tests {
             MassSpec::Mass(3.0),
         );
         assert!((mass_props(&b).unwrap().mass - 3.0).abs() < 1e-6);
+    }
+
+    /// The largest difference between two tensors' entries, relative to `a`'s largest.
+    fn off(a: Mat3, b: Mat3) -> f32 {
+        let scale = a.to_cols_array().iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        let d = (a - b).to_cols_array();
+        d.iter().fold(0.0f32, |m, x| m.max(x.abs())) / scale
+    }
+
+    #[test]
+    fn hull_of_a_turned_box_has_the_turned_box_inertia() {
+        // A 0.2 × 0.6 × 1.0 m box given as its eight corners, turned and moved: its
+        // tensor is `R diag(I) Rᵀ` about its centre, off-diagonal in the shape frame.
+        let half = Vec3::new(0.1, 0.3, 0.5);
+        let rot = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 1.1);
+        let centre = Vec3::new(0.3, -0.2, 0.1);
+        let pts: Vec<Vec3> = (0..8)
+            .map(|k| {
+                let s = Vec3::new(
+                    if k & 1 == 0 { -1.0 } else { 1.0 },
+                    if k & 2 == 0 { -1.0 } else { 1.0 },
+                    if k & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                centre + rot * (s * half)
+            })
+            .collect();
+        let hull = BodyDesc::new(
+            "hull",
+            Shape::ConvexHull { points: pts.into() },
+            Pose::IDENTITY,
+            MassSpec::Density(3.0),
+        );
+        let mp = mass_props(&hull).unwrap();
+        let (x, y, z) = (2.0 * half.x, 2.0 * half.y, 2.0 * half.z);
+        let m = 3.0 * x * y * z;
+        assert!((mp.mass - m).abs() < 1e-5 * m, "{} vs {m}", mp.mass);
+        assert!(mp.local_com.distance(centre) < 1e-5, "{}", mp.local_com);
+        let principal = Vec3::new(y * y + z * z, x * x + z * z, x * x + y * y) * (m / 12.0);
+        let r = Mat3::from_quat(rot);
+        let want = r * Mat3::from_diagonal(principal) * r.transpose();
+        assert!(off(want, mp.inertia) < 1e-4, "{:?} vs {want:?}", mp.inertia);
+    }
+
+    #[test]
+    fn doom_3_bone_turns_least_about_its_own_axis() {
+        // Doom 3's `bone` is two pyramids over the triangle (0, w), (±w, −w/2) in x, z
+        // with their tips at y = ±L (w half its width, L half its length). Over each
+        // pyramid the cross-section at height t is the triangle scaled by 1 − t/L, so
+        // with the triangle's area A = 1.5 w² and second moments ∫x² dA = A/12 · 2w²,
+        // ∫z² dA = A/12 · 1.5w², ∫xz dA = 0: ∫x² dV = 2 · L/5 · A w²/6 = 0.1 L w⁴,
+        // ∫z² dV = 0.075 L w⁴, ∫y² dV = 2 A ∫₀ᴸ t² (1 − t/L)² dt = 0.1 w² L³, V = w² L.
+        let (w, l) = (0.0508f32, 0.1524f32);
+        let b = BodyDesc::new(
+            "bone",
+            crate::scene::af::models::bone(l, 2.0 * w),
+            Pose::IDENTITY,
+            MassSpec::Density(1.0),
+        );
+        let mp = mass_props(&b).unwrap();
+        let (xx, zz, yy) = (
+            0.1 * l * w.powi(4),
+            0.075 * l * w.powi(4),
+            0.1 * w * w * l.powi(3),
+        );
+        assert!((mp.mass - w * w * l).abs() < 1e-5 * mp.mass);
+        let want = Mat3::from_diagonal(Vec3::new(yy + zz, xx + zz, xx + yy));
+        assert!(off(want, mp.inertia) < 1e-4, "{:?} vs {want:?}", mp.inertia);
+        assert!(mp.local_com.length() < 1e-6);
     }
 
     #[test]

@@ -26,7 +26,7 @@ mod build;
 mod constraint;
 mod contained;
 mod ctx;
-mod models;
+pub(crate) mod models;
 mod parser;
 mod place;
 
