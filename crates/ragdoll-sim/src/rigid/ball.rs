@@ -76,6 +76,10 @@ impl JointSolve for BallJoint {
         if let Some(t) = &self.twist {
             t.project(&self.frame, s);
         }
+        self.project_point(s);
+    }
+
+    fn project_point(&self, s: &mut BodyStates) {
         self.point.project(
             &self.frame,
             s,

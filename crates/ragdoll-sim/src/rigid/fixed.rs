@@ -40,6 +40,10 @@ impl JointSolve for FixedJoint {
 
     fn project(&self, s: &mut BodyStates) {
         self.lock.project(&self.frame, s);
+        self.project_point(s);
+    }
+
+    fn project_point(&self, s: &mut BodyStates) {
         self.point.project(&self.frame, s, false);
     }
 

@@ -78,6 +78,10 @@ impl JointSolve for HingeJoint {
             l.project(&self.frame, s);
         }
         self.align.project(&self.frame, s);
+        self.project_point(s);
+    }
+
+    fn project_point(&self, s: &mut BodyStates) {
         self.point.project(
             &self.frame,
             s,

@@ -115,6 +115,9 @@ pub trait JointSolve {
     /// One position-projection update (see [`super::project`]); joints without a
     /// rigid part (springs) keep the default, which does nothing.
     fn project(&self, _s: &mut BodyStates) {}
+    /// The position projection of the point row alone, as [`JointSolve::project`]
+    /// ends with it; joints without a point row keep the default, which does nothing.
+    fn project_point(&self, _s: &mut BodyStates) {}
     /// Distance between the anchor as seen from each body (m).
     fn gap(&self, s: &BodyStates) -> f32 {
         let (pa, pb) = self.frame().anchors(s);

@@ -54,6 +54,15 @@ pub struct JointSet {
     pub live_points: usize,
 }
 
+/// The rows a projection pass over the joints moves ([`JointSet::project`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ProjectedRows {
+    /// Every rigid row: limits, alignments, locks, then the point.
+    All,
+    /// The point rows alone.
+    Points,
+}
+
 /// Runs `$body` with `$j` bound to every joint, mutably (fields, not the solve trait).
 macro_rules! for_each_joint_mut {
     ($set:expr, $j:ident => $body:expr) => {{
@@ -398,7 +407,8 @@ impl JointSet {
     /// that the pass has not made immobile ([`super::project`] holds resting bodies as
     /// static). A joint between two immobile bodies would measure its errors and build
     /// its effective masses only to find them singular; once a pile starts to settle
-    /// that is most of them. The update of a joint of a figure that touches nothing
+    /// that is most of them. `rows` says whether each joint projects all its rows or
+    /// its point row alone. The update of a joint of a figure that touches nothing
     /// (`touching` unset, per body) keeps its pair's angular momentum
     /// ([`keep_pair_momentum`]).
     pub fn project(
@@ -407,13 +417,17 @@ impl JointSet {
         motion: Motions<'_>,
         awake: &[bool],
         touching: &[bool],
+        rows: ProjectedRows,
     ) {
         for_each_joint_ref!(self, j => {
             let f = j.frame();
             if touches_awake(f, awake) && (s.is_mobile(f.a) || s.is_mobile(f.b)) {
                 let free = !touching[f.a] && !touching[f.b];
                 let before = PairPose::of(s, f.a, f.b);
-                j.project(s);
+                match rows {
+                    ProjectedRows::All => j.project(s),
+                    ProjectedRows::Points => j.project_point(s),
+                }
                 if free {
                     keep_pair_momentum(s, motion, f.a, f.b, &before);
                 }

@@ -122,8 +122,12 @@ impl JointSolve for UniversalJoint {
             r.iter().for_each(|l| l.project(f, s));
         }
         self.cross_row_now(s).project(f, s);
+        self.project_point(s);
+    }
+
+    fn project_point(&self, s: &mut BodyStates) {
         self.point.project(
-            f,
+            &self.frame,
             s,
             self.friction.max_torque > 0.0 && self.friction.holding,
         );
