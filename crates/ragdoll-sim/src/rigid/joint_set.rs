@@ -133,6 +133,22 @@ impl JointSet {
         g: f32,
     ) -> JointSet {
         let mut set = JointSet::default();
+        // Each array holds exactly its joints: they are never added to after the build,
+        // and a hinge or ball joint keeps its rows (several hundred bytes), so an array
+        // doubled while pushing would hold up to as many again for good.
+        let count = |is: fn(&JointKind) -> bool| constraints.iter().filter(|c| is(&c.kind)).count();
+        set.ball
+            .reserve_exact(count(|k| matches!(k, JointKind::BallAndSocket { .. })));
+        set.hinge
+            .reserve_exact(count(|k| matches!(k, JointKind::Hinge { .. })));
+        set.universal
+            .reserve_exact(count(|k| matches!(k, JointKind::Universal { .. })));
+        set.fixed
+            .reserve_exact(count(|k| matches!(k, JointKind::Fixed)));
+        set.slider
+            .reserve_exact(count(|k| matches!(k, JointKind::Slider { .. })));
+        set.spring
+            .reserve_exact(count(|k| matches!(k, JointKind::Spring { .. })));
         for c in constraints {
             let a = c.body1.index();
             let b = match c.body2 {
