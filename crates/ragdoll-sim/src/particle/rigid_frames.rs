@@ -186,6 +186,12 @@ fn narrow_phase<T: Sync>(
             set
         })
         .collect();
+    // Grown to the size needed, not doubled: the set is kept for reuse at its largest
+    // size (a pile's landing), so doubling would hold up to twice its points for good.
+    out.manifolds
+        .reserve_exact(sets.iter().map(|s| s.manifolds.len()).sum());
+    out.points
+        .reserve_exact(sets.iter().map(|s| s.points.len()).sum());
     for set in &sets {
         out.append(set);
     }
