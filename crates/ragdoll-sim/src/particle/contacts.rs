@@ -176,6 +176,21 @@ impl ContactSet {
         self.points.push(point);
     }
 
+    /// Makes room for `extra` more manifolds and points in a set kept between
+    /// detections, growing a full array by an eighth (at least `extra`) rather than
+    /// doubling it: the set keeps its largest size (a pile's landing), so doubling
+    /// would hold up to twice its points for good; growing by an eighth costs a few
+    /// dozen copies of the set over a run, as its room is never given back.
+    pub fn reserve_kept(&mut self, extra: usize) {
+        fn grow<T>(v: &mut Vec<T>, extra: usize) {
+            if v.capacity() - v.len() < extra {
+                v.reserve_exact(extra.max(v.len() / 8));
+            }
+        }
+        grow(&mut self.manifolds, extra);
+        grow(&mut self.points, extra);
+    }
+
     /// Appends another set's manifolds and points after this one's, its points'
     /// ranges moved by where they land: the same set as pushing them here in turn.
     pub fn append(&mut self, other: &ContactSet) {

@@ -142,6 +142,11 @@ fn ground_contacts(
 /// a thread.
 const NARROW_PHASE_MIN_RUN: usize = 64;
 
+/// Room for a pair's or a bone's contacts that the serial narrow phase makes before
+/// each, so that the kept set grows by an eighth at a time, not by doubling
+/// ([`ContactSet::reserve_kept`]); a convex pair makes one manifold of a few points.
+const KEPT_ROOM: usize = 16;
+
 /// Runs of the parallel narrow phase per thread: a few, so that work stealing evens out
 /// runs of unequal cost (as `islands`' batches), but not many: each run fills a contact
 /// set of its own from empty, so a run costs more than its items, and hundreds of small
@@ -167,6 +172,7 @@ fn narrow_phase<T: Sync>(
     let threads = rayon::current_num_threads();
     if threads == 1 || items.len() < 2 * NARROW_PHASE_MIN_RUN {
         for item in items {
+            out.reserve_kept(KEPT_ROOM);
             collide(item, scratch, out);
         }
         return;
