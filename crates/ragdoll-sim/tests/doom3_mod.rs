@@ -139,16 +139,13 @@ fn the_figure_is_built_from_the_af_pose_frame() {
 ///
 /// Multibody: it keeps its energy, limits, contacts and joints at this start (the knee
 /// pressed at its stop stays closed: the position projection ends with a pass of the
-/// point rows, `rigid::project`). At other starts it lets the folded shins and the
-/// upper arm under the landing chest sink (a 2 kg body carrying 25 kg to the ground
-/// through a joint: the soft contact row under the light body gives way as a spring of
-/// its effective mass).
+/// point rows, `rigid::project`).
 ///
 /// One start says little on a landing this chaotic; over 72 starts shifted by 0–23 mm
 /// (`cargo run --release -p ragdoll-sim --example ensemble -- lab-human [--multibody]`),
 /// median (worst): rigid-frames energy gain 0.3 % (11.1 %), joint gap 1.6 mm (3.3),
-/// penetration 1.4 mm (5.1), asleep in 72 of 72; multibody energy gain 0.5 % (2.1 %),
-/// joint gap 2.2 mm (3.4), penetration 7.9 mm (8.3), asleep in 72 of 72.
+/// penetration 1.4 mm (5.1), asleep in 72 of 72; multibody energy gain 0.3 % (2.4 %),
+/// joint gap 0.8 mm (1.8), penetration 8.1 mm (8.1), asleep in 72 of 72.
 ///
 /// XPBD brings the knee in as rigid frames does (`xpbd::step::close_start_slack`) and
 /// keeps its energy, contacts, joints and limits at this start. Over the 72 starts

@@ -77,7 +77,9 @@ struct UnitMass {
 /// take parry3d's, whose principal frame is the shape's own; a convex hull's are
 /// integrated here ([`hull_mass`]): parry3d 0.31 returns a hull's principal moments with
 /// a wrong principal frame (Doom 3's `bone`, a bipyramid along Y, came back with its
-/// smallest moment about X, its long axis's moment on a transverse axis).
+/// smallest moment about X, its long axis's moment on a transverse axis; see also
+/// dimforge/parry#252 on its polyhedral tensors). The tests below pin both paths to
+/// closed forms.
 fn unit_density(shape: &Shape) -> Option<UnitMass> {
     let mp = match shape {
         Shape::Box { half_extents } => MassProperties::from_cuboid(1.0, *half_extents),
