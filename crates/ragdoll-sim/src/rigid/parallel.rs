@@ -1,4 +1,4 @@
-//! Solving islands on all cores.
+//! Solving islands in batches of their own, on all cores.
 //!
 //! Within a step, islands (dynamic bodies linked by joints or touching contacts, see
 //! [`super::island`]) do not interact: whatever an island's constraints read of a body
@@ -7,9 +7,11 @@
 //! order, into batches of about equal work, and each batch is gathered into dense local
 //! arrays — its moving bodies first, then the static bodies its constraints read; its
 //! joints and touching contact pairs with body indices rewritten to local ones — solved
-//! by the same [`substeps::solve`] that solves the whole world on one thread, and
-//! scattered back. Jolt and Box2D v3 hand islands (or constraint colours) to threads for
-//! the same reason.
+//! by the same [`substeps::solve`] that solves a small world in place, and scattered
+//! back. Jolt and Box2D v3 hand islands (or constraint colours) to threads for the same
+//! reason. On one thread the batches serve the cache: a batch's arrays stay in it through
+//! the batch's substeps and passes, where the whole world's arrays would be walked from
+//! memory at every pass.
 //!
 //! Determinism: every Gauss–Seidel loop runs over a batch's constraints in the relative
 //! order they have in the world's arrays, and where the solver regroups them (contact
@@ -25,13 +27,14 @@ use super::joint_set::JointSet;
 use super::joint_tree::JointTrees;
 use super::substeps::{self, SolveBuffers, SolveParams};
 use rayon::prelude::*;
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 /// No island / no local index.
 const NONE: u32 = u32::MAX;
 
 /// Below this much work in a step (moving bodies + joints + touching pairs) the world is
-/// solved in place: a figure or two has little to share out, and gathering and waking
-/// threads would cost about what they save.
+/// solved in place: a figure or two has little to share out, fits in cache as it is,
+/// and gathering and waking threads would cost about what they save.
 const MIN_PARALLEL_WORK: usize = 256;
 
 /// Batches per thread ([`crate::batches`]). A task per island would gather every
@@ -53,28 +56,53 @@ struct JointSlots {
     spring: Vec<usize>,
 }
 
-/// What a parallel solve keeps between steps, so that once grown a step allocates
-/// little: the batches' contents, one gathered batch per thread, and each batch's joint
+/// What a batched solve keeps between steps, so that once grown a step allocates
+/// little: the batches' contents, the gathered batches' arrays, and each batch's joint
 /// trees.
 ///
-/// The batches are solved in rounds of one batch per thread: a round gathers its
-/// batches into the threads' arrays, solves them at once and scatters them back. So the
-/// gathered copies (states, constraints, solve buffers) are as large as the largest
-/// batches, not as the world: a batch is a share of the step's work over
-/// `BATCHES_PER_THREAD` times the threads. Each round's batches are of about equal work
-/// (they were dealt so), so a round's threads finish at about the same time.
+/// Each batch is one rayon task that gathers it into a set of local arrays, solves it
+/// and scatters it back; the tasks run as threads come free (work stealing), not in
+/// rounds of one batch per thread, so a thread that finishes a cheap batch takes the next
+/// instead of waiting for its partner's dear one. Gathering and scattering read and write
+/// the world's arrays and so take turns ([`World`]'s lock), but one thread's gather or
+/// scatter overlaps the other threads' solves. The local arrays are taken from a free
+/// list and given back after the scatter: there are as many as batches solved at once
+/// (the threads), each as large as a batch, not as the world — a batch is a share of the
+/// step's work over `BATCHES_PER_THREAD` times the threads.
 #[derive(Default)]
 pub struct IslandTasks {
     plan: BatchPlan,
-    /// One batch's arrays per thread of the pool, refilled every round.
-    scratch: Vec<IslandTask>,
+    /// Gathered batches' arrays not in use, refilled for every batch.
+    free: Mutex<Vec<IslandTask>>,
     /// Per batch: its joint trees, kept so that a batch holding the same islands next
     /// step keeps them ([`super::joint_tree::JointTrees::rebuild`]); swapped into the
-    /// thread's arrays for its solve.
+    /// gathered arrays for its solve.
     trees: Vec<JointTrees>,
     /// Per world body: its index in its batch's arrays while the batch is gathered,
     /// `NONE` for a body that does not move.
     local_of_moving: Vec<u32>,
+    /// Solve every world in place, for the test that batches give its bits.
+    #[cfg(test)]
+    pub(crate) in_place: bool,
+}
+
+/// What the batches' gathers and scatters read and write, behind one lock: the world's
+/// bodies, joints and pairs, and the per-batch and per-body bookkeeping. A batch reads
+/// and writes only its own moving bodies, joints, pairs and trees (and reads static
+/// bodies nobody writes), so the order in which batches take the lock changes nothing.
+struct World<'a> {
+    s: &'a mut BodyStates,
+    joints: &'a mut JointSet,
+    pairs: &'a mut [ContactPair],
+    trees: &'a mut [JointTrees],
+    local_of_moving: &'a mut [u32],
+}
+
+/// Takes a lock whether or not a task panicked while holding it: a panic in a batch's
+/// solve reaches the caller through rayon anyway, and the data is only ever left between
+/// two whole batches.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// The step's batches: per batch, its moving bodies, joints and touching pairs in world
@@ -270,6 +298,8 @@ pub fn solve_islands(
     let work = awake[..n].iter().filter(|&&a| a).count()
         + joints.len()
         + pairs.iter().filter(|p| p.touching()).count();
+    #[cfg(test)]
+    let work = if tasks.in_place { 0 } else { work };
     if work < MIN_PARALLEL_WORK {
         // Too little to share out: solve in place.
         substeps::solve(s, motion, joints, pairs, awake, buffers, p);
@@ -294,45 +324,54 @@ pub fn solve_islands(
     );
     let IslandTasks {
         plan,
-        scratch,
+        free,
         trees,
         local_of_moving,
+        ..
     } = tasks;
     local_of_moving.clear();
     local_of_moving.resize(s.len(), NONE);
     trees.resize_with(batches, JointTrees::default);
-    let threads = rayon::current_num_threads().clamp(1, batches);
-    scratch.resize_with(threads, IslandTask::default);
-    for round in (0..batches).step_by(threads) {
-        let round = round..(round + threads).min(batches);
-        let scratch = &mut scratch[..round.len()];
-        for (task, b) in scratch.iter_mut().zip(round.clone()) {
-            task.gather(plan, b, local_of_moving, s, motion, joints, pairs);
-            std::mem::swap(task.buffers.trees_mut(), &mut trees[b]);
+    let plan = &*plan;
+    let world = Mutex::new(World {
+        s,
+        joints,
+        pairs,
+        trees,
+        local_of_moving,
+    });
+    let full = motion.full;
+    let run = |b: usize| {
+        let mut task = lock(free).pop().unwrap_or_default();
+        {
+            let w = &mut *lock(&world);
+            task.gather(plan, b, w.local_of_moving, w.s, motion, w.joints, w.pairs);
+            std::mem::swap(task.buffers.trees_mut(), &mut w.trees[b]);
         }
-        let solve = |t: &mut IslandTask| {
-            substeps::solve(
-                &mut t.states,
-                Motions {
-                    bodies: &t.motion,
-                    full: motion.full,
-                },
-                &mut t.joints,
-                &mut t.pairs,
-                &t.awake,
-                &mut t.buffers,
-                p,
-            );
-        };
-        if let [task] = scratch {
-            solve(task);
-        } else {
-            scratch.par_iter_mut().for_each(solve);
+        let t = &mut task;
+        substeps::solve(
+            &mut t.states,
+            Motions {
+                bodies: &t.motion,
+                full,
+            },
+            &mut t.joints,
+            &mut t.pairs,
+            &t.awake,
+            &mut t.buffers,
+            p,
+        );
+        {
+            let w = &mut *lock(&world);
+            std::mem::swap(task.buffers.trees_mut(), &mut w.trees[b]);
+            task.scatter(w.s, w.joints, w.pairs);
         }
-        for (task, b) in scratch.iter_mut().zip(round) {
-            std::mem::swap(task.buffers.trees_mut(), &mut trees[b]);
-            task.scatter(s, joints, pairs);
-        }
+        lock(free).push(task);
+    };
+    if rayon::current_num_threads() == 1 {
+        (0..batches).for_each(run);
+    } else {
+        (0..batches).into_par_iter().with_max_len(1).for_each(run);
     }
 }
 

@@ -546,6 +546,55 @@ mod tests {
         lanes_match_one_by_one(false);
     }
 
+    /// A pile of twenty humans solved in batches of islands gathered into arrays of their
+    /// own ([`super::parallel`]) gives the bits of the whole world solved in place, on one
+    /// thread and on two, frame after frame through the fall, the landing (islands
+    /// merging) and sleep.
+    #[test]
+    fn batches_of_islands_give_the_bits_of_the_world_in_place() {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/scenes/pile.af");
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+        let opts = AfOptions {
+            count: Some(20),
+            ..AfOptions::default()
+        };
+        let scene = parse(&text, &path, &opts)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .desc;
+        let mut states = Vec::new();
+        let mut bits = |w: &MultibodyWorld| {
+            w.body_states(&mut states);
+            let values = states.iter().flat_map(|b| {
+                let v = [b.com, b.linear_velocity, b.angular_velocity];
+                v.into_iter()
+                    .flat_map(|v| v.to_array())
+                    .chain(b.orientation.to_array())
+            });
+            values.map(f32::to_bits).collect::<Vec<_>>()
+        };
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            let mut batched = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
+            let mut in_place = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
+            in_place.island_tasks.in_place = true;
+            pool.install(|| {
+                for frame in 0..240 {
+                    batched.step();
+                    in_place.step();
+                    assert!(
+                        bits(&batched) == bits(&in_place),
+                        "{threads} threads, frame {frame}: the batches' bodies differ"
+                    );
+                }
+            });
+            assert!(batched.sample().all_asleep, "the pile did not settle");
+        }
+    }
+
     fn lanes_match_one_by_one(equal_masses: bool) {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../assets/scenes/pile.af");
