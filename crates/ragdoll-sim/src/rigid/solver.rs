@@ -119,11 +119,12 @@ pub fn step(
             );
         }
         // Islands share no moving body, so they can be solved in any order, or at once.
-        // They are solved in batches gathered into arrays of their own on one thread
-        // too: a batch's bodies and constraints stay in cache through its substeps, where
-        // a solve of the whole world in place walks arrays many times the cache's size
-        // at every pass (the 1000-human pile's busy frames cost a quarter less so). The
-        // bits are those of the whole world solved in place ([`parallel`]).
+        // They are solved in batches gathered into arrays of their own, on one thread too
+        // when the world is large: a batch's bodies and constraints stay in cache through
+        // its substeps, where a solve of the whole world in place walks arrays many times
+        // the cache's size at every pass (the 1000-human pile's busy frames cost a
+        // quarter less so). The bits are those of the whole world solved in place
+        // ([`parallel`]).
         parallel::solve_islands(
             s,
             motion,

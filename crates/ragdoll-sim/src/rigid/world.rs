@@ -580,7 +580,8 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{e}"));
             let mut batched = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
             let mut in_place = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
-            in_place.island_tasks.in_place = true;
+            batched.island_tasks.in_place = Some(false);
+            in_place.island_tasks.in_place = Some(true);
             pool.install(|| {
                 for frame in 0..240 {
                     batched.step();
