@@ -247,16 +247,19 @@ impl Contacts {
         let margin = speculative_margin(g, dt);
         let n = info.len();
         let anchor = n as u32;
-        // Broad phase on AABBs loosened by the speculative margin and this step's motion.
+        // Broad phase on AABBs loosened by the speculative margin and this step's motion,
+        // each body's on its own (on all cores, in body order).
         self.aabbs.clear();
-        for i in 0..n {
-            let motion = point_speed(s, info, i) * dt;
-            let aabb = info[i]
-                .collider(&self.hulls)
-                .shape()
-                .compute_aabb(&shape_pose(s, info, i));
-            self.aabbs.push(aabb.loosened(margin + motion));
-        }
+        let hulls = &self.hulls;
+        self.aabbs
+            .par_extend((0..n).into_par_iter().with_min_len(1024).map(|i| {
+                let motion = point_speed(s, info, i) * dt;
+                let aabb = info[i]
+                    .collider(hulls)
+                    .shape()
+                    .compute_aabb(&shape_pose(s, info, i));
+                aabb.loosened(margin + motion)
+            }));
         self.candidates.clear();
         // Bodies near the ground plane (the plane comes last: the anchor has the largest
         // index). Listed first, as the broad phase reserves its pairs' room once, after
