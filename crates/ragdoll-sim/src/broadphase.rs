@@ -79,72 +79,6 @@ pub fn moving_pairs_where(
     }
 }
 
-/// Detections that rebuild their trees from scratch at most every
-/// `REFITS_PER_BUILD + 1`-th time ([`Refitted`]).
-const REFITS_PER_BUILD: u32 = 8;
-
-/// The broad phase of a method that detects once a step, with the trees kept from one
-/// detection to the next and refitted while the same boxes move.
-///
-/// [`moving_pairs_where`] builds its trees afresh (a binned SAH build, the larger half of
-/// a detection's cost) at every call. Here, while the boxes that move are the same as at
-/// the last call, the trees keep their shape and only their nodes' boxes are recomputed
-/// from the leaves' new boxes, bottom up (parry's refit, O(n)); the trees are then
-/// traversed as new ones would be. A refitted tree finds the same pairs as a new one,
-/// since every node still bounds its leaves, but it bounds them less tightly as the
-/// boxes move apart from the neighbours they were grouped with, and its traversal visits
-/// more nodes: the trees are built anew every `REFITS_PER_BUILD + 1`-th call, and
-/// whenever a box has started or stopped moving or the number of boxes changed. The
-/// pairs are sorted, so which trees found them does not matter: they are exactly
-/// [`moving_pairs_where`]'s.
-///
-/// The trees cost about 80 bytes per moving body while kept: a caller whose bodies all
-/// rest drops them ([`Refitted::forget`]).
-#[derive(Default)]
-pub struct Refitted {
-    /// The boxes that moved at the last build: the trees hold those.
-    split: Split,
-    /// How many boxes there were.
-    boxes: usize,
-    parts: Vec<Part>,
-    /// Calls since the trees were built.
-    refits: u32,
-}
-
-impl Refitted {
-    /// Drops the trees: the next call builds them again.
-    pub fn forget(&mut self) {
-        *self = Refitted::default();
-    }
-
-    /// [`moving_pairs_where`], on the trees of the last call refitted when the same
-    /// boxes move ([`Refitted`]).
-    pub fn moving_pairs_where(
-        &mut self,
-        aabbs: &[Aabb],
-        resting: impl Fn(u32) -> bool,
-        keep: impl Fn(u32, u32) -> bool + Sync,
-        out: &mut Vec<(u32, u32)>,
-    ) {
-        if aabbs.len() < 2 {
-            self.forget();
-            return;
-        }
-        let split = Split::new(aabbs.len(), resting);
-        let refit = self.boxes == aabbs.len()
-            && self.refits < REFITS_PER_BUILD
-            && !self.parts.is_empty()
-            && split.moving == self.split.moving;
-        if refit {
-            self.refits += 1;
-        } else {
-            (self.split, self.boxes, self.refits) = (split, aabbs.len(), 0);
-        }
-        self.split
-            .detect(&mut self.parts, refit, aabbs, aabbs, &keep, out);
-    }
-}
-
 /// The boxes of one detection cut into those that move and those at rest, each list
 /// ascending. Only the moving boxes go into trees; the trees' leaves count along
 /// `moving`, so a leaf's box index is `moving[leaf]`.
@@ -164,7 +98,7 @@ impl Split {
         Split { moving, resting }
     }
 
-    /// Trees over the moving boxes of `tree_boxes` (see [`trees_and_pairs`]), and
+    /// Trees over the moving boxes of `tree_boxes` (see [`build_and_traverse`]), and
     /// the pairs `keep` accepts appended to `out`, sorted: moving boxes of `tree_boxes`
     /// that overlap each other, and boxes at rest, as `query_boxes` has them, that
     /// overlap a moving one of `tree_boxes`. A step that detects again builds its trees
@@ -177,42 +111,21 @@ impl Split {
         keep: &(impl Fn(u32, u32) -> bool + Sync),
         out: &mut Vec<(u32, u32)>,
     ) -> Vec<Part> {
-        let mut parts = Vec::new();
-        self.detect(&mut parts, false, tree_boxes, query_boxes, keep, out);
-        parts
-    }
-
-    /// [`Split::build`] into `parts`, or with `refit` the trees `parts` already hold
-    /// over the same moving boxes refitted to where `tree_boxes` has them now.
-    fn detect(
-        &self,
-        parts: &mut Vec<Part>,
-        refit: bool,
-        tree_boxes: &[Aabb],
-        query_boxes: &[Aabb],
-        keep: &(impl Fn(u32, u32) -> bool + Sync),
-        out: &mut Vec<(u32, u32)>,
-    ) {
         let moving = &self.moving;
         if self.resting.is_empty() {
-            trees_and_pairs(parts, refit, tree_boxes, keep, out);
-            return;
+            return build_and_traverse(tree_boxes, keep, out);
         }
         if moving.is_empty() {
-            parts.clear();
-            return;
+            return Vec::new();
         }
         let start = out.len();
         let boxes: Vec<Aabb> = moving.iter().map(|&i| tree_boxes[i as usize]).collect();
         let mut among = Vec::new();
-        trees_and_pairs(
-            parts,
-            refit,
+        let parts = build_and_traverse(
             &boxes,
             &|a, b| keep(moving[a as usize], moving[b as usize]),
             &mut among,
         );
-        let parts = &*parts;
         // `moving` ascends, so the pairs stay sorted.
         out.extend(
             among
@@ -227,7 +140,7 @@ impl Split {
                 for &r in chunk {
                     let query = &query_boxes[r as usize];
                     // parry tests every node on the way, the leaf's own box too.
-                    for part in parts {
+                    for part in &parts {
                         for leaf in part.tree.intersect_aabb(query) {
                             let m = moving[(part.start + leaf) as usize];
                             let pair = (r.min(m), r.max(m));
@@ -247,6 +160,7 @@ impl Split {
             }
             out[start..].sort_unstable();
         }
+        parts
     }
 }
 
@@ -334,18 +248,6 @@ impl Part {
             start: start as u32,
             tree: Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs[start..end]),
         }
-    }
-
-    /// The tree's leaves moved to their boxes in `aabbs` (the run's, from `start`), and
-    /// its nodes' boxes recomputed from them, its shape kept.
-    fn refit(&mut self, aabbs: &[Aabb]) {
-        let start = self.start as usize;
-        let len = self.tree.leaf_count() as usize;
-        for (leaf, aabb) in aabbs[start..start + len].iter().enumerate() {
-            self.tree
-                .update_partially_if_present(*aabb, leaf as u32, 0.0);
-        }
-        self.tree.refit_without_opt();
     }
 
     /// The run's overlapping pairs `keep` accepts, by box index, into `out`.
@@ -544,54 +446,33 @@ fn dedup_from(out: &mut Vec<(u32, u32)>, start: usize) {
     out.truncate(kept);
 }
 
-/// New trees over `aabbs` (a run each, see [`parts`]) into `parts`, or with `refit`
-/// the trees `parts` holds over runs of as many boxes refitted to `aabbs`; and their
-/// overlapping pairs that `keep` accepts appended to `out`, sorted.
-fn trees_and_pairs(
-    parts: &mut Vec<Part>,
-    refit: bool,
+/// New trees over `aabbs` (a run each, see [`parts`]), and their overlapping pairs that
+/// `keep` accepts appended to `out`, sorted.
+fn build_and_traverse(
     aabbs: &[Aabb],
     keep: &(impl Fn(u32, u32) -> bool + Sync),
     out: &mut Vec<(u32, u32)>,
-) {
+) -> Vec<Part> {
     let start = out.len();
     let n = aabbs.len();
-    let k = if refit { parts.len() } else { self::parts(n) };
-    if k == 1 {
-        if refit {
-            parts[0].refit(aabbs);
-        } else {
-            *parts = vec![Part::build(aabbs, 0, n)];
-        }
-        parts[0].self_pairs(keep, out);
+    let k = parts(n);
+    let parts = if k == 1 {
+        let part = Part::build(aabbs, 0, n);
+        part.self_pairs(keep, out);
+        vec![part]
     } else {
         let run = |p: usize| (n * p / k, n * (p + 1) / k);
         // Each run's tree and the pairs within it, in one task.
-        let found: Vec<Vec<(u32, u32)>> = if refit {
-            parts
-                .par_iter_mut()
-                .map(|part| {
-                    part.refit(aabbs);
-                    let mut pairs = Vec::new();
-                    part.self_pairs(keep, &mut pairs);
-                    pairs
-                })
-                .collect()
-        } else {
-            let (built, found): (Vec<Part>, Vec<Vec<(u32, u32)>>) = (0..k)
-                .into_par_iter()
-                .map(|p| {
-                    let (s, e) = run(p);
-                    let part = Part::build(aabbs, s, e);
-                    let mut pairs = Vec::new();
-                    part.self_pairs(keep, &mut pairs);
-                    (part, pairs)
-                })
-                .unzip();
-            *parts = built;
-            found
-        };
-        let parts = &*parts;
+        let (parts, found): (Vec<Part>, Vec<Vec<(u32, u32)>>) = (0..k)
+            .into_par_iter()
+            .map(|p| {
+                let (s, e) = run(p);
+                let part = Part::build(aabbs, s, e);
+                let mut pairs = Vec::new();
+                part.self_pairs(keep, &mut pairs);
+                (part, pairs)
+            })
+            .unzip();
         let crossing: Vec<Vec<(u32, u32)>> = (0..k)
             .flat_map(|p| (p + 1..k).map(move |q| (p, q)))
             .collect::<Vec<_>>()
@@ -604,8 +485,10 @@ fn trees_and_pairs(
         for pairs in found.iter().chain(&crossing) {
             out.extend_from_slice(pairs);
         }
-    }
+        parts
+    };
     out[start..].sort_unstable();
+    parts
 }
 
 #[cfg(test)]
@@ -774,68 +657,6 @@ mod tests {
                 assert_eq!(reused.fat_boxes, built, "{n} boxes: built again");
                 assert_eq!(b, want, "{n} boxes, after moving");
             });
-        }
-    }
-
-    /// Trees kept and refitted from call to call ([`Refitted`]): boxes that move further
-    /// every call, across the grid and into each other, over more calls than the trees
-    /// are refitted for, on one tree and on trees cut into runs, with every box moving
-    /// and with one in three at rest; then a box comes to rest. Every call gives exactly
-    /// the pairs of a fresh detection and the quadratic answer's, and the trees were
-    /// refitted, not built, while the same boxes moved.
-    #[test]
-    fn refitted_trees_find_the_pairs_of_new_ones() {
-        let moved =
-            |aabbs: &[Aabb], step: usize, still: &(dyn Fn(u32) -> bool + Sync)| -> Vec<Aabb> {
-                (aabbs.iter().enumerate())
-                    .map(|(k, b)| {
-                        if still(k as u32) {
-                            return *b;
-                        }
-                        let t = 0.07 * step as f32;
-                        let shift = Vec3::new(
-                            t * ((k % 5) as f32 - 2.0),
-                            -t * (k % 3) as f32,
-                            t * ((k * 7) % 4) as f32 * 0.5,
-                        );
-                        Aabb::new(b.mins + shift, b.maxs + shift)
-                    })
-                    .collect()
-            };
-        let at_rest = |i: u32| i % 3 == 1;
-        let none = |_: u32| false;
-        for (n, threads) in [(1200, 1), (BOXES_TO_CUT + 700, 2)] {
-            let first = scattered(n, 0.0);
-            for still in [&none as &(dyn Fn(u32) -> bool + Sync), &at_rest] {
-                pool(threads).install(|| {
-                    let mut kept = Refitted::default();
-                    for step in 0..REFITS_PER_BUILD as usize + 4 {
-                        let boxes = moved(&first, step, still);
-                        let mut got = Vec::new();
-                        kept.moving_pairs_where(&boxes, still, keep_some, &mut got);
-                        let mut fresh = Vec::new();
-                        moving_pairs_where(&boxes, still, keep_some, &mut fresh);
-                        let want: Vec<(u32, u32)> = slow(&boxes)
-                            .into_iter()
-                            .filter(|&(a, b)| !(still(a) && still(b)))
-                            .collect();
-                        assert!(!want.is_empty());
-                        assert_eq!(got, want, "{n} boxes, call {step}");
-                        assert_eq!(fresh, want, "{n} boxes, call {step}, fresh");
-                        let refits = step % (REFITS_PER_BUILD as usize + 1);
-                        assert_eq!(kept.refits as usize, refits, "{n} boxes, call {step}");
-                    }
-                    // A box that stops moving: new trees, the same pairs as fresh ones.
-                    let boxes = moved(&first, 3, still);
-                    let stopped = |i: u32| still(i) || i == 5;
-                    let mut got = Vec::new();
-                    kept.moving_pairs_where(&boxes, stopped, keep_some, &mut got);
-                    let mut fresh = Vec::new();
-                    moving_pairs_where(&boxes, stopped, keep_some, &mut fresh);
-                    assert_eq!(got, fresh, "{n} boxes, one stopped");
-                    assert_eq!(kept.refits, 0, "{n} boxes: one stopped, not built again");
-                });
-            }
         }
     }
 

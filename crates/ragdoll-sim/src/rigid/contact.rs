@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{Refitted, box_height_above_plane, speculative_margin};
+use crate::broadphase::{box_height_above_plane, moving_pairs_where, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::rolling_arm;
 use glam::{Quat, Vec3};
@@ -200,8 +200,6 @@ pub struct Contacts {
     pub pairs: Vec<ContactPair>,
     candidates: Vec<(u32, u32)>,
     aabbs: Vec<Aabb>,
-    /// The broad phase's trees, kept and refitted from step to step while bodies move.
-    broad_phase: Refitted,
     /// Pairs that never collide (jointed, overlapping at rest, self-collision off), sorted.
     pub excluded: Vec<(u32, u32)>,
     /// The ground, if any.
@@ -233,12 +231,6 @@ pub fn may_collide(info: &[BodyInfo], a: usize, b: usize) -> bool {
 }
 
 impl Contacts {
-    /// Drops what the broad phase keeps between steps, for a world whose bodies all
-    /// rest (it holds the moving bodies' trees, [`Refitted`]).
-    pub fn rest(&mut self) {
-        self.broad_phase.forget();
-    }
-
     /// Runs broad and narrow phase for the current pose and prepares the solver data.
     /// `awake[i]` tells which bodies move; pairs between resting bodies keep their
     /// cached state untouched. `dt` widens the margins for fast bodies, `g` (the
@@ -278,7 +270,7 @@ impl Contacts {
         // most overlaps are a figure's jointed neighbours. Pairs of two resting bodies
         // are not looked for at all (`moving_pairs_where`).
         let excluded = &self.excluded;
-        self.broad_phase.moving_pairs_where(
+        moving_pairs_where(
             &self.aabbs,
             |a| !awake[a as usize],
             |a, b| {

@@ -71,7 +71,6 @@ pub fn step(
         // back (a step waking it pays for growing them once).
         *buffers = SolveBuffers::default();
         *tasks = IslandTasks::default();
-        contacts.rest();
         clock.finish(times);
         return;
     }
