@@ -1,5 +1,6 @@
 //! Real Doom 3 figures, read from a Doom 3 base folder the way `ragdoll-lab stats
-//! --doom3 BASE --entity NAME` reads them, and run on both methods.
+//! --doom3 BASE --entity NAME` reads them, and run on every improved solver (rigid
+//! frames, XPBD, the multibody).
 //!
 //! id Software's files are not part of this repository: the tests run only when
 //! `RAGDOLL_LAB_DOOM3_BASE` names a base folder (one holding `def/`, `af/`,
@@ -118,15 +119,20 @@ fn run(mut w: Box<dyn Method>, sc: &SceneDesc) -> (MethodStats, f32) {
     (stats, start.max_limit_violation_deg)
 }
 
-/// Both methods on every figure: (entities, method, stats).
+/// Every improved solver on every figure: (entities, method, stats). The particle
+/// method runs both its improved solvers, rigid frames and XPBD.
 fn measure(figs: &[(Vec<String>, SceneDesc)]) -> Vec<(String, &'static str, MethodStats)> {
     let mut out = Vec::new();
     for (names, sc) in figs {
         let label = names.join(", ");
-        let p = ParticleWorld::new(sc, ParticleSolver::RigidFrames)
-            .unwrap_or_else(|e| panic!("{label}: {e}"));
-        let (st, start) = run(Box::new(p), sc);
-        out.push((label.clone(), "particle", st, start));
+        for (solver, name) in [
+            (ParticleSolver::RigidFrames, "rigid frames"),
+            (ParticleSolver::Xpbd, "xpbd"),
+        ] {
+            let p = ParticleWorld::new(sc, solver).unwrap_or_else(|e| panic!("{label}: {e}"));
+            let (st, start) = run(Box::new(p), sc);
+            out.push((label.clone(), name, st, start));
+        }
         let m = MultibodyWorld::new(sc).unwrap_or_else(|e| panic!("{label}: {e}"));
         let (st, start) = run(Box::new(m), sc);
         out.push((label, "multibody", st, start));
@@ -146,7 +152,7 @@ fn measure(figs: &[(Vec<String>, SceneDesc)]) -> Vec<(String, &'static str, Meth
     out.into_iter().map(|(l, m, s, _)| (l, m, s)).collect()
 }
 
-/// Every real figure builds on both methods, stays finite and no body exceeds
+/// Every real figure builds on every improved solver, stays finite and no body exceeds
 /// 15 m/s (a figure dropped from standing falls well below that).
 #[test]
 fn real_figures_load_and_stay_finite_and_bounded() {
@@ -166,7 +172,7 @@ fn real_figures_load_and_stay_finite_and_bounded() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// Every real figure holds the scene thresholds on both methods: energy gain ≤ 2 %,
+/// Every real figure holds the scene thresholds on every improved solver: energy gain ≤ 2 %,
 /// penetration ≤ 1 cm, joint gap ≤ 5 mm (particle) / 2 mm (multibody), limit excess
 /// ≤ 3° / 2°.
 #[test]
@@ -175,10 +181,10 @@ fn real_figures_hold_the_scene_thresholds() {
     let figs = figures(&base);
     let mut failures = Vec::new();
     for (label, method, s) in measure(&figs) {
-        let (gap, limit) = if method == "particle" {
-            (0.005, 3.0)
-        } else {
+        let (gap, limit) = if method == "multibody" {
             (0.002, 2.0)
+        } else {
+            (0.005, 3.0)
         };
         for (metric, value, max) in [
             ("energy gain", s.energy_gain, 0.02),
