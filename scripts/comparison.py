@@ -134,7 +134,7 @@ def scale(binary, solver):
 
 def memory(binary):
     """Bytes per bone per `bench memory` key: (stack of STACK_BONES, pile of PILE_HUMANS)."""
-    d = run_json([binary, "bench", "memory", "--only", str(STACK_BONES), "--json"])
+    d = run_json([binary, "bench", "memory", "--only", f"{STACK_BONES},{PILE_HUMANS}", "--json"])
     stack = next(r for r in d["rows"] if r["bones"] == STACK_BONES)
     pile = next(r for r in d["pile_rows"] if r["humans"] == PILE_HUMANS)
     def per_bone(row, k):
