@@ -607,9 +607,9 @@ const SLACK_GAP: f32 = 1e-6;
 /// frame narrows them at a bounded speed (`Joint::close_slack`) and moves its figure
 /// onto the narrowed limits with [`SLACK_PASSES`] passes over the figure's joints
 /// (anchors, axes and limits) until their anchors meet, folded into the frames as where
-/// the bones are, not as a motion of a substep: no velocity comes of it. Held in one substep instead, a door
-/// hinge 10° outside its range turned at 200 rad/s and gained four times the scene's
-/// energy scale. It runs before the frame's start is recorded, so the energy metric's
+/// the bones are, not as a motion of a substep: no velocity comes of it. Held in one
+/// substep instead, a door hinge 10° outside its range turned at 200 rad/s and gained
+/// four times the scene's energy scale. It runs before the frame's start is recorded, so the energy metric's
 /// velocities do not see it either. The joint pass holds the widened limits meanwhile.
 fn close_start_slack(w: &mut ParticleWorld, h: f32) {
     let figures = w.close_slack_of_figures();

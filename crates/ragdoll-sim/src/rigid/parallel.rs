@@ -40,9 +40,8 @@ const MIN_PARALLEL_WORK: usize = 256;
 /// Moving bodies from which a world on one thread is solved in batches, for the cache
 /// ([`solve_islands`]). A smaller world's arrays stay in cache as they are, and in place
 /// its ball joints and hinges are solved four at a time in SIMD lanes
-/// ([`JointSet::lanes`]), which a gathered batch does not plan. Measured on piles of
-/// humans, one thread, first 40 frames: batches cost 2 % less than in place at 270
-/// humans (4320 bodies), 10 % less at 500, a quarter less at 1000.
+/// ([`JointSet::lanes`]), which a gathered batch does not plan; from about this size
+/// (a few hundred humans) the cache gains more than the lanes give.
 const MIN_MOVING_FOR_CACHE: usize = 4096;
 
 /// Batches per thread ([`crate::batches`]). A task per island would gather every
@@ -72,7 +71,7 @@ struct JointSlots {
 /// and scatters it back; the tasks run as threads come free (work stealing), not in
 /// rounds of one batch per thread, so a thread that finishes a cheap batch takes the next
 /// instead of waiting for its partner's dear one. Gathering and scattering read and write
-/// the world's arrays and so take turns ([`World`]'s lock), but one thread's gather or
+/// the world's arrays and so take turns ([`Shared`]'s lock), but one thread's gather or
 /// scatter overlaps the other threads' solves. The local arrays are taken from a free
 /// list and given back after the scatter: there are as many as batches solved at once
 /// (the threads), each as large as a batch, not as the world — a batch is a share of the
@@ -99,7 +98,7 @@ pub struct IslandTasks {
 /// bodies, joints and pairs, and the per-batch and per-body bookkeeping. A batch reads
 /// and writes only its own moving bodies, joints, pairs and trees (and reads static
 /// bodies nobody writes), so the order in which batches take the lock changes nothing.
-struct World<'a> {
+struct Shared<'a> {
     s: &'a mut BodyStates,
     joints: &'a mut JointSet,
     pairs: &'a mut [ContactPair],
@@ -344,7 +343,7 @@ pub fn solve_islands(
     local_of_moving.resize(s.len(), NONE);
     trees.resize_with(batches, JointTrees::default);
     let plan = &*plan;
-    let world = Mutex::new(World {
+    let shared = Mutex::new(Shared {
         s,
         joints,
         pairs,
@@ -355,7 +354,7 @@ pub fn solve_islands(
     let run = |b: usize| {
         let mut task = lock(free).pop().unwrap_or_default();
         {
-            let w = &mut *lock(&world);
+            let w = &mut *lock(&shared);
             task.gather(plan, b, w.local_of_moving, w.s, motion, w.joints, w.pairs);
             std::mem::swap(task.buffers.trees_mut(), &mut w.trees[b]);
         }
@@ -373,7 +372,7 @@ pub fn solve_islands(
             p,
         );
         {
-            let w = &mut *lock(&world);
+            let w = &mut *lock(&shared);
             std::mem::swap(task.buffers.trees_mut(), &mut w.trees[b]);
             task.scatter(w.s, w.joints, w.pairs);
         }

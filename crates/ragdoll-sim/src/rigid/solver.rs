@@ -117,12 +117,8 @@ pub fn step(
                 &mut clock,
             );
         }
-        // Islands share no moving body, so they can be solved in any order, or at once.
-        // They are solved in batches gathered into arrays of their own, on one thread too
-        // when the world is large: a batch's bodies and constraints stay in cache through
-        // its substeps, where a solve of the whole world in place walks arrays many times
-        // the cache's size at every pass (the 1000-human pile's busy frames cost a
-        // quarter less so). The bits are those of the whole world solved in place
+        // Islands share no moving body, so they can be solved in any order, or at once:
+        // in batches of their own, or a small world in place, with the same bits
         // ([`parallel`]).
         parallel::solve_islands(
             s,

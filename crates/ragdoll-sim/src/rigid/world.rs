@@ -552,16 +552,7 @@ mod tests {
     /// merging) and sleep.
     #[test]
     fn batches_of_islands_give_the_bits_of_the_world_in_place() {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/pile.af");
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
-        let opts = AfOptions {
-            count: Some(20),
-            ..AfOptions::default()
-        };
-        let scene = parse(&text, &path, &opts)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
+        let scene = pile(20);
         let mut states = Vec::new();
         let mut bits = |w: &MultibodyWorld| {
             w.body_states(&mut states);
@@ -596,17 +587,22 @@ mod tests {
         }
     }
 
-    fn lanes_match_one_by_one(equal_masses: bool) {
+    /// The shipped pile scene with `count` humans.
+    fn pile(count: u32) -> SceneDesc {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../assets/scenes/pile.af");
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
         let opts = AfOptions {
-            count: Some(10),
+            count: Some(count),
             ..AfOptions::default()
         };
-        let mut scene = parse(&text, &path, &opts)
+        parse(&text, &path, &opts)
             .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
+            .desc
+    }
+
+    fn lanes_match_one_by_one(equal_masses: bool) {
+        let mut scene = pile(10);
         for b in &mut scene.bodies {
             b.mass = MassSpec::Mass(5.0);
         }
