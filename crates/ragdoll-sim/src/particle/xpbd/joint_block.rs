@@ -45,34 +45,44 @@ const MAX_ROWS: usize = 10;
 /// Rows of the point, first in every block.
 const POINT_ROWS: usize = 3;
 
-/// One side of a block: its bone (if it takes corrections), inverse mass and world
-/// inverse inertia at the substep's start, and the lever from its centre to the point.
+/// One side of a block: its bone (if it takes corrections) and inverse mass at the
+/// substep's start. Its world inverse inertia then is the particles' own
+/// (`XParticles::inv_inertia_prev`), read where it is needed rather than kept twice.
 #[derive(Clone, Copy)]
 struct Body {
-    bone: Option<usize>,
+    bone: Option<u32>,
     inv_mass: f64,
-    inv_inertia: DMat3,
-    lever: DVec3,
 }
 
 impl Body {
-    fn of(p: &XParticles, bones: &[Bone], s: Side, end: &Anchor) -> Body {
+    /// The side `s` of a joint, and its lever: from its centre to its point `end`, both
+    /// at the substep's start (zero on a side that takes no correction).
+    fn of(p: &XParticles, bones: &[Bone], s: Side, end: &Anchor) -> (Body, DVec3) {
         match s {
-            Some(i) if p.moves(i) => {
-                let b = &bones[i];
+            Some(i) if p.moves(i) => (
                 Body {
-                    bone: Some(i),
-                    inv_mass: 1.0 / b.mass as f64,
-                    inv_inertia: *p.inv_inertia_prev(i),
-                    lever: end.prev_point64(p) - p.centre_prev(i),
-                }
-            }
-            _ => Body {
-                bone: None,
-                inv_mass: 0.0,
-                inv_inertia: DMat3::ZERO,
-                lever: DVec3::ZERO,
-            },
+                    bone: Some(i as u32),
+                    inv_mass: 1.0 / bones[i].mass as f64,
+                },
+                end.prev_point64(p) - p.centre_prev(i),
+            ),
+            _ => (
+                Body {
+                    bone: None,
+                    inv_mass: 0.0,
+                },
+                DVec3::ZERO,
+            ),
+        }
+    }
+
+    /// Its world inverse inertia at the substep's start; zero for a side that takes no
+    /// correction.
+    #[inline(always)]
+    fn inv_inertia(&self, p: &XParticles) -> DMat3 {
+        match self.bone {
+            Some(i) => *p.inv_inertia_prev(i as usize),
+            None => DMat3::ZERO,
         }
     }
 }
@@ -88,22 +98,32 @@ struct Row {
     alpha: f64,
 }
 
+/// Index of entry `(i, m)`, `m ≤ i`, of a lower triangle packed row by row.
+const fn tri(i: usize, m: usize) -> usize {
+    i * (i + 1) / 2 + m
+}
+
 /// What a joint's block keeps through a substep: its sides and its point rows depend
-/// only on the substep's start (the levers, the inverse inertias), so they, their
-/// `M⁻¹ Jᵀ` and the first [`POINT_ROWS`] rows of the Cholesky factor of `K` (which
-/// depend on nothing after them) are taken once a substep ([`begin_substep`]), with
-/// the same arithmetic the passes used, so the results are the same.
+/// only on the substep's start (the levers, the inverse inertias), so their angular
+/// parts, their `M⁻¹ Jᵀ` and the first [`POINT_ROWS`] rows of the Cholesky factor of
+/// `K` (which depend on nothing after them) are taken once a substep
+/// ([`begin_substep`]), with the same arithmetic the passes used, so the results are
+/// the same. What the passes can read elsewhere is not kept: a point row's linear part
+/// is its world axis `e`, its error is measured in the pass, its compliance is 0, and
+/// each side's inverse inertia is its bone's ([`Body::inv_inertia`]).
 #[derive(Clone, Copy)]
 pub(crate) struct Start {
     a: Body,
     b: Body,
-    /// The point rows' angular parts, their error left to the pass.
-    point: [Row; POINT_ROWS],
+    /// The point rows' angular parts `−r_a × e` and `r_b × e`.
+    ang_a: [DVec3; POINT_ROWS],
+    ang_b: [DVec3; POINT_ROWS],
     /// `I_a⁻¹ J_a` and `I_b⁻¹ J_b` of the point rows.
     ia: [DVec3; POINT_ROWS],
     ib: [DVec3; POINT_ROWS],
-    /// The point rows of the in-place factor (`solve_rows`) and whether each is live.
-    factor: [[f64; POINT_ROWS]; POINT_ROWS],
+    /// The point rows of the in-place factor (`solve_rows`), its lower triangle packed
+    /// ([`tri`]; the rest is zero), and whether each row is live.
+    factor: [f64; tri(POINT_ROWS, 0)],
     live: [bool; POINT_ROWS],
 }
 
@@ -122,8 +142,8 @@ pub(crate) fn begin_substep(
         if !blocks(j) {
             return None;
         }
-        let a = Body::of(p, bones, j.a, ea);
-        let b = Body::of(p, bones, j.b, eb);
+        let (a, lever_a) = Body::of(p, bones, j.a, ea);
+        let (b, lever_b) = Body::of(p, bones, j.b, eb);
         if a.bone.is_none() && b.bone.is_none() {
             return None;
         }
@@ -131,25 +151,33 @@ pub(crate) fn begin_substep(
             let e = [DVec3::X, DVec3::Y, DVec3::Z][i];
             Row {
                 lin: e,
-                ang_a: -a.lever.cross(e),
-                ang_b: b.lever.cross(e),
+                ang_a: -lever_a.cross(e),
+                ang_b: lever_b.cross(e),
                 c: 0.0,
                 alpha: 0.0,
             }
         });
-        let ia = point.map(|r| a.inv_inertia * r.ang_a);
-        let ib = point.map(|r| b.inv_inertia * r.ang_b);
+        let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
+        let ia = point.map(|r| inv_a * r.ang_a);
+        let ib = point.map(|r| inv_b * r.ang_b);
         let w = a.inv_mass + b.inv_mass;
         let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
         let mut live = [false; MAX_ROWS];
         fill_and_factor(&mut k, &mut live, &point, &ia, &ib, w, 0);
+        let mut factor = [0.0; tri(POINT_ROWS, 0)];
+        for i in 0..POINT_ROWS {
+            for m in 0..=i {
+                factor[tri(i, m)] = k[i][m];
+            }
+        }
         Some(Start {
             a,
             b,
-            point,
+            ang_a: point.map(|r| r.ang_a),
+            ang_b: point.map(|r| r.ang_b),
             ia,
             ib,
-            factor: std::array::from_fn(|i| std::array::from_fn(|m| k[i][m])),
+            factor,
             live: std::array::from_fn(|i| live[i]),
         })
     }));
@@ -215,10 +243,13 @@ pub(crate) fn solve(
         n: 0,
     };
     let delta = eb.point64(p) - ea.point64(p);
-    for (e, r) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().zip(start.point) {
+    for (i, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
         rows.push(Row {
+            lin: e,
+            ang_a: start.ang_a[i],
+            ang_b: start.ang_b[i],
             c: e.dot(delta),
-            ..r
+            alpha: 0.0,
         });
     }
     let (qa, qb) = (rot(bones, j.a), rot(bones, j.b));
@@ -279,7 +310,8 @@ pub(crate) fn solve(
             rows.angle(grad / g, (target - phi) / g, alpha);
         }
     }
-    let dl = solve_rows(&rows, start);
+    let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
+    let dl = solve_rows(&rows, start, inv_a, inv_b);
     let (mut lin, mut ang_a, mut ang_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
         lin += r.lin * *l;
@@ -288,11 +320,11 @@ pub(crate) fn solve(
     }
     if let Some(i) = a.bone {
         let shift = (-lin * a.inv_mass).as_vec3();
-        move_linear(p, bones, i, shift, (a.inv_inertia * ang_a).as_vec3());
+        move_linear(p, bones, i as usize, shift, (inv_a * ang_a).as_vec3());
     }
     if let Some(i) = b.bone {
         let shift = (lin * b.inv_mass).as_vec3();
-        move_linear(p, bones, i, shift, (b.inv_inertia * ang_b).as_vec3());
+        move_linear(p, bones, i as usize, shift, (inv_b * ang_b).as_vec3());
     }
 }
 
@@ -344,9 +376,9 @@ fn fill_and_factor(
 /// `Δλ` of `(J M⁻¹ Jᵀ + α̃) Δλ = −C` by Cholesky's factorisation (the matrix is
 /// symmetric positive semi-definite); a row whose pivot vanishes against its diagonal
 /// depends on the rows before it and takes no `Δλ`. The point rows come factored
-/// from `start`.
+/// from `start`; `inv_a`, `inv_b` are its sides' inverse inertias.
 #[inline(always)]
-fn solve_rows(rows: &Rows, start: &Start) -> [f64; MAX_ROWS] {
+fn solve_rows(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f64; MAX_ROWS] {
     let (a, b) = (&start.a, &start.b);
     let n = rows.n;
     let r = &rows.rows[..n];
@@ -362,13 +394,15 @@ fn solve_rows(rows: &Rows, start: &Start) -> [f64; MAX_ROWS] {
             }
         })
     };
-    let ia = side(&start.ia, a.inv_inertia, |row| row.ang_a);
-    let ib = side(&start.ib, b.inv_inertia, |row| row.ang_b);
+    let ia = side(&start.ia, inv_a, |row| row.ang_a);
+    let ib = side(&start.ib, inv_b, |row| row.ang_b);
     let w = a.inv_mass + b.inv_mass;
     let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
     let mut live = [false; MAX_ROWS];
     for i in 0..POINT_ROWS {
-        k[i][..POINT_ROWS].copy_from_slice(&start.factor[i]);
+        for m in 0..=i {
+            k[i][m] = start.factor[tri(i, m)];
+        }
         live[i] = start.live[i];
     }
     fill_and_factor(&mut k, &mut live, r, &ia[..n], &ib[..n], w, POINT_ROWS);
