@@ -323,27 +323,28 @@ impl Rigid {
 }
 
 /// One side of a contact at the velocity level: its bone's [`Rigid`] body seen from
-/// the contact point.
+/// the contact point. The body's `1/M` and `I⁻¹` are read from its [`Rigid`], shared
+/// by the bone's contacts, not copied into each lever.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Lever {
-    /// The bone (`u32::MAX` for the world).
+    /// The bone ([`Lever::WORLD`] for the world).
     bone: u32,
-    /// The bone's `1/M`; 0 for the world or a bone that takes no correction.
-    inv_total: f32,
-    /// The point about the particles' centre, `r`.
+    /// The point about the particles' centre, `r`; zero for the world or a bone that
+    /// takes no correction.
     arm: Vec3,
-    /// `I⁻¹` (world) of the particles about their centre.
-    inv_inertia: Mat3,
 }
 
 impl Lever {
+    /// The `bone` of the world's side.
+    const WORLD: u32 = u32::MAX;
+
     /// The lever of `side`, its bone's rigid body taken into `rigid` if not yet
     /// (`taken`).
     fn of(side: &Anchor, p: &XParticles, rigid: &mut [Rigid], taken: &mut [bool]) -> Lever {
         let Anchor::Bone(i, _) = *side else {
             return Lever {
-                bone: u32::MAX,
-                ..Lever::default()
+                bone: Lever::WORLD,
+                arm: Vec3::ZERO,
             };
         };
         let b = i as usize;
@@ -355,74 +356,79 @@ impl Lever {
         if r.inv_total == 0.0 {
             return Lever {
                 bone: i,
-                ..Lever::default()
+                arm: Vec3::ZERO,
             };
         }
         Lever {
             bone: i,
-            inv_total: r.inv_total,
             arm: (side.point64(p) - r.centre).as_vec3(),
-            inv_inertia: r.inv_inertia,
         }
     }
 
+    /// Its bone's rigid body, if it takes corrections (`None` for the world or a bone
+    /// with `1/M = 0`).
+    #[inline(always)]
+    fn body<'r>(&self, rigid: &'r [Rigid]) -> Option<&'r Rigid> {
+        if self.bone == Lever::WORLD {
+            return None;
+        }
+        let r = &rigid[self.bone as usize];
+        (r.inv_total != 0.0).then_some(r)
+    }
+
     /// The point's generalised inverse mass along the unit `d`,
-    /// `1/M + (r × d)ᵀ I⁻¹ (r × d)`.
-    fn inv_mass(&self, d: Vec3) -> f32 {
+    /// `1/M + (r × d)ᵀ I⁻¹ (r × d)`; 0 for a side that takes no correction.
+    fn inv_mass(&self, rigid: &[Rigid], d: Vec3) -> f32 {
+        let Some(r) = self.body(rigid) else {
+            return 0.0;
+        };
         let rd = self.arm.cross(d);
-        self.inv_total + rd.dot(self.inv_inertia * rd)
+        r.inv_total + rd.dot(r.inv_inertia * rd)
     }
 
     /// The bone's angular velocity, `ω = I⁻¹ Σ m_k r_k × v_k` of its particles about
     /// their centre (their velocities are rigid here); zero for the world or a bone
     /// that takes no correction.
     fn spin(&self, rigid: &[Rigid], p: &XParticles) -> Vec3 {
-        if self.inv_total == 0.0 {
+        let Some(r) = self.body(rigid) else {
             return Vec3::ZERO;
-        }
+        };
         let f = PER_BONE * self.bone as usize;
-        let arms = &rigid[self.bone as usize].arms;
         let momentum: Vec3 = (0..PER_BONE)
-            .map(|k| arms[k].cross(p.v[f + k]) * p.mass[f + k])
+            .map(|k| r.arms[k].cross(p.v[f + k]) * p.mass[f + k])
             .sum();
-        self.inv_inertia * momentum
+        r.inv_inertia * momentum
     }
 
     /// The bone's `I⁻¹` (world), zero for the world or a bone that takes no
     /// correction.
-    fn inv_inertia(&self) -> Mat3 {
-        if self.inv_total == 0.0 {
-            Mat3::ZERO
-        } else {
-            self.inv_inertia
-        }
+    fn inv_inertia(&self, rigid: &[Rigid]) -> Mat3 {
+        self.body(rigid).map_or(Mat3::ZERO, |r| r.inv_inertia)
     }
 
     /// Changes the bone's velocities by the angular impulse `l`: particle `k` by
     /// `(I⁻¹ l) × r_k`, a turn that keeps the linear momentum.
     fn twist(&self, rigid: &[Rigid], p: &mut XParticles, l: Vec3) {
-        if self.inv_total == 0.0 {
+        let Some(r) = self.body(rigid) else {
             return;
-        }
+        };
         let f = PER_BONE * self.bone as usize;
-        let arms = &rigid[self.bone as usize].arms;
-        let dw = self.inv_inertia * l;
-        for (v, r) in p.v[f..f + PER_BONE].iter_mut().zip(arms) {
-            *v += dw.cross(*r);
+        let dw = r.inv_inertia * l;
+        for (v, arm) in p.v[f..f + PER_BONE].iter_mut().zip(&r.arms) {
+            *v += dw.cross(*arm);
         }
     }
 
     /// Changes the bone's velocities by the impulse `j` at the point: particle `k` by
     /// `j / M + (I⁻¹ (r × j)) × r_k`, a rigid velocity change.
     fn kick(&self, rigid: &[Rigid], p: &mut XParticles, j: Vec3) {
-        if self.inv_total == 0.0 {
+        let Some(r) = self.body(rigid) else {
             return;
-        }
+        };
         let f = PER_BONE * self.bone as usize;
-        let arms = &rigid[self.bone as usize].arms;
-        let (dv, dw) = (j * self.inv_total, self.inv_inertia * self.arm.cross(j));
-        for (v, r) in p.v[f..f + PER_BONE].iter_mut().zip(arms) {
-            *v += dv + dw.cross(*r);
+        let (dv, dw) = (j * r.inv_total, r.inv_inertia * self.arm.cross(j));
+        for (v, arm) in p.v[f..f + PER_BONE].iter_mut().zip(&r.arms) {
+            *v += dv + dw.cross(*arm);
         }
     }
 }
@@ -507,7 +513,7 @@ pub(crate) fn solve_velocities(
             };
             let target = (-e * c.vn_before).max(0.0);
             let dv = target - normal_velocity(c, p);
-            let w = la.inv_mass(c.n) + lb.inv_mass(c.n);
+            let w = la.inv_mass(rigid, c.n) + lb.inv_mass(rigid, c.n);
             if w <= 0.0 {
                 continue;
             }
@@ -532,7 +538,7 @@ pub(crate) fn solve_velocities(
             let mut total = old;
             if speed >= 1e-9 {
                 let d = slip / speed;
-                let w = la.inv_mass(d) + lb.inv_mass(d);
+                let w = la.inv_mass(rigid, d) + lb.inv_mass(rigid, d);
                 if w > 0.0 {
                     total -= d * (speed / w);
                 }
@@ -578,7 +584,7 @@ fn roll(contacts: &[Contact], p: &mut XParticles, scratch: &Scratch, h: f32) {
         let [la, lb] = &scratch.levers[first];
         let rigid = &scratch.rigid;
         let spin = lb.spin(rigid, p) - la.spin(rigid, p);
-        let (inv_a, inv_b) = (la.inv_inertia(), lb.inv_inertia());
+        let (inv_a, inv_b) = (la.inv_inertia(rigid), lb.inv_inertia(rigid));
         if let Some(l) = rolling::impulse(spin, inv_a, inv_b, arm * normal) {
             la.twist(rigid, p, -l);
             lb.twist(rigid, p, l);
