@@ -182,13 +182,8 @@ impl ContactSet {
     /// would hold up to twice its points for good; growing by an eighth costs a few
     /// dozen copies of the set over a run, as its room is never given back.
     pub fn reserve_kept(&mut self, extra: usize) {
-        fn grow<T>(v: &mut Vec<T>, extra: usize) {
-            if v.capacity() - v.len() < extra {
-                v.reserve_exact(extra.max(v.len() / 8));
-            }
-        }
-        grow(&mut self.manifolds, extra);
-        grow(&mut self.points, extra);
+        reserve_kept(&mut self.manifolds, extra);
+        reserve_kept(&mut self.points, extra);
     }
 
     /// Appends another set's manifolds and points after this one's, its points'
@@ -202,6 +197,16 @@ impl ContactSet {
                 ..*m
             }));
         self.points.extend_from_slice(&other.points);
+    }
+}
+
+/// Makes room for `extra` more items in an array kept between uses at its largest
+/// size, growing it by an eighth (at least `extra`) rather than doubling it: doubling
+/// would hold up to twice the largest size for good. Into an emptied array, `extra` is
+/// its size, and the room is exactly that.
+pub(crate) fn reserve_kept<T>(v: &mut Vec<T>, extra: usize) {
+    if v.capacity() - v.len() < extra {
+        v.reserve_exact(extra.max(v.len() / 8));
     }
 }
 
@@ -336,6 +341,8 @@ pub(crate) fn broad_phase_on(
         |i, j| filter.collides((i, keys[i as usize]), (j, keys[j as usize])),
         &mut pairs,
     );
+    // Kept between detections at the most pairs, not doubled past it.
+    reserve_kept(out, pairs.len());
     out.extend(pairs.into_iter().map(|(i, j)| (i as usize, j as usize)));
     aabbs
 }

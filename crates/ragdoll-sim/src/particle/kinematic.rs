@@ -101,8 +101,8 @@ impl ParticleWorld {
                 });
                 self.bones[i].fixed = true;
                 if let Some(st) = self.xpbd.as_mut() {
+                    // Fixed, so never woken (`XParticles::set_asleep`) while kinematic.
                     for k in PER_BONE * i..PER_BONE * (i + 1) {
-                        st.particles.inv_mass[k] = 0.0;
                         st.particles.w[k] = 0.0;
                     }
                 }
@@ -118,11 +118,7 @@ impl ParticleWorld {
                 self.kinematic[i] = None;
                 self.bones[i].fixed = false;
                 if let Some(st) = self.xpbd.as_mut() {
-                    for p in PER_BONE * i..PER_BONE * (i + 1) {
-                        let m = st.particles.mass[p];
-                        st.particles.inv_mass[p] = if m > 0.0 { 1.0 / m } else { 0.0 };
-                        st.particles.w[p] = st.particles.inv_mass[p];
-                    }
+                    st.particles.set_asleep(i, false);
                 }
                 if self.solver == super::ParticleSolver::Paper {
                     for (p, inv) in self.particles.of_bone[i].into_iter().zip(k.inv_mass) {

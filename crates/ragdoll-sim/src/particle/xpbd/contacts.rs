@@ -23,7 +23,7 @@
 
 use super::super::bone::{Bone, rolled_point};
 use super::super::contacts::{
-    Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, shape_pair,
+    Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, reserve_kept, shape_pair,
 };
 use super::super::rolling;
 use super::contact_block::{block_len, block_len_back, normals};
@@ -116,6 +116,8 @@ pub(crate) fn detect(
     scratch: &mut Scratch,
     out: &mut Vec<Contact>,
 ) {
+    // The contacts are kept between detections at their largest count (a pile's
+    // landing), grown by an eighth at a time, not doubled past it (`reserve_kept`).
     out.clear();
     let reach = speculative_margin(settings.gravity.length(), span);
     // A bone's points move no faster than its fastest particle plus its turn; the
@@ -123,6 +125,8 @@ pub(crate) fn detect(
     // scaled by how far the shape reaches beyond them.
     scratch.speeds.clear();
     scratch.margins.clear();
+    reserve_kept(&mut scratch.speeds, bones.len());
+    reserve_kept(&mut scratch.margins, bones.len());
     for (i, b) in bones.iter().enumerate() {
         let f = 4 * i;
         let c = (p.v[f] + p.v[f + 1] + p.v[f + 2] + p.v[f + 3]) * 0.25;
@@ -158,6 +162,7 @@ pub(crate) fn detect(
             prediction,
             &mut scratch.manifolds,
             |pa, pb, n, _| {
+                reserve_kept(out, 1);
                 out.push(Contact {
                     a: attach(bones, rest_inv, i, pa),
                     b: attach(bones, rest_inv, j, pb),
@@ -194,6 +199,7 @@ pub(crate) fn detect(
                 scratch.margins[i],
                 &mut scratch.manifolds,
                 |pa, pb, n, _| {
+                    reserve_kept(out, 1);
                     out.push(Contact {
                         a: attach(bones, rest_inv, i, pa),
                         b: Anchor::World(pb),
@@ -480,7 +486,9 @@ pub(crate) fn solve_velocities(
     scratch.taken.clear();
     scratch.taken.resize(bones, false);
     scratch.rigid.resize(bones, Rigid::default());
+    // Each per-contact array is kept at the largest count, not doubled past it.
     scratch.levers.clear();
+    reserve_kept(&mut scratch.levers, contacts.len());
     for c in contacts {
         scratch.levers.push(if c.active {
             let (rigid, taken) = (&mut scratch.rigid, &mut scratch.taken);
@@ -493,8 +501,10 @@ pub(crate) fn solve_velocities(
         });
     }
     scratch.friction.clear();
+    reserve_kept(&mut scratch.friction, contacts.len());
     scratch.friction.resize(contacts.len(), Vec3::ZERO);
     scratch.normal.clear();
+    reserve_kept(&mut scratch.normal, contacts.len());
     scratch.normal.resize(contacts.len(), 0.0);
     let rigid = &scratch.rigid;
     let n = contacts.len();

@@ -30,9 +30,8 @@ pub(crate) struct XParticles {
     pub v: Vec<Vec3>,
     /// Mass (kg); a quarter of the bone's.
     pub mass: Vec<f32>,
-    /// Inverse mass as built: 0 for the particles of fixed bones.
-    pub inv_mass: Vec<f32>,
-    /// Inverse mass the solver sees: [`XParticles::inv_mass`], or 0 while the bone sleeps.
+    /// Inverse mass the solver sees: `1 / mass` (0 for a fixed bone's particles, whose
+    /// `mass` is 0), or 0 while the bone sleeps.
     pub w: Vec<f32>,
     /// What stays fixed through a substep's passes, set by [`XParticles::fix_start`].
     pub start: Start,
@@ -68,7 +67,6 @@ impl XParticles {
             self.x_prev.push(x[k].as_dvec3());
             self.v.push(if movable { v[k] } else { Vec3::ZERO });
             self.mass.push(if movable { mass } else { 0.0 });
-            self.inv_mass.push(inv);
             self.w.push(inv);
         }
     }
@@ -159,7 +157,9 @@ impl XParticles {
         self.w[PER_BONE * i] > 0.0
     }
 
-    /// Puts bone `i` to sleep (frozen, no velocity) or wakes it.
+    /// Puts bone `i` to sleep (frozen, no velocity) or wakes it. Only a bone that is not
+    /// fixed is woken (a kinematic bone is fixed while it is): its particles take their
+    /// inverse masses `1 / mass` again.
     pub fn set_asleep(&mut self, i: usize, asleep: bool) {
         for k in PER_BONE * i..PER_BONE * (i + 1) {
             if asleep {
@@ -167,7 +167,10 @@ impl XParticles {
                 self.x_prev[k] = self.x[k];
                 self.w[k] = 0.0;
             } else {
-                self.w[k] = self.inv_mass[k];
+                // As `push_bone` took it: a movable particle's `mass` is its own and
+                // positive or 0 (then `w` is 0), a fixed one's 0.
+                let m = self.mass[k];
+                self.w[k] = if m > 0.0 { 1.0 / m } else { 0.0 };
             }
         }
     }
@@ -178,7 +181,6 @@ impl XParticles {
         self.x_prev.shrink_to_fit();
         self.v.shrink_to_fit();
         self.mass.shrink_to_fit();
-        self.inv_mass.shrink_to_fit();
         self.w.shrink_to_fit();
     }
 }
