@@ -172,6 +172,8 @@ fn pull_rigid(
 
 /// Moves bone `i`'s particles by `shift + omega × a_k`, `a_k` their arms about their
 /// centre at the substep's start (`pull_rigid`), and turns its read frame by `omega`.
+/// Inlined: the blocks' passes call it for every side they move.
+#[inline(always)]
 pub(super) fn move_linear(
     p: &mut XParticles,
     bones: &mut [Bone],
