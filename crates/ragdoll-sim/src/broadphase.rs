@@ -222,8 +222,16 @@ struct Part {
     tree: Bvh,
 }
 
-/// Boxes from which [`Reused`] cuts them into runs, a tree each.
+/// Boxes from which [`Reused`] cuts them into runs, a tree each, on one thread: there
+/// the runs only serve the cache, and below this one tree is cheaper.
 const BOXES_TO_CUT: usize = 4096;
+
+/// Boxes from which the runs are cut on more threads than one: the trees are then built
+/// at once, and one tree over every box, built on one thread while the others wait, was
+/// the largest serial part of a 100-human pile's multibody step (a twelfth of it on one
+/// thread, where the solve that follows is shared out). Below this a tree costs less
+/// than waking a thread.
+const BOXES_TO_CUT_SHARED: usize = 1024;
 
 /// The share of boxes (1 / this) that may leave their fat boxes before [`Reused`]
 /// builds its trees again: each box that left is a query of the trees.
@@ -232,12 +240,19 @@ const ESCAPED_FOR_REBUILD: usize = 16;
 /// How many runs [`Reused`] cuts `n` boxes into on this thread pool: two per thread, at
 /// most eight (the trees' cross traversals grow with the square of their number). With
 /// one run per thread, two threads would have a single cross traversal, run on one of
-/// them; two runs per thread give two threads six cross traversals to share.
+/// them; two runs per thread give two threads six cross traversals to share. The pairs
+/// do not depend on the runs (they are sorted), so neither does any result.
 fn parts(n: usize) -> usize {
-    if n < BOXES_TO_CUT {
+    let threads = rayon::current_num_threads();
+    let cut_from = if threads > 1 {
+        BOXES_TO_CUT_SHARED
+    } else {
+        BOXES_TO_CUT
+    };
+    if n < cut_from {
         1
     } else {
-        (2 * rayon::current_num_threads()).clamp(1, 8)
+        (2 * threads).clamp(1, 8)
     }
 }
 
@@ -611,6 +626,9 @@ mod tests {
         for threads in [1, 2, 3] {
             pool(threads).install(|| {
                 assert_eq!(parts(n), 2 * threads);
+                // Fewer boxes are cut only when the runs' trees are built at once.
+                let fewer = BOXES_TO_CUT_SHARED + 100;
+                assert_eq!(parts(fewer), if threads == 1 { 1 } else { 2 * threads });
                 let mut reused = Reused::fattened(0.01);
                 let (mut a, mut b) = (Vec::new(), Vec::new());
                 reused.overlapping_pairs_where(&first, keep, &mut a);
@@ -633,7 +651,7 @@ mod tests {
     #[test]
     fn boxes_leaving_their_fat_boxes_find_their_new_pairs() {
         let fat = 0.05;
-        for (n, threads) in [(1200, 1), (BOXES_TO_CUT + 700, 2)] {
+        for (n, threads) in [(1200, 1), (1200, 2), (BOXES_TO_CUT + 700, 2)] {
             let first = scattered(n, 0.0);
             let mut moved = scattered(n, 0.03);
             let corner = Vec3::new(0.1, 0.2, 0.3);
@@ -676,7 +694,7 @@ mod tests {
                 .filter(|&(a, b)| !(resting(a) && resting(b)))
                 .collect()
         };
-        for (n, threads) in [(1200, 1), (BOXES_TO_CUT + 700, 2)] {
+        for (n, threads) in [(1200, 1), (1200, 2), (BOXES_TO_CUT + 700, 2)] {
             let first = scattered(n, 0.0);
             let mut moved = scattered(n, 0.03);
             let corner = Vec3::new(0.1, 0.2, 0.3);
