@@ -1,11 +1,12 @@
-//! The multibody pile of N humans (scene 10) frame by frame, for profiling its busy and
+//! The pile of N humans (scene 10) frame by frame, multibody unless `--solver` names
+//! another (`paper`, `rigid-frames`, `xpbd`, `multibody`), for profiling its busy and
 //! slowest frames: the mean, 95th-percentile and slowest frame, the slowest frame's
 //! phases ([`ragdoll_sim::PhaseTimes`]: collision, islands, substeps, sleep) and the
 //! phases summed over the run, the stepping thread's CPU time per frame, and a hash of
 //! the final state, so that a change meant to keep results bit for bit can be checked.
 //!
 //! ```text
-//! cargo run --release -p ragdoll-sim --example pile_frames -- [HUMANS] [THREADS] [FRAMES] [--no-sleep] [--each]
+//! cargo run --release -p ragdoll-sim --example pile_frames -- [HUMANS] [THREADS] [FRAMES] [--no-sleep] [--each] [--solver NAME]
 //! ```
 //!
 //! Defaults: 1000 humans, one thread, 600 frames at 1/60 s. `--each` prints every
@@ -14,8 +15,7 @@
 //! it is the step's cost (on several it leaves out the other threads' share). The bench
 //! tables (`ragdoll-lab bench scale`) are the reference figures; this is the quick look.
 
-use ragdoll_sim::Method;
-use ragdoll_sim::rigid::MultibodyWorld;
+use ragdoll_sim::Solver;
 use ragdoll_sim::scene::af::{AfOptions, load};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -38,8 +38,21 @@ fn run() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let no_sleep = args.iter().any(|a| a == "--no-sleep");
     let each = args.iter().any(|a| a == "--each");
+    let solver_at = args.iter().position(|a| a == "--solver");
+    let solver = match solver_at.map(|i| args.get(i + 1)) {
+        None => Solver::Multibody,
+        Some(name) => {
+            let name = name.ok_or("--solver needs a name")?;
+            (Solver::ALL.into_iter().find(|s| s.name() == name)).ok_or_else(|| {
+                format!("--solver {name:?}: not one of paper, rigid-frames, xpbd, multibody")
+            })?
+        }
+    };
     let mut numbers = Vec::new();
-    for a in args.iter().filter(|a| !a.starts_with("--")) {
+    let skip = solver_at.map(|i| i + 1);
+    for (_, a) in
+        (args.iter().enumerate()).filter(|&(i, a)| !a.starts_with("--") && Some(i) != skip)
+    {
         numbers.push(
             a.parse::<usize>()
                 .map_err(|e| format!("argument {a:?}: {e}"))?,
@@ -63,7 +76,7 @@ fn run() -> Result<(), String> {
         .num_threads(threads)
         .build()
         .map_err(|e| e.to_string())?;
-    let mut world = MultibodyWorld::new(&scene).map_err(|e| e.to_string())?;
+    let mut world = solver.build(&scene).map_err(|e| e.to_string())?;
 
     let mut wall = Vec::with_capacity(frames);
     let mut cpu = Vec::with_capacity(frames);
@@ -97,7 +110,8 @@ fn run() -> Result<(), String> {
     });
 
     println!(
-        "{humans} humans, {threads} thread(s), {frames} frames, sleeping {}",
+        "{humans} humans, {}, {threads} thread(s), {frames} frames, sleeping {}",
+        solver.name(),
         if no_sleep { "off" } else { "on" }
     );
     println!("  wall-clock: {}", summary(&wall));
