@@ -121,7 +121,11 @@ fn ground_contacts(
     set: &mut ContactSet,
 ) {
     let plane = ground_plane(ground);
+    // On the pool, in bone order (rayon's collect keeps it): a test of every bone, four
+    // times a frame, was a serial part of a large pile's frame on several threads.
     let near: Vec<usize> = (0..bones.len())
+        .into_par_iter()
+        .with_min_len(BONES_PER_TASK)
         .filter(|&i| !bones[i].is_static() && reaches_ground(plane, &boxes[i]))
         .collect();
     narrow_phase(&near, &mut Vec::new(), set, |&i, scratch, set| {
@@ -708,6 +712,9 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         clock.lap(&mut times, "substeps");
         sub += count;
     }
+    // The batches' copies of their bones, freed on all threads: one by one on the
+    // stepping thread this was a serial part of a large pile's frame.
+    kept.into_par_iter().for_each(drop);
     let mut newly = Vec::new();
     let held = w
         .grab
