@@ -3,6 +3,7 @@
 
 use super::body::BodyStates;
 use super::joint::{FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint_rows::PointRows;
 use super::limits::{AngleLimit, Swing};
 use super::soft::StepContext;
 
@@ -34,21 +35,23 @@ impl BallJoint {
 }
 
 impl JointSolve for BallJoint {
+    type Rows = PointRows<f32>;
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, s: &BodyStates) {
-        self.point.prepare(&self.frame, s);
+    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::prepare(rows, &self.frame, s);
         self.update_limits(s);
     }
 
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.point.weigh(&self.frame, s);
+    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::weigh(rows, &self.frame, s);
         self.update_limits(s);
     }
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(sw) = &self.swing {
             sw.warm_start(&self.frame, s);
@@ -56,17 +59,23 @@ impl JointSolve for BallJoint {
         if let Some(t) = &self.twist {
             t.warm_start(&self.frame, s);
         }
-        self.point.warm_start(&self.frame, s);
+        self.point.warm_start(rows, &self.frame, s);
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(
+        &mut self,
+        rows: &mut PointRows<f32>,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         if let Some(sw) = &mut self.swing {
             sw.solve(&self.frame, s, ctx, use_bias);
         }
         if let Some(t) = &mut self.twist {
             t.solve(&self.frame, s, ctx, use_bias);
         }
-        self.point.solve(&self.frame, s, ctx, use_bias);
+        self.point.solve(rows, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

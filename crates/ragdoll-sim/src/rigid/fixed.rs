@@ -2,6 +2,7 @@
 
 use super::body::BodyStates;
 use super::joint::{AngularLock3, JointFrame, JointSolve, PointPart};
+use super::joint_rows::PointRows;
 use super::soft::StepContext;
 
 /// A fixed joint.
@@ -16,26 +17,34 @@ pub struct FixedJoint {
 }
 
 impl JointSolve for FixedJoint {
+    type Rows = PointRows<f32>;
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, s: &BodyStates) {
-        self.point.prepare(&self.frame, s);
+    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::prepare(rows, &self.frame, s);
     }
 
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.point.weigh(&self.frame, s);
+    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::weigh(rows, &self.frame, s);
     }
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
         self.lock.warm_start(&self.frame, s);
-        self.point.warm_start(&self.frame, s);
+        self.point.warm_start(rows, &self.frame, s);
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(
+        &mut self,
+        rows: &mut PointRows<f32>,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         self.lock.solve(&self.frame, s, ctx, use_bias);
-        self.point.solve(&self.frame, s, ctx, use_bias);
+        self.point.solve(rows, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

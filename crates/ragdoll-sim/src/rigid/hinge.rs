@@ -4,6 +4,7 @@
 
 use super::body::BodyStates;
 use super::joint::{AlignPart, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint_rows::PointRows;
 use super::limits::{AngleGauge, AngleLimit};
 use super::soft::StepContext;
 use glam::Vec3A;
@@ -40,37 +41,45 @@ impl HingeJoint {
 }
 
 impl JointSolve for HingeJoint {
+    type Rows = PointRows<f32>;
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, s: &BodyStates) {
-        self.point.prepare(&self.frame, s);
+    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::prepare(rows, &self.frame, s);
         self.align.prepare(&self.frame, s);
         self.update_limit(s);
     }
 
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.point.weigh(&self.frame, s);
+    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::weigh(rows, &self.frame, s);
         self.align.weigh(&self.frame, s);
         self.update_limit(s);
     }
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(l) = &self.limit {
             l.warm_start(&self.frame, s);
         }
         self.align.warm_start(&self.frame, s);
-        self.point.warm_start(&self.frame, s);
+        self.point.warm_start(rows, &self.frame, s);
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(
+        &mut self,
+        rows: &mut PointRows<f32>,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         if let Some(l) = &mut self.limit {
             l.solve(&self.frame, s, ctx, use_bias);
         }
         self.align.solve(&self.frame, s, ctx, use_bias);
-        self.point.solve(&self.frame, s, ctx, use_bias);
+        self.point.solve(rows, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

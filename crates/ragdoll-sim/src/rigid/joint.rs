@@ -94,24 +94,41 @@ impl JointFrame {
 }
 
 /// What the solver asks of every joint type.
-pub trait JointSolve {
+///
+/// A joint keeps what must last from one step to the next (bodies, anchors, limits,
+/// accumulated impulses, friction state); what a step prepares anew on the pose and
+/// inertias of each substep (offsets, errors, turns, effective masses: a joint's
+/// [`JointSolve::Rows`]) lives in an array beside the joints, in the arrays being solved
+/// ([`super::joint_set::JointSet::rows`]): the world's own when it is solved in place,
+/// a batch's when it is solved in batches ([`super::parallel`]), so a world solved in
+/// batches keeps one batch's worth of rows per thread rather than one per joint.
+pub(crate) trait JointSolve {
+    /// The rows a step prepares for the joint and its solve reads; nothing in them
+    /// outlives the step.
+    type Rows: Copy + Default;
     /// Bodies and anchor.
     fn frame(&self) -> &JointFrame;
     /// Evaluates the rows (anchors, errors, effective masses, limit rows) on the current
     /// pose and inertias, at a step's first substep (later substeps call
     /// [`JointSolve::prepare_after_relax`]).
-    fn prepare(&mut self, s: &BodyStates);
+    fn prepare(&mut self, rows: &mut Self::Rows, s: &BodyStates);
     /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
     /// has moved since, only the inertias were refreshed): the point and alignment rows,
     /// which that pass prepared on this pose, only re-weigh their turns and effective
     /// masses with the new inertias (the same bits as preparing them anew, for less).
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.prepare(s);
+    fn prepare_after_relax(&mut self, rows: &mut Self::Rows, s: &BodyStates) {
+        self.prepare(rows, s);
     }
     /// Re-applies the accumulated impulses.
-    fn warm_start(&self, s: &mut BodyStates);
+    fn warm_start(&self, rows: &Self::Rows, s: &mut BodyStates);
     /// One Gauss–Seidel update; `use_bias` false in the relax pass.
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
+    fn solve(
+        &mut self,
+        rows: &mut Self::Rows,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    );
     /// One position-projection update (see [`super::project`]); joints without a
     /// rigid part (springs) keep the default, which does nothing.
     fn project(&self, _s: &mut BodyStates) {}
@@ -134,9 +151,9 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
     if use_bias { ctx.joint } else { Softness::RIGID }
 }
 
-/// The ball-and-socket point constraint `p_b − p_a = 0`, one joint's
-/// [`PointRows`] (the rows, written once for one joint and for lanes of four) and its
-/// accumulated impulse.
+/// The ball-and-socket point constraint `p_b − p_a = 0`: one joint's accumulated
+/// impulse and how it is solved; its [`PointRows`] (the rows, written once for one joint
+/// and for lanes of four) are the joint's [`JointSolve::Rows`], passed in.
 ///
 /// `K⁻¹` is prepared once per substep and shared by the biased iterations; the relax
 /// pass comes after the positions moved and prepares again.
@@ -147,10 +164,8 @@ pub struct PointPart {
     /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
     pub direct: bool,
     /// In a tree of this solve (`direct` unless the tree's factorisation failed): the
-    /// tree reads the rows here.
+    /// tree reads the joint's rows.
     pub(super) in_tree: bool,
-    /// The rows at `prepare`.
-    pub(super) rows: PointRows<f32>,
 }
 
 /// `v` as a one-lane vector.
@@ -172,64 +187,59 @@ fn masses(f: &JointFrame, s: &BodyStates) -> [f32; 2] {
 
 impl PointPart {
     /// Evaluates the offsets, the error, the turns and `K⁻¹` on the current positions.
-    pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
+    pub(crate) fn prepare(rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
         let local = [one(f.local_a), one(f.local_b)];
         let pose = Pose::of(s, f.a, f.b);
-        self.rows.prepare(local, &pose, masses(f, s), true);
+        rows.prepare(local, &pose, masses(f, s), true);
     }
 
     /// The turns and `K⁻¹` for the offsets of the last [`PointPart::prepare`] and the
     /// inertias now: all that changes when only the inertias were refreshed since.
-    pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
+    pub(crate) fn weigh(rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
         let inertias = [inertia(s, f.a), inertia(s, f.b)];
-        self.rows.weigh(inertias, masses(f, s), true);
+        rows.weigh(inertias, masses(f, s), true);
     }
 
-    /// World offset of the anchor from a's centre of mass, at `prepare`.
+    /// The world offsets of the anchor from a's and from b's centre of mass and
+    /// `p_b − p_a`, at the `prepare` of `rows`.
     #[inline]
-    pub(super) fn ra(&self) -> Vec3A {
-        self.rows.ra.lane(0).into()
-    }
-
-    /// World offset of the anchor from b's centre of mass, at `prepare`.
-    #[inline]
-    pub(super) fn rb(&self) -> Vec3A {
-        self.rows.rb.lane(0).into()
-    }
-
-    /// `p_b − p_a` at `prepare`.
-    #[inline]
-    pub(super) fn c(&self) -> Vec3A {
-        self.rows.c.lane(0).into()
+    pub(super) fn anchors_of(rows: &PointRows<f32>) -> [Vec3A; 3] {
+        [rows.ra, rows.rb, rows.c].map(|v| v.lane(0).into())
     }
 
     /// Applies the impulse `p` on b and `−p` on a.
     #[inline]
-    pub(super) fn apply(&self, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
+    pub(super) fn apply(rows: &PointRows<f32>, f: &JointFrame, s: &mut BodyStates, p: Vec3A) {
         let mut v = Velocities::of(s, f.a, f.b);
-        self.rows.apply(&mut v, masses(f, s), one(p), true);
+        rows.apply(&mut v, masses(f, s), one(p), true);
         v.store(s, f.a, f.b);
     }
 
     /// Re-applies last substep's impulse (after [`PointPart::prepare`]).
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        self.apply(f, s, self.impulse);
+    pub(crate) fn warm_start(&self, rows: &PointRows<f32>, f: &JointFrame, s: &mut BodyStates) {
+        PointPart::apply(rows, f, s, self.impulse);
     }
 
     /// One soft Gauss–Seidel update; the relax pass (`use_bias` false) first prepares
     /// again, since the positions have moved.
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    pub(crate) fn solve(
+        &mut self,
+        rows: &mut PointRows<f32>,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         if !use_bias {
-            self.prepare(f, s);
+            PointPart::prepare(rows, f, s);
         }
-        if self.direct || !self.rows.on {
+        if self.direct || !rows.on {
             return;
         }
         let mut v = Velocities::of(s, f.a, f.b);
         let mut impulse = one(self.impulse);
         let soft = Soft::new(ctx, use_bias);
-        self.rows
-            .solve(&mut v, masses(f, s), &mut impulse, &soft, true);
+        rows.solve(&mut v, masses(f, s), &mut impulse, &soft, true);
         v.store(s, f.a, f.b);
         self.impulse = impulse.lane(0).into();
     }

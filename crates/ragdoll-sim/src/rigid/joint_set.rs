@@ -9,6 +9,7 @@ use super::joint::{
     AlignPart, AngularLock3, AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart,
     RowKind,
 };
+use super::joint_rows::PointRows;
 use super::joint_wide::JointLanes;
 use super::limits::{AngleGauge, AngleLimit, Swing};
 use super::project::{PairPose, keep_pair_momentum};
@@ -34,6 +35,12 @@ pub struct JointSet {
     pub slider: Vec<SliderJoint>,
     /// Springs.
     pub spring: Vec<SpringJoint>,
+    /// The rows the solve of these arrays prepares for their joints, by type and in
+    /// their order ([`JointSolve::Rows`]): sized to the joints by [`JointSet::prepare`],
+    /// read only within a solve. The world's arrays fill theirs only when solved in
+    /// place; solved in batches ([`super::parallel`]), each batch's gathered arrays
+    /// hold the rows of its own joints, and the world's stay empty.
+    pub(crate) rows: JointRows,
     /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), planned by the
     /// first solve of the whole set that would use them ([`JointSet::prepare`]); `None`
     /// (and in the arrays gathered for one island) solves each joint alone.
@@ -52,6 +59,18 @@ pub struct JointSet {
     /// How many ball joints, hinges and universal joints touch a moving body this solve
     /// (set with `direct`).
     pub live_points: usize,
+}
+
+/// The rows a solve prepares for each joint ([`JointSolve::Rows`]), one array per joint
+/// type, each entry the rows of the joint at the same index.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JointRows {
+    pub ball: Vec<PointRows<f32>>,
+    pub hinge: Vec<PointRows<f32>>,
+    pub universal: Vec<PointRows<f32>>,
+    pub fixed: Vec<PointRows<f32>>,
+    pub slider: Vec<()>,
+    pub spring: Vec<()>,
 }
 
 /// The rows a projection pass over the joints moves ([`JointSet::project`]).
@@ -75,25 +94,25 @@ macro_rules! for_each_joint_mut {
     }};
 }
 
-/// Runs `$body` with `$list` bound to each type's array, ball joints and hinges only
-/// when `$balls` / `$hinges` (solved in lanes) are false.
+/// Runs `$body` with `$list` bound to each type's array and `$rows` to its rows, ball
+/// joints and hinges only when `$balls` / `$hinges` (solved in lanes) are false.
 macro_rules! for_each_type {
-    ($set:expr, $balls:expr, $hinges:expr, $list:ident => $body:expr) => {{
+    ($set:expr, $balls:expr, $hinges:expr, ($list:ident, $rows:ident) => $body:expr) => {{
         if !$balls {
-            let $list = &mut $set.ball;
+            let ($list, $rows) = (&mut $set.ball, &mut $set.rows.ball);
             $body
         }
         if !$hinges {
-            let $list = &mut $set.hinge;
+            let ($list, $rows) = (&mut $set.hinge, &mut $set.rows.hinge);
             $body
         }
-        let $list = &mut $set.universal;
+        let ($list, $rows) = (&mut $set.universal, &mut $set.rows.universal);
         $body
-        let $list = &mut $set.fixed;
+        let ($list, $rows) = (&mut $set.fixed, &mut $set.rows.fixed);
         $body
-        let $list = &mut $set.slider;
+        let ($list, $rows) = (&mut $set.slider, &mut $set.rows.slider);
         $body
-        let $list = &mut $set.spring;
+        let ($list, $rows) = (&mut $set.spring, &mut $set.rows.spring);
         $body
     }};
 }
@@ -278,8 +297,10 @@ impl JointSet {
     }
 
     /// The first substep's preparation of joints touching an awake body (the lanes also
-    /// take the joints' impulses, see [`JointSet::end_substeps`]).
+    /// take the joints' impulses, see [`JointSet::end_substeps`]), with the rows sized
+    /// to the joints.
     pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
+        self.fit_rows();
         if self.live_points > 0
             && !self.trees_own_most()
             && let Some(anchor) = self.lanes_to_plan.take()
@@ -288,24 +309,44 @@ impl JointSet {
         }
         let (balls, hinges) = self.in_lanes();
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
-            lanes.prepare(&mut self.ball, &mut self.hinge, s, awake);
+            let rows = [&mut self.rows.ball, &mut self.rows.hinge];
+            lanes.prepare(&mut self.ball, &mut self.hinge, rows, s, awake);
         }
-        for_each_type!(self, balls, hinges, list => for j in list.iter_mut() {
-            if touches_awake(j.frame(), awake) {
-                j.prepare(s)
+        for_each_type!(self, balls, hinges, (list, rows) => {
+            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+                if touches_awake(j.frame(), awake) {
+                    j.prepare(r, s)
+                }
             }
         });
+    }
+
+    /// Sizes each type's rows to its joints. Entries are overwritten by the preparation
+    /// of their joint before any read, so kept or fresh they give the same solve; the
+    /// arrays keep their capacity from step to step (a batch's, from batch to batch).
+    fn fit_rows(&mut self) {
+        let r = &mut self.rows;
+        r.ball.resize(self.ball.len(), PointRows::default());
+        r.hinge.resize(self.hinge.len(), PointRows::default());
+        r.universal
+            .resize(self.universal.len(), PointRows::default());
+        r.fixed.resize(self.fixed.len(), PointRows::default());
+        r.slider.resize(self.slider.len(), ());
+        r.spring.resize(self.spring.len(), ());
     }
 
     /// [`JointSolve::prepare_after_relax`] of joints touching an awake body.
     pub fn prepare_after_relax(&mut self, s: &BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
-            lanes.prepare_after_relax(&mut self.ball, &mut self.hinge, s);
+            let rows = [&mut self.rows.ball, &mut self.rows.hinge];
+            lanes.prepare_after_relax(&mut self.ball, &mut self.hinge, rows, s);
         }
-        for_each_type!(self, balls, hinges, list => for j in list.iter_mut() {
-            if touches_awake(j.frame(), awake) {
-                j.prepare_after_relax(s)
+        for_each_type!(self, balls, hinges, (list, rows) => {
+            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+                if touches_awake(j.frame(), awake) {
+                    j.prepare_after_relax(r, s)
+                }
             }
         });
     }
@@ -314,18 +355,19 @@ impl JointSet {
     pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
         let trees = self.direct;
+        let rows = &self.rows;
         match self.lanes.as_mut().filter(|_| balls) {
             Some(l) => l.warm_start_balls(s, &mut self.ball, trees),
-            None => warm_start_each(&self.ball, s, awake),
+            None => warm_start_each(&self.ball, &rows.ball, s, awake),
         }
         match self.lanes.as_mut().filter(|_| hinges) {
             Some(l) => l.warm_start_hinges(s, &mut self.hinge, trees),
-            None => warm_start_each(&self.hinge, s, awake),
+            None => warm_start_each(&self.hinge, &rows.hinge, s, awake),
         }
-        warm_start_each(&self.universal, s, awake);
-        warm_start_each(&self.fixed, s, awake);
-        warm_start_each(&self.slider, s, awake);
-        warm_start_each(&self.spring, s, awake);
+        warm_start_each(&self.universal, &rows.universal, s, awake);
+        warm_start_each(&self.fixed, &rows.fixed, s, awake);
+        warm_start_each(&self.slider, &rows.slider, s, awake);
+        warm_start_each(&self.spring, &rows.spring, s, awake);
     }
 
     /// One iteration over joints touching an awake body: every joint's friction first,
@@ -334,18 +376,27 @@ impl JointSet {
         self.solve_friction(s, awake, ctx);
         let (balls, hinges) = self.in_lanes();
         let trees = self.direct;
+        let rows = &mut self.rows;
         match self.lanes.as_mut().filter(|_| balls) {
-            Some(l) => l.solve_balls(s, &mut self.ball, trees, ctx, use_bias),
-            None => solve_each(&mut self.ball, s, awake, ctx, use_bias),
+            Some(l) => l.solve_balls(s, &mut self.ball, &mut rows.ball, trees, ctx, use_bias),
+            None => solve_each(&mut self.ball, &mut rows.ball, s, awake, ctx, use_bias),
         }
         match self.lanes.as_mut().filter(|_| hinges) {
-            Some(l) => l.solve_hinges(s, &mut self.hinge, trees, ctx, use_bias),
-            None => solve_each(&mut self.hinge, s, awake, ctx, use_bias),
+            Some(l) => l.solve_hinges(s, &mut self.hinge, &mut rows.hinge, trees, ctx, use_bias),
+            None => solve_each(&mut self.hinge, &mut rows.hinge, s, awake, ctx, use_bias),
         }
-        solve_each(&mut self.universal, s, awake, ctx, use_bias);
-        solve_each(&mut self.fixed, s, awake, ctx, use_bias);
-        solve_each(&mut self.slider, s, awake, ctx, use_bias);
-        solve_each(&mut self.spring, s, awake, ctx, use_bias);
+        let r = rows;
+        solve_each(
+            &mut self.universal,
+            &mut r.universal,
+            s,
+            awake,
+            ctx,
+            use_bias,
+        );
+        solve_each(&mut self.fixed, &mut r.fixed, s, awake, ctx, use_bias);
+        solve_each(&mut self.slider, &mut r.slider, s, awake, ctx, use_bias);
+        solve_each(&mut self.spring, &mut r.spring, s, awake, ctx, use_bias);
     }
 
     /// One update of every joint friction touching an awake body, in the turns its
@@ -528,10 +579,16 @@ impl JointSet {
 }
 
 /// Warm start of `joints` touching an awake body, one by one.
-fn warm_start_each<J: JointSolve>(joints: &[J], s: &mut BodyStates, awake: &[bool]) {
-    for j in joints {
+fn warm_start_each<J: JointSolve>(
+    joints: &[J],
+    rows: &[J::Rows],
+    s: &mut BodyStates,
+    awake: &[bool],
+) {
+    debug_assert_eq!(joints.len(), rows.len(), "rows fitted by JointSet::prepare");
+    for (j, r) in joints.iter().zip(rows) {
         if touches_awake(j.frame(), awake) {
-            j.warm_start(s);
+            j.warm_start(r, s);
         }
     }
 }
@@ -539,14 +596,16 @@ fn warm_start_each<J: JointSolve>(joints: &[J], s: &mut BodyStates, awake: &[boo
 /// One iteration over `joints` touching an awake body, one by one.
 fn solve_each<J: JointSolve>(
     joints: &mut [J],
+    rows: &mut [J::Rows],
     s: &mut BodyStates,
     awake: &[bool],
     ctx: &StepContext,
     use_bias: bool,
 ) {
-    for j in joints {
+    debug_assert_eq!(joints.len(), rows.len(), "rows fitted by JointSet::prepare");
+    for (j, r) in joints.iter_mut().zip(rows) {
         if touches_awake(j.frame(), awake) {
-            j.solve(s, ctx, use_bias);
+            j.solve(r, s, ctx, use_bias);
         }
     }
 }

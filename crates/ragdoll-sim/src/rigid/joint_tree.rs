@@ -48,6 +48,7 @@
 
 use super::body::BodyStates;
 use super::joint::PointPart;
+use super::joint_rows::PointRows;
 use super::joint_set::JointSet;
 use super::soft::{Softness, StepContext};
 use glam::{Mat3A, Vec3, Vec3A};
@@ -480,8 +481,7 @@ impl JointTrees {
             ..
         } = self;
         for node in nodes.iter_mut() {
-            let p = point_of(joints, node.joint);
-            (node.ra, node.rb, node.c) = (p.ra(), p.rb(), p.c());
+            [node.ra, node.rb, node.c] = PointPart::anchors_of(rows_of(joints, node.joint));
             node.d_inv = Mat3A::ZERO;
         }
         for node in bodies.iter_mut() {
@@ -654,7 +654,7 @@ impl JointTrees {
             let decay = -soft.impulse_scale * point_of(joints, node.joint).impulse;
             if soft.impulse_scale != 0.0 {
                 let f = frame_of(joints, node.joint);
-                point_of(joints, node.joint).apply(&f, s, decay);
+                PointPart::apply(rows_of(joints, node.joint), &f, s, decay);
             }
             point_of_mut(joints, node.joint).impulse += soft.mass_scale * lambda + decay;
         }
@@ -734,6 +734,15 @@ fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {
         JointRef::Ball(i) => &joints.ball[i].point,
         JointRef::Hinge(i) => &joints.hinge[i].point,
         JointRef::Universal(i) => &joints.universal[i].point,
+    }
+}
+
+/// The point rows the solve prepared for joint `j`.
+fn rows_of(joints: &JointSet, j: JointRef) -> &PointRows<f32> {
+    match j {
+        JointRef::Ball(i) => &joints.rows.ball[i],
+        JointRef::Hinge(i) => &joints.rows.hinge[i],
+        JointRef::Universal(i) => &joints.rows.universal[i],
     }
 }
 

@@ -314,12 +314,13 @@ impl PointX4 {
         }
     }
 
-    /// Copies the rows of the lanes in a tree to their joints: the tree reads them
-    /// there, and they are the rows the one-by-one code prepares (the same code).
-    fn hand_rows_to_trees<J: Pointed>(&self, l: &Lanes, joints: &mut [J]) {
+    /// Copies the rows of the lanes in a tree to their joints' rows (`rows`, by joint):
+    /// the tree reads them there, and they are the rows the one-by-one code prepares
+    /// (the same code).
+    fn hand_rows_to_trees(&self, l: &Lanes, rows: &mut [PointRows<f32>]) {
         if self.in_tree.any() {
             for k in (0..LANES).filter(|&k| is_set(self.in_tree, k)) {
-                joints[l.joint(k)].point_mut().rows = self.rows.lane(k);
+                rows[l.joint(k)] = self.rows.lane(k);
             }
         }
     }
@@ -610,6 +611,7 @@ impl JointLanes {
         &mut self,
         balls: &mut [BallJoint],
         hinges: &mut [HingeJoint],
+        [ball_rows, hinge_rows]: [&mut Vec<PointRows<f32>>; 2],
         s: &BodyStates,
         awake: &[bool],
     ) {
@@ -624,7 +626,7 @@ impl JointLanes {
             b.point.direct = mask(|k| is_set(b.lanes.live, k) && j(k).point.direct);
             b.point.in_tree = mask(|k| is_set(b.lanes.live, k) && j(k).point.in_tree);
             b.point.prepare(&b.lanes, &p);
-            b.point.hand_rows_to_trees(&b.lanes, balls);
+            b.point.hand_rows_to_trees(&b.lanes, ball_rows);
         }
         for h in &mut self.hinges {
             let frame = |j: usize| [hinges[j].frame.a, hinges[j].frame.b];
@@ -640,7 +642,7 @@ impl JointLanes {
             h.point.direct = mask(|k| is_set(h.lanes.live, k) && j(k).point.direct);
             h.point.in_tree = mask(|k| is_set(h.lanes.live, k) && j(k).point.in_tree);
             h.point.prepare(&h.lanes, &p);
-            h.point.hand_rows_to_trees(&h.lanes, hinges);
+            h.point.hand_rows_to_trees(&h.lanes, hinge_rows);
             h.align.prepare(&h.lanes, &p);
         }
         self.update_limits(balls, hinges, s);
@@ -652,19 +654,20 @@ impl JointLanes {
         &mut self,
         balls: &mut [BallJoint],
         hinges: &mut [HingeJoint],
+        [ball_rows, hinge_rows]: [&mut Vec<PointRows<f32>>; 2],
         s: &BodyStates,
     ) {
         for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
             b.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = b.lanes.inertia;
             b.point.weigh(&b.lanes, ia, ib);
-            b.point.hand_rows_to_trees(&b.lanes, balls);
+            b.point.hand_rows_to_trees(&b.lanes, ball_rows);
         }
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             h.lanes.refresh_inertia(s);
             let Inertias { ia, ib } = h.lanes.inertia;
             h.point.weigh(&h.lanes, ia, ib);
-            h.point.hand_rows_to_trees(&h.lanes, hinges);
+            h.point.hand_rows_to_trees(&h.lanes, hinge_rows);
             h.align.weigh(&h.lanes, ia, ib);
         }
         self.update_limits(balls, hinges, s);
@@ -754,12 +757,14 @@ impl JointLanes {
     }
 
     /// One iteration over the ball joints; the relax pass (`use_bias` false) prepares
-    /// the point rows first, since the positions have moved (and one by one those a
-    /// tree solves, for the tree).
+    /// the point rows first, since the positions have moved (and one by one, in `rows`,
+    /// those a tree solves, for the tree).
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_balls(
         &mut self,
         s: &mut BodyStates,
         balls: &mut [BallJoint],
+        rows: &mut [PointRows<f32>],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -773,7 +778,7 @@ impl JointLanes {
             }
             if !use_bias {
                 b.point.prepare(&b.lanes, &b.lanes.bodies(s));
-                b.point.hand_rows_to_trees(&b.lanes, balls);
+                b.point.hand_rows_to_trees(&b.lanes, rows);
             }
             b.lanes.update_velocities(s, |v| {
                 b.cone.solve(v, &soft);
@@ -785,10 +790,12 @@ impl JointLanes {
     /// One iteration over the hinges; the relax pass prepares the point and axis rows
     /// first. (A preparation reads poses and inertias, which the velocity solve does not
     /// change, so preparing before the range rows' update is preparing after it.)
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_hinges(
         &mut self,
         s: &mut BodyStates,
         hinges: &mut [HingeJoint],
+        rows: &mut [PointRows<f32>],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -802,7 +809,7 @@ impl JointLanes {
                 let p = h.lanes.bodies(s);
                 h.align.prepare(&h.lanes, &p);
                 h.point.prepare(&h.lanes, &p);
-                h.point.hand_rows_to_trees(&h.lanes, hinges);
+                h.point.hand_rows_to_trees(&h.lanes, rows);
             }
             h.lanes.update_velocities(s, |v| {
                 h.limit[0].solve(v, &soft);

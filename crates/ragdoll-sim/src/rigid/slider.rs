@@ -54,13 +54,15 @@ impl SliderJoint {
 }
 
 impl JointSolve for SliderJoint {
+    type Rows = ();
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, _: &BodyStates) {}
+    fn prepare(&mut self, _: &mut (), _: &BodyStates) {}
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, _: &(), s: &mut BodyStates) {
         self.lock.warm_start(&self.frame, s);
         let (uv, ra, rbd, _) = self.rows(s);
         for (u, l) in uv.into_iter().zip(self.impulse) {
@@ -68,7 +70,7 @@ impl JointSolve for SliderJoint {
         }
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(&mut self, _: &mut (), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         self.lock.solve(&self.frame, s, ctx, use_bias);
         let f = self.frame;
         let (uv, ra, rbd, d) = self.rows(s);

@@ -50,19 +50,21 @@ impl SpringJoint {
 }
 
 impl JointSolve for SpringJoint {
+    type Rows = ();
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, _: &BodyStates) {}
+    fn prepare(&mut self, _: &mut (), _: &BodyStates) {}
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, _: &(), s: &mut BodyStates) {
         let (n, _, ra, rb) = self.geometry(s);
         let total = self.impulse[0] + self.impulse[1] - self.impulse[2];
         self.apply(s, n, ra, rb, total);
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(&mut self, _: &mut (), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let f = self.frame;
         let (n, len, ra, rb) = self.geometry(s);
         let (ja, jb) = (ra.cross(n), rb.cross(n));

@@ -4,6 +4,7 @@
 
 use super::body::BodyStates;
 use super::joint::{AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint_rows::PointRows;
 use super::limits::{AngleLimit, Swing};
 use super::soft::StepContext;
 use glam::Vec3;
@@ -74,21 +75,23 @@ impl UniversalJoint {
 }
 
 impl JointSolve for UniversalJoint {
+    type Rows = PointRows<f32>;
+
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, s: &BodyStates) {
-        self.point.prepare(&self.frame, s);
+    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::prepare(rows, &self.frame, s);
         self.set_angular_rows(s);
     }
 
-    fn prepare_after_relax(&mut self, s: &BodyStates) {
-        self.point.weigh(&self.frame, s);
+    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::weigh(rows, &self.frame, s);
         self.set_angular_rows(s);
     }
 
-    fn warm_start(&self, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
         let f = &self.frame;
         self.friction.warm_start(f, s);
         if let Some(sw) = &self.swing {
@@ -98,10 +101,16 @@ impl JointSolve for UniversalJoint {
             r.iter().for_each(|l| l.warm_start(f, s));
         }
         self.cross_row.warm_start(f, s);
-        self.point.warm_start(f, s);
+        self.point.warm_start(rows, f, s);
     }
 
-    fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(
+        &mut self,
+        rows: &mut PointRows<f32>,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         let f = &self.frame;
         if let Some(sw) = &mut self.swing {
             sw.solve(f, s, ctx, use_bias);
@@ -110,7 +119,7 @@ impl JointSolve for UniversalJoint {
             r.iter_mut().for_each(|l| l.solve(f, s, ctx, use_bias));
         }
         self.cross_row.solve(f, s, ctx, use_bias);
-        self.point.solve(f, s, ctx, use_bias);
+        self.point.solve(rows, f, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {
