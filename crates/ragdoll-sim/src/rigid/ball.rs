@@ -4,7 +4,7 @@
 use super::body::BodyStates;
 use super::joint::{FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::joint_rows::PointRows;
-use super::limits::{AngleLimit, Swing};
+use super::limits::{AngleLimit, RangeRows, Swing, SwingRows};
 use super::soft::StepContext;
 
 /// A ball-and-socket joint.
@@ -22,60 +22,69 @@ pub struct BallJoint {
     pub friction: FrictionMotor,
 }
 
+/// The rows a step prepares for a ball joint ([`JointSolve::Rows`]): its point's, its
+/// swing limit's and its twist limit's.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct BallRows {
+    pub point: PointRows<f32>,
+    pub swing: SwingRows,
+    pub twist: RangeRows,
+}
+
 impl BallJoint {
     /// The swing and twist rows on the current pose and inertias.
-    fn update_limits(&mut self, s: &BodyStates) {
+    fn update_limits(&mut self, rows: &mut BallRows, s: &BodyStates) {
         if let Some(sw) = &mut self.swing {
-            sw.update(&self.frame, s);
+            sw.update(&mut rows.swing, &self.frame, s);
         }
         if let Some(t) = &mut self.twist {
-            t.update(&self.frame, s);
+            t.update(&mut rows.twist, &self.frame, s);
         }
     }
 }
 
 impl JointSolve for BallJoint {
-    type Rows = PointRows<f32>;
+    type Rows = BallRows;
 
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::prepare(rows, &self.frame, s);
-        self.update_limits(s);
+    fn prepare(&mut self, rows: &mut BallRows, s: &BodyStates) {
+        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.update_limits(rows, s);
     }
 
-    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::weigh(rows, &self.frame, s);
-        self.update_limits(s);
+    fn prepare_after_relax(&mut self, rows: &mut BallRows, s: &BodyStates) {
+        PointPart::weigh(&mut rows.point, &self.frame, s);
+        self.update_limits(rows, s);
     }
 
-    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &BallRows, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(sw) = &self.swing {
-            sw.warm_start(&self.frame, s);
+            sw.warm_start(&rows.swing, &self.frame, s);
         }
         if let Some(t) = &self.twist {
-            t.warm_start(&self.frame, s);
+            t.warm_start(&rows.twist, &self.frame, s);
         }
-        self.point.warm_start(rows, &self.frame, s);
+        self.point.warm_start(&rows.point, &self.frame, s);
     }
 
     fn solve(
         &mut self,
-        rows: &mut PointRows<f32>,
+        rows: &mut BallRows,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
     ) {
         if let Some(sw) = &mut self.swing {
-            sw.solve(&self.frame, s, ctx, use_bias);
+            sw.solve(&rows.swing, &self.frame, s, ctx, use_bias);
         }
         if let Some(t) = &mut self.twist {
-            t.solve(&self.frame, s, ctx, use_bias);
+            t.solve(&rows.twist, &self.frame, s, ctx, use_bias);
         }
-        self.point.solve(rows, &self.frame, s, ctx, use_bias);
+        self.point.solve(&mut rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

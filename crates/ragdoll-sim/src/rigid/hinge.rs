@@ -5,7 +5,7 @@
 use super::body::BodyStates;
 use super::joint::{AlignPart, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
 use super::joint_rows::PointRows;
-use super::limits::{AngleGauge, AngleLimit};
+use super::limits::{AngleGauge, AngleLimit, RangeRows};
 use super::soft::StepContext;
 use glam::Vec3A;
 
@@ -26,6 +26,14 @@ pub struct HingeJoint {
     pub friction: FrictionMotor,
 }
 
+/// The rows a step prepares for a hinge ([`JointSolve::Rows`]): its point's and its
+/// range's (the alignment keeps its own).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct HingeRows {
+    pub point: PointRows<f32>,
+    pub limit: RangeRows,
+}
+
 impl HingeJoint {
     /// The one turn a hinge leaves free: about its axis (world, as body a carries it).
     pub(crate) fn free_turns(&self, s: &BodyStates) -> FreeTurns {
@@ -33,53 +41,53 @@ impl HingeJoint {
     }
 
     /// The range rows on the current pose and inertias.
-    fn update_limit(&mut self, s: &BodyStates) {
+    fn update_limit(&mut self, rows: &mut RangeRows, s: &BodyStates) {
         if let Some(l) = &mut self.limit {
-            l.update(&self.frame, s);
+            l.update(rows, &self.frame, s);
         }
     }
 }
 
 impl JointSolve for HingeJoint {
-    type Rows = PointRows<f32>;
+    type Rows = HingeRows;
 
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::prepare(rows, &self.frame, s);
+    fn prepare(&mut self, rows: &mut HingeRows, s: &BodyStates) {
+        PointPart::prepare(&mut rows.point, &self.frame, s);
         self.align.prepare(&self.frame, s);
-        self.update_limit(s);
+        self.update_limit(&mut rows.limit, s);
     }
 
-    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::weigh(rows, &self.frame, s);
+    fn prepare_after_relax(&mut self, rows: &mut HingeRows, s: &BodyStates) {
+        PointPart::weigh(&mut rows.point, &self.frame, s);
         self.align.weigh(&self.frame, s);
-        self.update_limit(s);
+        self.update_limit(&mut rows.limit, s);
     }
 
-    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &HingeRows, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(l) = &self.limit {
-            l.warm_start(&self.frame, s);
+            l.warm_start(&rows.limit, &self.frame, s);
         }
         self.align.warm_start(&self.frame, s);
-        self.point.warm_start(rows, &self.frame, s);
+        self.point.warm_start(&rows.point, &self.frame, s);
     }
 
     fn solve(
         &mut self,
-        rows: &mut PointRows<f32>,
+        rows: &mut HingeRows,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
     ) {
         if let Some(l) = &mut self.limit {
-            l.solve(&self.frame, s, ctx, use_bias);
+            l.solve(&rows.limit, &self.frame, s, ctx, use_bias);
         }
         self.align.solve(&self.frame, s, ctx, use_bias);
-        self.point.solve(rows, &self.frame, s, ctx, use_bias);
+        self.point.solve(&mut rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

@@ -446,17 +446,34 @@ pub enum RowKind {
     Equality,
 }
 
-/// One angular constraint row `Ċ = axis · (ω_a − ω_b)`.
+/// What a one-dimensional angular row ([`AxisRow`]) keeps from step to step: how it
+/// reacts and its accumulated impulse. The joint holds it; the row itself is set anew
+/// at every substep and lives with the joint's other rows ([`JointSolve::Rows`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RowState {
+    /// Reaction.
+    pub kind: RowKind,
+    /// Accumulated impulse.
+    pub impulse: f32,
+}
+
+impl RowState {
+    /// No impulse yet.
+    pub const fn new(kind: RowKind) -> RowState {
+        RowState { kind, impulse: 0.0 }
+    }
+}
+
+/// One angular constraint row `Ċ = axis · (ω_a − ω_b)`, as set on a substep's pose;
+/// its accumulated impulse is its [`RowState`]'s, passed in.
 #[derive(Clone, Copy, Debug)]
 pub struct AxisRow {
     /// World axis, recomputed every substep.
     pub axis: Vec3,
     /// Position value (rad or a dimensionless sine, positive = inside the limit).
     pub c: f32,
-    /// Reaction.
+    /// Reaction (the state's, copied by [`AxisRow::set`]).
     pub kind: RowKind,
-    /// Accumulated impulse.
-    pub impulse: f32,
     /// Whether the row is near enough to its bound to be solved this substep.
     pub active: bool,
     /// How a unit impulse along the axis turns each body, `I_a⁻¹ axis` and `I_b⁻¹ axis`,
@@ -466,28 +483,38 @@ pub struct AxisRow {
     pub(super) k: f32,
 }
 
-impl AxisRow {
-    /// An inactive row.
-    pub const fn new(kind: RowKind) -> AxisRow {
+/// An inactive row, never read before [`AxisRow::set`].
+impl Default for AxisRow {
+    fn default() -> AxisRow {
         AxisRow {
             axis: Vec3::ZERO,
             c: 0.0,
-            kind,
-            impulse: 0.0,
+            kind: RowKind::Equality,
             active: false,
             turn: [Vec3A::ZERO; 2],
             k: 0.0,
         }
     }
+}
 
-    /// Sets axis and value on the current pose and inertias of `f`'s bodies; rows far
-    /// from their bound (more than `margin`) sleep.
-    pub fn set(&mut self, f: &JointFrame, s: &BodyStates, axis: Vec3, c: f32, margin: f32) {
+impl AxisRow {
+    /// Sets the row of `state` (its kind) with axis and value on the current pose and
+    /// inertias of `f`'s bodies; rows far from their bound (more than `margin`) sleep,
+    /// and their state's impulse is dropped.
+    pub fn set(
+        &mut self,
+        state: &mut RowState,
+        f: &JointFrame,
+        s: &BodyStates,
+        (axis, c): (Vec3, f32),
+        margin: f32,
+    ) {
         self.axis = axis;
         self.c = c;
+        self.kind = state.kind;
         let active = self.kind == RowKind::Equality || c < margin;
         if !active {
-            self.impulse = 0.0;
+            state.impulse = 0.0;
         } else {
             let axis = Vec3A::from(axis);
             self.turn = [s.inv_inertia[f.a] * axis, s.inv_inertia[f.b] * axis];
@@ -509,11 +536,11 @@ impl AxisRow {
         }
     }
 
-    /// Re-applies the accumulated impulse.
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+    /// Re-applies the accumulated impulse `impulse`.
+    pub fn warm_start(&self, impulse: f32, f: &JointFrame, s: &mut BodyStates) {
         if self.active {
             let mut v = Velocities::of(s, f.a, f.b);
-            self.one_lane().warm_start(&mut v, self.impulse);
+            self.one_lane().warm_start(&mut v, impulse);
             v.store(s, f.a, f.b);
         }
     }
@@ -521,16 +548,24 @@ impl AxisRow {
     /// One update of the row. Inlined so that a row far from its bound (most limit rows:
     /// a range has two, at most one of them near) costs the test, not a call.
     #[inline]
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    pub fn solve(
+        &self,
+        impulse: &mut f32,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         if self.active {
-            self.solve_active(f, s, ctx, use_bias);
+            self.solve_active(impulse, f, s, ctx, use_bias);
         }
     }
 
     /// [`AxisRow::solve`] of an active row: a hard limit or an equality by
     /// [`AngularRow::solve`], a soft limit here.
     fn solve_active(
-        &mut self,
+        &self,
+        impulse: &mut f32,
         f: &JointFrame,
         s: &mut BodyStates,
         ctx: &StepContext,
@@ -544,13 +579,12 @@ impl AxisRow {
             RowKind::Limit => true,
             RowKind::Equality => false,
             RowKind::SoftLimit { k: stiffness } => {
-                return self.solve_soft(f, s, ctx, stiffness);
+                return self.solve_soft(impulse, f, s, ctx, stiffness);
             }
         };
         let mut v = Velocities::of(s, f.a, f.b);
         let soft = Soft::new(ctx, use_bias);
-        self.one_lane()
-            .solve(&mut v, &mut self.impulse, &soft, limit);
+        self.one_lane().solve(&mut v, impulse, &soft, limit);
         v.store(s, f.a, f.b);
     }
 
@@ -563,7 +597,8 @@ impl AxisRow {
 
     /// The update of an active soft limit of `stiffness`.
     fn solve_soft(
-        &mut self,
+        &self,
+        impulse: &mut f32,
         f: &JointFrame,
         s: &mut BodyStates,
         ctx: &StepContext,
@@ -571,7 +606,7 @@ impl AxisRow {
     ) {
         let k = self.k;
         let cdot = Vec3A::from(self.axis).dot(f.rel_ang_vel(s));
-        let old = self.impulse;
+        let old = *impulse;
         let new = if self.c >= 0.0 {
             0.0
         } else {
@@ -582,7 +617,7 @@ impl AxisRow {
             let l = -(cdot + sp.bias_rate * self.c + sp.gamma * old) / (k + sp.gamma);
             (old + l).max(0.0)
         };
-        self.impulse = new;
+        *impulse = new;
         self.apply(f, s, new - old);
     }
 

@@ -1,12 +1,12 @@
 //! All joints of a world, in one array per joint type (Box2D/Jolt style: no pointers,
 //! no virtual calls in the inner loops), built from the scene's constraints.
 
-use super::ball::BallJoint;
+use super::ball::{BallJoint, BallRows};
 use super::body::{BodyInfo, BodyStates, Motions};
 use super::fixed::FixedJoint;
-use super::hinge::HingeJoint;
+use super::hinge::{HingeJoint, HingeRows};
 use super::joint::{
-    AlignPart, AngularLock3, AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart,
+    AlignPart, AngularLock3, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart, RowState,
     RowKind,
 };
 use super::joint_rows::PointRows;
@@ -16,7 +16,7 @@ use super::project::{PairPose, keep_pair_momentum};
 use super::slider::SliderJoint;
 use super::soft::StepContext;
 use super::spring::SpringJoint;
-use super::universal::UniversalJoint;
+use super::universal::{UniversalJoint, UniversalRows};
 use crate::scene::{BodyRef, ConstraintDesc, JointKind, LimitStyle};
 use crate::snapshot::{JointInstance, LimitShape};
 
@@ -65,9 +65,9 @@ pub struct JointSet {
 /// type, each entry the rows of the joint at the same index.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct JointRows {
-    pub ball: Vec<PointRows<f32>>,
-    pub hinge: Vec<PointRows<f32>>,
-    pub universal: Vec<PointRows<f32>>,
+    pub ball: Vec<BallRows>,
+    pub hinge: Vec<HingeRows>,
+    pub universal: Vec<UniversalRows>,
     pub fixed: Vec<PointRows<f32>>,
     pub slider: Vec<()>,
     pub spring: Vec<()>,
@@ -223,7 +223,7 @@ impl JointSet {
                         shaft_a: frame.dir_in_a(s, *shaft1),
                         shaft_b: frame.dir_in_b(s, *shaft2),
                         rest_dot: shaft1.dot(*shaft2),
-                        cross_row: AxisRow::new(RowKind::Equality),
+                        cross_row: RowState::new(RowKind::Equality),
                         swing: swing.map(|l| Swing::new(&frame, s, &l, LimitStyle::Hard)),
                         ranges: axis_ranges.map(|r| {
                             [
@@ -309,7 +309,7 @@ impl JointSet {
         }
         let (balls, hinges) = self.in_lanes();
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
-            let rows = [&mut self.rows.ball, &mut self.rows.hinge];
+            let rows = (&mut self.rows.ball[..], &mut self.rows.hinge[..]);
             lanes.prepare(&mut self.ball, &mut self.hinge, rows, s, awake);
         }
         for_each_type!(self, balls, hinges, (list, rows) => {
@@ -326,10 +326,10 @@ impl JointSet {
     /// arrays keep their capacity from step to step (a batch's, from batch to batch).
     fn fit_rows(&mut self) {
         let r = &mut self.rows;
-        r.ball.resize(self.ball.len(), PointRows::default());
-        r.hinge.resize(self.hinge.len(), PointRows::default());
+        r.ball.resize(self.ball.len(), BallRows::default());
+        r.hinge.resize(self.hinge.len(), HingeRows::default());
         r.universal
-            .resize(self.universal.len(), PointRows::default());
+            .resize(self.universal.len(), UniversalRows::default());
         r.fixed.resize(self.fixed.len(), PointRows::default());
         r.slider.resize(self.slider.len(), ());
         r.spring.resize(self.spring.len(), ());
@@ -339,7 +339,7 @@ impl JointSet {
     pub fn prepare_after_relax(&mut self, s: &BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
-            let rows = [&mut self.rows.ball, &mut self.rows.hinge];
+            let rows = (&mut self.rows.ball[..], &mut self.rows.hinge[..]);
             lanes.prepare_after_relax(&mut self.ball, &mut self.hinge, rows, s);
         }
         for_each_type!(self, balls, hinges, (list, rows) => {

@@ -740,9 +740,9 @@ fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {
 /// The point rows the solve prepared for joint `j`.
 fn rows_of(joints: &JointSet, j: JointRef) -> &PointRows<f32> {
     match j {
-        JointRef::Ball(i) => &joints.rows.ball[i],
-        JointRef::Hinge(i) => &joints.rows.hinge[i],
-        JointRef::Universal(i) => &joints.rows.universal[i],
+        JointRef::Ball(i) => &joints.rows.ball[i].point,
+        JointRef::Hinge(i) => &joints.rows.hinge[i].point,
+        JointRef::Universal(i) => &joints.rows.universal[i].point,
     }
 }
 

@@ -29,10 +29,10 @@
 //! joints with a hard cone, no twist limit and no friction (a pile's humans). A type
 //! with any other joint is solved one by one, as are the other joint types.
 
-use super::ball::BallJoint;
+use super::ball::{BallJoint, BallRows};
 use super::body::BodyStates;
-use super::hinge::HingeJoint;
-use super::joint::{AxisRow, JointFrame, PointPart, RowKind};
+use super::hinge::{HingeJoint, HingeRows};
+use super::joint::{AxisRow, JointFrame, PointPart, RowKind, RowState};
 use super::joint_rows::{self, AlignRows, AngularRow, PointRows, Pose};
 use super::limits::{MARGIN, Swing};
 use super::soft::StepContext;
@@ -317,12 +317,29 @@ impl PointX4 {
     /// Copies the rows of the lanes in a tree to their joints' rows (`rows`, by joint):
     /// the tree reads them there, and they are the rows the one-by-one code prepares
     /// (the same code).
-    fn hand_rows_to_trees(&self, l: &Lanes, rows: &mut [PointRows<f32>]) {
+    fn hand_rows_to_trees<R: WithPoint>(&self, l: &Lanes, rows: &mut [R]) {
         if self.in_tree.any() {
             for k in (0..LANES).filter(|&k| is_set(self.in_tree, k)) {
-                rows[l.joint(k)] = self.rows.lane(k);
+                *rows[l.joint(k)].point_mut() = self.rows.lane(k);
             }
         }
+    }
+}
+
+/// The rows of a joint type the lanes bundle: they hold its point rows.
+trait WithPoint {
+    fn point_mut(&mut self) -> &mut PointRows<f32>;
+}
+
+impl WithPoint for BallRows {
+    fn point_mut(&mut self) -> &mut PointRows<f32> {
+        &mut self.point
+    }
+}
+
+impl WithPoint for HingeRows {
+    fn point_mut(&mut self) -> &mut PointRows<f32> {
+        &mut self.point
     }
 }
 
@@ -480,15 +497,15 @@ fn ball_fits(j: &BallJoint) -> bool {
         && matches!(j.swing, Some(Swing::Cone { row, .. }) if row.kind == RowKind::Limit)
 }
 
-/// The cone row of a ball joint that [`ball_fits`].
-fn cone_row(j: &BallJoint) -> AxisRow {
+/// The cone row's state of a ball joint that [`ball_fits`].
+fn cone_state(j: &BallJoint) -> RowState {
     match &j.swing {
         Some(Swing::Cone { row, .. }) => *row,
         _ => unreachable!("ball_fits checked the cone"),
     }
 }
 
-fn cone_row_mut(j: &mut BallJoint) -> &mut AxisRow {
+fn cone_state_mut(j: &mut BallJoint) -> &mut RowState {
     match &mut j.swing {
         Some(Swing::Cone { row, .. }) => row,
         _ => unreachable!("ball_fits checked the cone"),
@@ -611,7 +628,7 @@ impl JointLanes {
         &mut self,
         balls: &mut [BallJoint],
         hinges: &mut [HingeJoint],
-        [ball_rows, hinge_rows]: [&mut Vec<PointRows<f32>>; 2],
+        (ball_rows, hinge_rows): (&mut [BallRows], &mut [HingeRows]),
         s: &BodyStates,
         awake: &[bool],
     ) {
@@ -622,7 +639,7 @@ impl JointLanes {
             };
             let j = |k: usize| &balls[b.lanes.joint(k)];
             b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
-            b.cone.impulse = f4(|k| cone_row(j(k)).impulse);
+            b.cone.impulse = f4(|k| cone_state(j(k)).impulse);
             b.point.direct = mask(|k| is_set(b.lanes.live, k) && j(k).point.direct);
             b.point.in_tree = mask(|k| is_set(b.lanes.live, k) && j(k).point.in_tree);
             b.point.prepare(&b.lanes, &p);
@@ -637,7 +654,7 @@ impl JointLanes {
             h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
             h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
             for (r, row) in h.limit.iter_mut().enumerate() {
-                row.impulse = f4(|k| limit_rows(j(k))[r].impulse);
+                row.impulse = f4(|k| limit_states(j(k))[r].impulse);
             }
             h.point.direct = mask(|k| is_set(h.lanes.live, k) && j(k).point.direct);
             h.point.in_tree = mask(|k| is_set(h.lanes.live, k) && j(k).point.in_tree);
@@ -645,7 +662,7 @@ impl JointLanes {
             h.point.hand_rows_to_trees(&h.lanes, hinge_rows);
             h.align.prepare(&h.lanes, &p);
         }
-        self.update_limits(balls, hinges, s);
+        self.update_limits(balls, hinges, (ball_rows, hinge_rows), s);
     }
 
     /// A later substep's preparation, on the pose the relax pass prepared the rows on:
@@ -654,7 +671,7 @@ impl JointLanes {
         &mut self,
         balls: &mut [BallJoint],
         hinges: &mut [HingeJoint],
-        [ball_rows, hinge_rows]: [&mut Vec<PointRows<f32>>; 2],
+        (ball_rows, hinge_rows): (&mut [BallRows], &mut [HingeRows]),
         s: &BodyStates,
     ) {
         for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
@@ -670,7 +687,7 @@ impl JointLanes {
             h.point.hand_rows_to_trees(&h.lanes, hinge_rows);
             h.align.weigh(&h.lanes, ia, ib);
         }
-        self.update_limits(balls, hinges, s);
+        self.update_limits(balls, hinges, (ball_rows, hinge_rows), s);
     }
 
     /// Measures the live joints' limits one by one and copies their rows in.
@@ -685,6 +702,7 @@ impl JointLanes {
         &mut self,
         balls: &mut [BallJoint],
         hinges: &mut [HingeJoint],
+        (ball_rows, hinge_rows): (&mut [BallRows], &mut [HingeRows]),
         s: &BodyStates,
     ) {
         for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
@@ -693,28 +711,29 @@ impl JointLanes {
             let shaft = Quatx4::from_fn(|k| s.rot[a[k]]).rotate_as_glam(b.shaft_a);
             let far = axis.dot(shaft).simd_gt(b.cos_far);
             for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
-                let j = &mut balls[b.lanes.joints[k] as usize];
+                let i = b.lanes.joints[k] as usize;
+                let (j, rows) = (&mut balls[i], &mut ball_rows[i]);
                 if is_set(far, k) {
-                    let row = cone_row_mut(j);
-                    row.active = false;
-                    row.impulse = 0.0;
+                    rows.swing[0].active = false;
+                    cone_state_mut(j).impulse = 0.0;
                 } else if let Some(sw) = &mut j.swing {
-                    sw.update(&j.frame, s);
+                    sw.update(&mut rows.swing, &j.frame, s);
                 }
             }
-            let j = |k: usize| &balls[b.lanes.joints[k] as usize];
-            b.cone.copy(&b.lanes, |k| cone_row(j(k)));
+            let rows = |k: usize| &ball_rows[b.lanes.joints[k] as usize];
+            b.cone.copy(&b.lanes, |k| rows(k).swing[0]);
         }
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
-                let j = &mut hinges[h.lanes.joints[k] as usize];
+                let i = h.lanes.joints[k] as usize;
+                let j = &mut hinges[i];
                 if let Some(l) = &mut j.limit {
-                    l.update(&j.frame, s);
+                    l.update(&mut hinge_rows[i].limit, &j.frame, s);
                 }
             }
-            let j = |k: usize| &hinges[h.lanes.joints[k] as usize];
+            let rows = |k: usize| &hinge_rows[h.lanes.joints[k] as usize];
             for (r, row) in h.limit.iter_mut().enumerate() {
-                row.copy(&h.lanes, |k| limit_rows(j(k))[r]);
+                row.copy(&h.lanes, |k| rows(k).limit[r]);
             }
         }
     }
@@ -764,7 +783,7 @@ impl JointLanes {
         &mut self,
         s: &mut BodyStates,
         balls: &mut [BallJoint],
-        rows: &mut [PointRows<f32>],
+        rows: &mut [BallRows],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -795,7 +814,7 @@ impl JointLanes {
         &mut self,
         s: &mut BodyStates,
         hinges: &mut [HingeJoint],
-        rows: &mut [PointRows<f32>],
+        rows: &mut [HingeRows],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -829,7 +848,7 @@ impl JointLanes {
                 if !is_set(b.point.direct, k) {
                     j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
                 }
-                cone_row_mut(j).impulse = b.cone.impulse.as_array()[k];
+                cone_state_mut(j).impulse = b.cone.impulse.as_array()[k];
             }
         }
         for h in self.hinges.iter().filter(|x| x.lanes.is_live()) {
@@ -848,8 +867,8 @@ impl JointLanes {
     }
 }
 
-/// The range rows of a hinge that [`hinge_fits`].
-fn limit_rows(j: &HingeJoint) -> [AxisRow; 2] {
+/// The range rows' states of a hinge that [`hinge_fits`].
+fn limit_states(j: &HingeJoint) -> [RowState; 2] {
     j.limit.as_ref().expect("hinge_fits checked the range").rows
 }
 

@@ -7,7 +7,7 @@
 //! the *shaft* to body1.
 
 use super::body::BodyStates;
-use super::joint::{AlignPart, AxisRow, JointFrame, RowKind, unwrap_angle};
+use super::joint::{AlignPart, AxisRow, JointFrame, RowKind, RowState, unwrap_angle};
 use super::soft::StepContext;
 use crate::scene::{AngleRange, LimitStyle, SwingLimit, TwistLimit};
 use glam::{Quat, Vec3};
@@ -24,6 +24,12 @@ pub fn row_kind(style: LimitStyle) -> RowKind {
         LimitStyle::Soft { torque } => RowKind::SoftLimit { k: torque },
     }
 }
+
+/// The rows a swing limit sets at each substep ([`JointSolve::Rows`] of its joint): the
+/// cone's first, the pyramid's four (the 0° cone keeps its alignment rows itself).
+///
+/// [`JointSolve::Rows`]: super::joint::JointSolve::Rows
+pub(crate) type SwingRows = [AxisRow; 4];
 
 /// A swing limit in body space.
 // The 0° cone's rows (an `AlignPart`, its impulses' turns in SIMD lanes) are larger
@@ -43,8 +49,8 @@ pub enum Swing {
         half_angle: f32,
         /// Its cosine: a shaft whose cosine with the axis is at least this is inside.
         cos_half: f32,
-        /// The row.
-        row: AxisRow,
+        /// The row's state (its row is the first of [`SwingRows`]).
+        row: RowState,
     },
     /// A 0° cone: shaft and axis locked together (two bilateral rows).
     Tight(AlignPart),
@@ -61,8 +67,8 @@ pub enum Swing {
         shaft_a: Vec3,
         /// Half-angles.
         half: [f32; 2],
-        /// One row per side plane.
-        rows: [AxisRow; 4],
+        /// One row per side plane: their states (the rows are [`SwingRows`]).
+        rows: [RowState; 4],
     },
 }
 
@@ -88,7 +94,7 @@ impl Swing {
                         shaft_a: f.dir_in_a(s, shaft),
                         half_angle,
                         cos_half: half_angle.cos(),
-                        row: AxisRow::new(kind),
+                        row: RowState::new(kind),
                     }
                 }
             }
@@ -106,7 +112,7 @@ impl Swing {
                     side2_b: f.dir_in_b(s, v),
                     shaft_a: f.dir_in_a(s, shaft),
                     half: [half_angle1, half_angle2],
-                    rows: [AxisRow::new(kind); 4],
+                    rows: [RowState::new(kind); 4],
                 }
             }
         }
@@ -126,7 +132,7 @@ impl Swing {
     }
 
     /// Recomputes the rows from the current pose.
-    pub fn update(&mut self, f: &JointFrame, s: &BodyStates) {
+    pub(crate) fn update(&mut self, set: &mut SwingRows, f: &JointFrame, s: &BodyStates) {
         match self {
             Swing::Cone {
                 axis_b,
@@ -145,7 +151,7 @@ impl Swing {
                 } else {
                     a.any_orthonormal_vector()
                 };
-                row.set(f, s, -n, *half_angle - phi, MARGIN);
+                set[0].set(row, f, s, (-n, *half_angle - phi), MARGIN);
             }
             Swing::Tight(p) => p.prepare(f, s),
             Swing::Pyramid {
@@ -160,10 +166,10 @@ impl Swing {
                 let normals =
                     Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half);
                 let sh = s.rot[f.a] * *shaft_a;
-                for (row, n) in rows.iter_mut().zip(normals) {
+                for ((row, state), n) in set.iter_mut().zip(rows).zip(normals) {
                     // d(shaft·n)/dt = (ω_a − ω_b)·(shaft × n).
                     let c = -sh.dot(n);
-                    row.set(f, s, -sh.cross(n), c, MARGIN);
+                    row.set(state, f, s, (-sh.cross(n), c), MARGIN);
                 }
             }
         }
@@ -214,23 +220,30 @@ impl Swing {
         }
     }
 
-    /// Re-applies accumulated impulses.
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+    /// Re-applies accumulated impulses along the rows `set`.
+    pub(crate) fn warm_start(&self, set: &SwingRows, f: &JointFrame, s: &mut BodyStates) {
         match self {
-            Swing::Cone { row, .. } => row.warm_start(f, s),
+            Swing::Cone { row, .. } => set[0].warm_start(row.impulse, f, s),
             Swing::Tight(p) => p.warm_start(f, s),
-            Swing::Pyramid { rows, .. } => rows.iter().for_each(|r| r.warm_start(f, s)),
+            Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
+                .for_each(|(r, state)| r.warm_start(state.impulse, f, s)),
         }
     }
 
-    /// One update of every row.
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    /// One update of every row of `set`.
+    pub(crate) fn solve(
+        &mut self,
+        set: &SwingRows,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         match self {
-            Swing::Cone { row, .. } => row.solve(f, s, ctx, use_bias),
+            Swing::Cone { row, .. } => set[0].solve(&mut row.impulse, f, s, ctx, use_bias),
             Swing::Tight(p) => p.solve(f, s, ctx, use_bias),
-            Swing::Pyramid { rows, .. } => {
-                rows.iter_mut().for_each(|r| r.solve(f, s, ctx, use_bias))
-            }
+            Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
+                .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias)),
         }
     }
 
@@ -256,11 +269,12 @@ impl Swing {
             }
         }
         let mut now = *self;
-        now.update(f, s);
+        let mut set = SwingRows::default();
+        now.update(&mut set, f, s);
         match &now {
-            Swing::Cone { row, .. } => row.project(f, s),
+            Swing::Cone { .. } => set[0].project(f, s),
             Swing::Tight(p) => p.project(f, s),
-            Swing::Pyramid { rows, .. } => rows.iter().for_each(|r| r.project(f, s)),
+            Swing::Pyramid { .. } => set.iter().for_each(|r| r.project(f, s)),
         }
     }
 
@@ -354,9 +368,12 @@ pub struct AngleLimit {
     pub gauge: AngleGauge,
     /// Bounds (rad).
     pub range: AngleRange,
-    /// Lower and upper rows.
-    pub rows: [AxisRow; 2],
+    /// The states of the lower and upper rows (the rows are [`RangeRows`]).
+    pub rows: [RowState; 2],
 }
+
+/// The lower and upper rows an [`AngleLimit`] sets at each substep.
+pub(crate) type RangeRows = [AxisRow; 2];
 
 impl AngleLimit {
     /// A limit about the world `axis` at rest.
@@ -371,7 +388,7 @@ impl AngleLimit {
         AngleLimit {
             gauge: AngleGauge::new(f, s, axis),
             range,
-            rows: [AxisRow::new(kind); 2],
+            rows: [RowState::new(kind); 2],
         }
     }
 
@@ -397,11 +414,12 @@ impl AngleLimit {
     }
 
     /// Measures the angle (remembering it for unwrapping) and sets the rows.
-    pub fn update(&mut self, f: &JointFrame, s: &BodyStates) {
+    pub(crate) fn update(&mut self, set: &mut RangeRows, f: &JointFrame, s: &BodyStates) {
         let (axis, angle) = self.gauge.measure(f, s);
         self.gauge.angle = angle;
-        self.rows[0].set(f, s, axis, angle - self.range.min, MARGIN);
-        self.rows[1].set(f, s, -axis, self.range.max - angle, MARGIN);
+        let [lower, upper] = &mut self.rows;
+        set[0].set(lower, f, s, (axis, angle - self.range.min), MARGIN);
+        set[1].set(upper, f, s, (-axis, self.range.max - angle), MARGIN);
     }
 
     /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
@@ -415,9 +433,9 @@ impl AngleLimit {
         (self.range.min - a).max(a - self.range.max).max(0.0)
     }
 
-    /// Re-applies accumulated impulses.
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
-        self.rows.iter().for_each(|r| r.warm_start(f, s));
+    /// Re-applies accumulated impulses along the rows `set`.
+    pub(crate) fn warm_start(&self, set: &RangeRows, f: &JointFrame, s: &mut BodyStates) {
+        (set.iter().zip(&self.rows)).for_each(|(r, state)| r.warm_start(state.impulse, f, s));
     }
 
     /// Position projection of the range, measured on the current pose without touching
@@ -428,15 +446,22 @@ impl AngleLimit {
             return;
         }
         let mut now = *self;
-        now.update(f, s);
-        now.rows.iter().for_each(|r| r.project(f, s));
+        let mut set = RangeRows::default();
+        now.update(&mut set, f, s);
+        set.iter().for_each(|r| r.project(f, s));
     }
 
-    /// One update of both rows.
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
-        self.rows
-            .iter_mut()
-            .for_each(|r| r.solve(f, s, ctx, use_bias));
+    /// One update of both rows of `set`.
+    pub(crate) fn solve(
+        &mut self,
+        set: &RangeRows,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
+        (set.iter().zip(&mut self.rows))
+            .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias));
     }
 }
 

@@ -3,9 +3,11 @@
 //! Doom 3 swing limit on shaft1 and PyODE lo/hi stops about each shaft.
 
 use super::body::BodyStates;
-use super::joint::{AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
+use super::joint::{
+    AxisRow, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart, RowState,
+};
 use super::joint_rows::PointRows;
-use super::limits::{AngleLimit, Swing};
+use super::limits::{AngleLimit, RangeRows, Swing, SwingRows};
 use super::soft::StepContext;
 use glam::Vec3;
 
@@ -22,14 +24,25 @@ pub struct UniversalJoint {
     pub shaft_b: Vec3,
     /// `shaft1 · shaft2` at rest.
     pub rest_dot: f32,
-    /// The row keeping `shaft1 · shaft2` at rest: `Ċ = (ω_a − ω_b)·(s₁ × s₂)`.
-    pub cross_row: AxisRow,
+    /// The state of the row keeping `shaft1 · shaft2` at rest:
+    /// `Ċ = (ω_a − ω_b)·(s₁ × s₂)`.
+    pub cross_row: RowState,
     /// Swing limit on shaft 1.
     pub swing: Option<Swing>,
     /// Stops about shaft 1 and shaft 2.
     pub ranges: Option<[AngleLimit; 2]>,
     /// Joint friction.
     pub friction: FrictionMotor,
+}
+
+/// The rows a step prepares for a universal joint ([`JointSolve::Rows`]): its point's,
+/// its cross row, its swing limit's and its stops'.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct UniversalRows {
+    pub point: PointRows<f32>,
+    pub cross: AxisRow,
+    pub swing: SwingRows,
+    pub ranges: [RangeRows; 2],
 }
 
 impl UniversalJoint {
@@ -45,81 +58,80 @@ impl UniversalJoint {
         }
     }
 
-    /// The cross row measured on the current pose (impulse kept).
+    /// The cross row measured on the current pose (an equality: always active, its
+    /// impulse kept).
     fn cross_row_now(&self, s: &BodyStates) -> AxisRow {
         let f = &self.frame;
         let s1 = s.rot[f.a] * self.shaft_a;
         let s2 = s.rot[f.b] * self.shaft_b;
-        let mut row = self.cross_row;
-        row.set(
-            f,
-            s,
-            s1.cross(s2),
-            s1.dot(s2) - self.rest_dot,
-            f32::INFINITY,
-        );
+        let mut state = self.cross_row;
+        let mut row = AxisRow::default();
+        let value = (s1.cross(s2), s1.dot(s2) - self.rest_dot);
+        row.set(&mut state, f, s, value, f32::INFINITY);
         row
     }
 
     /// The cross row, the swing and the axis ranges on the current pose and inertias.
-    fn set_angular_rows(&mut self, s: &BodyStates) {
+    fn set_angular_rows(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
         let f = self.frame;
-        self.cross_row = self.cross_row_now(s);
+        rows.cross = self.cross_row_now(s);
         if let Some(sw) = &mut self.swing {
-            sw.update(&f, s);
+            sw.update(&mut rows.swing, &f, s);
         }
         if let Some(r) = &mut self.ranges {
-            r.iter_mut().for_each(|l| l.update(&f, s));
+            (r.iter_mut().zip(&mut rows.ranges)).for_each(|(l, set)| l.update(set, &f, s));
         }
     }
 }
 
 impl JointSolve for UniversalJoint {
-    type Rows = PointRows<f32>;
+    type Rows = UniversalRows;
 
     fn frame(&self) -> &JointFrame {
         &self.frame
     }
 
-    fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::prepare(rows, &self.frame, s);
-        self.set_angular_rows(s);
+    fn prepare(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
+        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.set_angular_rows(rows, s);
     }
 
-    fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::weigh(rows, &self.frame, s);
-        self.set_angular_rows(s);
+    fn prepare_after_relax(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
+        PointPart::weigh(&mut rows.point, &self.frame, s);
+        self.set_angular_rows(rows, s);
     }
 
-    fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
+    fn warm_start(&self, rows: &UniversalRows, s: &mut BodyStates) {
         let f = &self.frame;
         self.friction.warm_start(f, s);
         if let Some(sw) = &self.swing {
-            sw.warm_start(f, s);
+            sw.warm_start(&rows.swing, f, s);
         }
         if let Some(r) = &self.ranges {
-            r.iter().for_each(|l| l.warm_start(f, s));
+            (r.iter().zip(&rows.ranges)).for_each(|(l, set)| l.warm_start(set, f, s));
         }
-        self.cross_row.warm_start(f, s);
-        self.point.warm_start(rows, f, s);
+        rows.cross.warm_start(self.cross_row.impulse, f, s);
+        self.point.warm_start(&rows.point, f, s);
     }
 
     fn solve(
         &mut self,
-        rows: &mut PointRows<f32>,
+        rows: &mut UniversalRows,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
     ) {
         let f = &self.frame;
         if let Some(sw) = &mut self.swing {
-            sw.solve(f, s, ctx, use_bias);
+            sw.solve(&rows.swing, f, s, ctx, use_bias);
         }
         if let Some(r) = &mut self.ranges {
-            r.iter_mut().for_each(|l| l.solve(f, s, ctx, use_bias));
+            (r.iter_mut().zip(&rows.ranges))
+                .for_each(|(l, set)| l.solve(set, f, s, ctx, use_bias));
         }
-        self.cross_row.solve(f, s, ctx, use_bias);
-        self.point.solve(rows, f, s, ctx, use_bias);
+        rows.cross
+            .solve(&mut self.cross_row.impulse, f, s, ctx, use_bias);
+        self.point.solve(&mut rows.point, f, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {
