@@ -84,7 +84,8 @@ impl JointSolve for BallJoint {
         if let Some(t) = &mut self.twist {
             t.solve(&rows.twist, &self.frame, s, ctx, use_bias);
         }
-        self.point.solve(&mut rows.point, &self.frame, s, ctx, use_bias);
+        self.point
+            .solve(&mut rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

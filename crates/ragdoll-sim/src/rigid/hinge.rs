@@ -4,8 +4,8 @@
 
 use super::body::BodyStates;
 use super::joint::{AlignPart, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart};
-use super::joint_rows::PointRows;
-use super::limits::{AngleGauge, AngleLimit, RangeRows};
+use super::joint_rows::{AlignRows, PointRows};
+use super::limits::{AngleLimit, RangeRows};
 use super::soft::StepContext;
 use glam::Vec3A;
 
@@ -18,19 +18,18 @@ pub struct HingeJoint {
     pub point: PointPart,
     /// The axis, kept aligned in both bodies.
     pub align: AlignPart,
-    /// The hinge angle (for drawing and the range).
-    pub gauge: AngleGauge,
-    /// The range, if limited.
+    /// The range, if limited (its gauge measures the hinge angle).
     pub limit: Option<AngleLimit>,
     /// Joint friction.
     pub friction: FrictionMotor,
 }
 
-/// The rows a step prepares for a hinge ([`JointSolve::Rows`]): its point's and its
-/// range's (the alignment keeps its own).
+/// The rows a step prepares for a hinge ([`JointSolve::Rows`]): its point's, its
+/// alignment's and its range's.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct HingeRows {
     pub point: PointRows<f32>,
+    pub align: AlignRows<f32>,
     pub limit: RangeRows,
 }
 
@@ -57,13 +56,13 @@ impl JointSolve for HingeJoint {
 
     fn prepare(&mut self, rows: &mut HingeRows, s: &BodyStates) {
         PointPart::prepare(&mut rows.point, &self.frame, s);
-        self.align.prepare(&self.frame, s);
+        self.align.prepare(&mut rows.align, &self.frame, s);
         self.update_limit(&mut rows.limit, s);
     }
 
     fn prepare_after_relax(&mut self, rows: &mut HingeRows, s: &BodyStates) {
         PointPart::weigh(&mut rows.point, &self.frame, s);
-        self.align.weigh(&self.frame, s);
+        AlignPart::weigh(&mut rows.align, &self.frame, s);
         self.update_limit(&mut rows.limit, s);
     }
 
@@ -72,7 +71,7 @@ impl JointSolve for HingeJoint {
         if let Some(l) = &self.limit {
             l.warm_start(&rows.limit, &self.frame, s);
         }
-        self.align.warm_start(&self.frame, s);
+        self.align.warm_start(&rows.align, &self.frame, s);
         self.point.warm_start(&rows.point, &self.frame, s);
     }
 
@@ -86,8 +85,10 @@ impl JointSolve for HingeJoint {
         if let Some(l) = &mut self.limit {
             l.solve(&rows.limit, &self.frame, s, ctx, use_bias);
         }
-        self.align.solve(&self.frame, s, ctx, use_bias);
-        self.point.solve(&mut rows.point, &self.frame, s, ctx, use_bias);
+        self.align
+            .solve(&mut rows.align, &self.frame, s, ctx, use_bias);
+        self.point
+            .solve(&mut rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

@@ -344,10 +344,11 @@ impl AngularLock3 {
     }
 }
 
-/// Keeps a direction fixed in a aligned with one fixed in b: one joint's
-/// [`AlignRows`] (the hinge's rotational part; a 0° cone), its directions and
-/// accumulated impulse. Like [`PointPart`], the rows and their 2×2 effective mass are
-/// prepared once per substep and shared by the biased iterations.
+/// Keeps a direction fixed in a aligned with one fixed in b (the hinge's rotational
+/// part; a 0° cone): its directions and accumulated impulse. Its [`AlignRows`] are
+/// passed in (the hinge's [`JointSolve::Rows`], the 0° cone's own); like [`PointPart`]'s,
+/// the rows and their 2×2 effective mass are prepared once per substep and shared by the
+/// biased iterations.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AlignPart {
     /// Direction in a's space.
@@ -356,8 +357,6 @@ pub struct AlignPart {
     pub local_b: Vec3,
     /// Accumulated impulse (two components along the current perpendiculars).
     pub impulse: [f32; 2],
-    /// The rows at `prepare`.
-    rows: AlignRows<f32>,
 }
 
 impl AlignPart {
@@ -378,37 +377,43 @@ impl AlignPart {
     }
 
     /// Evaluates the rows, the error and the effective mass on the current positions.
-    pub fn prepare(&mut self, f: &JointFrame, s: &BodyStates) {
+    pub(crate) fn prepare(&self, rows: &mut AlignRows<f32>, f: &JointFrame, s: &BodyStates) {
         let local = [one(self.local_a), one(self.local_b)];
-        self.rows.prepare(local, &Pose::of(s, f.a, f.b), true);
+        rows.prepare(local, &Pose::of(s, f.a, f.b), true);
     }
 
     /// The turns and the effective mass for the rows of the last [`AlignPart::prepare`]
     /// and the inertias now: all that changes when only the inertias were refreshed
     /// since.
-    pub fn weigh(&mut self, f: &JointFrame, s: &BodyStates) {
-        self.rows.weigh([inertia(s, f.a), inertia(s, f.b)], true);
+    pub(crate) fn weigh(rows: &mut AlignRows<f32>, f: &JointFrame, s: &BodyStates) {
+        rows.weigh([inertia(s, f.a), inertia(s, f.b)], true);
     }
 
     /// Re-applies the accumulated impulse along the rows (after [`AlignPart::prepare`]).
-    pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
+    pub(crate) fn warm_start(&self, rows: &AlignRows<f32>, f: &JointFrame, s: &mut BodyStates) {
         let mut v = Velocities::of(s, f.a, f.b);
-        self.rows.apply(&mut v, self.impulse, true);
+        rows.apply(&mut v, self.impulse, true);
         v.store(s, f.a, f.b);
     }
 
     /// One soft 2×2 block update; the relax pass (`use_bias` false) first prepares
     /// again, since the positions have moved.
-    pub fn solve(&mut self, f: &JointFrame, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    pub(crate) fn solve(
+        &mut self,
+        rows: &mut AlignRows<f32>,
+        f: &JointFrame,
+        s: &mut BodyStates,
+        ctx: &StepContext,
+        use_bias: bool,
+    ) {
         if !use_bias {
-            self.prepare(f, s);
+            self.prepare(rows, f, s);
         }
-        if !self.rows.on {
+        if !rows.on {
             return;
         }
         let mut v = Velocities::of(s, f.a, f.b);
-        self.rows
-            .solve(&mut v, &mut self.impulse, &Soft::new(ctx, use_bias));
+        rows.solve(&mut v, &mut self.impulse, &Soft::new(ctx, use_bias));
         v.store(s, f.a, f.b);
     }
 

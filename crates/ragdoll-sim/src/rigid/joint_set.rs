@@ -6,12 +6,12 @@ use super::body::{BodyInfo, BodyStates, Motions};
 use super::fixed::FixedJoint;
 use super::hinge::{HingeJoint, HingeRows};
 use super::joint::{
-    AlignPart, AngularLock3, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart, RowState,
-    RowKind,
+    AlignPart, AngularLock3, FreeTurns, FrictionMotor, JointFrame, JointSolve, PointPart, RowKind,
+    RowState,
 };
 use super::joint_rows::PointRows;
 use super::joint_wide::JointLanes;
-use super::limits::{AngleGauge, AngleLimit, Swing};
+use super::limits::{AngleLimit, Swing};
 use super::project::{PairPose, keep_pair_momentum};
 use super::slider::SliderJoint;
 use super::soft::StepContext;
@@ -203,7 +203,6 @@ impl JointSet {
                         frame,
                         point: PointPart::default(),
                         align: AlignPart::new(&frame, s, *axis),
-                        gauge: AngleGauge::new(&frame, s, *axis),
                         limit: limit
                             .map(|r| AngleLimit::new(&frame, s, *axis, r, LimitStyle::Hard)),
                         friction: friction(&frame),
@@ -536,8 +535,8 @@ impl JointSet {
                 .limit
                 .as_ref()
                 .map_or(LimitShape::None, |l| LimitShape::Arc {
-                    axis: s.rot[j.frame.b] * j.gauge.axis_b,
-                    reference: s.rot[j.frame.b] * j.gauge.ref_b,
+                    axis: s.rot[j.frame.b] * l.gauge.axis_b,
+                    reference: s.rot[j.frame.b] * l.gauge.ref_b,
                     min: l.range.min,
                     max: l.range.max,
                 });

@@ -8,6 +8,7 @@
 
 use super::body::BodyStates;
 use super::joint::{AlignPart, AxisRow, JointFrame, RowKind, RowState, unwrap_angle};
+use super::joint_rows::AlignRows;
 use super::soft::StepContext;
 use crate::scene::{AngleRange, LimitStyle, SwingLimit, TwistLimit};
 use glam::{Quat, Vec3};
@@ -31,6 +32,17 @@ pub fn row_kind(style: LimitStyle) -> RowKind {
 /// [`JointSolve::Rows`]: super::joint::JointSolve::Rows
 pub(crate) type SwingRows = [AxisRow; 4];
 
+/// A 0° cone's alignment and its rows: the one limit that keeps its rows itself
+/// (rare, and the only swing with two-dimensional rows, which [`SwingRows`] would
+/// otherwise carry for every swing).
+#[derive(Clone, Copy, Debug)]
+pub struct TightCone {
+    /// Shaft in a, axis in b, and their impulse.
+    pub part: AlignPart,
+    /// The rows at the last update.
+    rows: AlignRows<f32>,
+}
+
 /// A swing limit in body space.
 // The 0° cone's rows (an `AlignPart`, its impulses' turns in SIMD lanes) are larger
 // than a cone's: boxing them would put a pointer in the hot loop and lose `Copy`, which
@@ -53,7 +65,7 @@ pub enum Swing {
         row: RowState,
     },
     /// A 0° cone: shaft and axis locked together (two bilateral rows).
-    Tight(AlignPart),
+    Tight(TightCone),
     /// Shaft inside four planes through the axis, tilted by ±half_angle1 towards `side1`
     /// and ±half_angle2 towards `side2`: `C_k = −shaft · n_k`.
     Pyramid {
@@ -85,9 +97,12 @@ impl Swing {
                 if half_angle < TIGHT_CONE && kind == RowKind::Limit {
                     // Align the shaft (in a) with the axis (in b). At rest they may differ;
                     // the tight cone then holds the shaft on the axis from the first step.
-                    let mut p = AlignPart::new(f, s, axis);
-                    p.local_a = f.dir_in_a(s, shaft);
-                    Swing::Tight(p)
+                    let mut part = AlignPart::new(f, s, axis);
+                    part.local_a = f.dir_in_a(s, shaft);
+                    Swing::Tight(TightCone {
+                        part,
+                        rows: AlignRows::default(),
+                    })
                 } else {
                     Swing::Cone {
                         axis_b: f.dir_in_b(s, axis),
@@ -153,7 +168,7 @@ impl Swing {
                 };
                 set[0].set(row, f, s, (-n, *half_angle - phi), MARGIN);
             }
-            Swing::Tight(p) => p.prepare(f, s),
+            Swing::Tight(t) => t.part.prepare(&mut t.rows, f, s),
             Swing::Pyramid {
                 axis_b,
                 side1_b,
@@ -197,7 +212,7 @@ impl Swing {
                 let sh = s.rot[f.a] * *shaft_a;
                 (a.dot(sh).clamp(-1.0, 1.0).acos() - half_angle).max(0.0)
             }
-            Swing::Tight(p) => {
+            Swing::Tight(TightCone { part: p, .. }) => {
                 let a = s.rot[f.b] * p.local_b;
                 let sh = s.rot[f.a] * p.local_a;
                 a.dot(sh).clamp(-1.0, 1.0).acos()
@@ -224,9 +239,10 @@ impl Swing {
     pub(crate) fn warm_start(&self, set: &SwingRows, f: &JointFrame, s: &mut BodyStates) {
         match self {
             Swing::Cone { row, .. } => set[0].warm_start(row.impulse, f, s),
-            Swing::Tight(p) => p.warm_start(f, s),
-            Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
-                .for_each(|(r, state)| r.warm_start(state.impulse, f, s)),
+            Swing::Tight(t) => t.part.warm_start(&t.rows, f, s),
+            Swing::Pyramid { rows, .. } => {
+                (set.iter().zip(rows)).for_each(|(r, state)| r.warm_start(state.impulse, f, s))
+            }
         }
     }
 
@@ -241,7 +257,7 @@ impl Swing {
     ) {
         match self {
             Swing::Cone { row, .. } => set[0].solve(&mut row.impulse, f, s, ctx, use_bias),
-            Swing::Tight(p) => p.solve(f, s, ctx, use_bias),
+            Swing::Tight(t) => t.part.solve(&mut t.rows, f, s, ctx, use_bias),
             Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
                 .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias)),
         }
@@ -273,7 +289,7 @@ impl Swing {
         now.update(&mut set, f, s);
         match &now {
             Swing::Cone { .. } => set[0].project(f, s),
-            Swing::Tight(p) => p.project(f, s),
+            Swing::Tight(t) => t.part.project(f, s),
             Swing::Pyramid { .. } => set.iter().for_each(|r| r.project(f, s)),
         }
     }
@@ -284,7 +300,7 @@ impl Swing {
             Swing::Cone {
                 axis_b, half_angle, ..
             } => (s.rot[f.b] * *axis_b, *half_angle),
-            Swing::Tight(p) => (s.rot[f.b] * p.local_b, 0.0),
+            Swing::Tight(t) => (s.rot[f.b] * t.part.local_b, 0.0),
             Swing::Pyramid { axis_b, half, .. } => (s.rot[f.b] * *axis_b, half[0].max(half[1])),
         }
     }

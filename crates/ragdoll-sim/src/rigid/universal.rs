@@ -126,8 +126,7 @@ impl JointSolve for UniversalJoint {
             sw.solve(&rows.swing, f, s, ctx, use_bias);
         }
         if let Some(r) = &mut self.ranges {
-            (r.iter_mut().zip(&rows.ranges))
-                .for_each(|(l, set)| l.solve(set, f, s, ctx, use_bias));
+            (r.iter_mut().zip(&rows.ranges)).for_each(|(l, set)| l.solve(set, f, s, ctx, use_bias));
         }
         rows.cross
             .solve(&mut self.cross_row.impulse, f, s, ctx, use_bias);
