@@ -320,6 +320,16 @@ impl JointSet {
         });
     }
 
+    /// Gives back the rows of an in-place solve: a world at rest, or one now solved in
+    /// batches (whose own arrays hold the rows), keeps none.
+    pub fn release_rows(&mut self) {
+        if self.rows.ball.capacity() + self.rows.hinge.capacity() > 0
+            || self.rows.universal.capacity() + self.rows.fixed.capacity() > 0
+        {
+            self.rows = JointRows::default();
+        }
+    }
+
     /// Sizes each type's rows to its joints. Entries are overwritten by the preparation
     /// of their joint before any read, so kept or fresh they give the same solve; the
     /// arrays keep their capacity from step to step (a batch's, from batch to batch).

@@ -321,6 +321,7 @@ pub fn solve_islands(
         substeps::solve(s, motion, joints, pairs, awake, buffers, p);
         return;
     }
+    joints.release_rows();
     let batch_of_island = numbering.deal(joints, pairs);
     let batches = batch_of_island.last().map_or(0, |&b| b as usize + 1);
     let batch_of = |a: usize, b: usize| numbering.of(a, b).map_or(NONE, |t| batch_of_island[t]);

@@ -71,6 +71,7 @@ pub fn step(
         // back (a step waking it pays for growing them once).
         *buffers = SolveBuffers::default();
         *tasks = IslandTasks::default();
+        joints.release_rows();
         clock.finish(times);
         return;
     }
