@@ -587,6 +587,42 @@ mod tests {
         }
     }
 
+    /// The rows a step prepares for the joints live in the arrays being solved: a world
+    /// solved in batches holds none of its own (each batch's gathered arrays do), one
+    /// solved in place holds one per joint while it moves and gives them back at rest.
+    #[test]
+    fn joint_rows_live_in_the_arrays_being_solved() {
+        let scene = pile(20);
+        let mut batched = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
+        let mut in_place = MultibodyWorld::new(&scene).unwrap_or_else(|e| panic!("{e}"));
+        batched.island_tasks.in_place = Some(false);
+        in_place.island_tasks.in_place = Some(true);
+        let held = |w: &MultibodyWorld| {
+            let r = &w.joints.rows;
+            r.ball.capacity() + r.hinge.capacity() + r.universal.capacity() + r.fixed.capacity()
+        };
+        for _ in 0..5 {
+            batched.step();
+            in_place.step();
+        }
+        assert_eq!(held(&batched), 0, "the batched world holds joint rows");
+        let j = &in_place.joints;
+        assert!(!j.ball.is_empty() && !j.hinge.is_empty());
+        assert_eq!(
+            [j.rows.ball.len(), j.rows.hinge.len()],
+            [j.ball.len(), j.hinge.len()],
+            "in place, one row set per joint"
+        );
+        let mut frames = 0;
+        while !in_place.sample().all_asleep {
+            in_place.step();
+            frames += 1;
+            assert!(frames < 600, "the pile did not settle");
+        }
+        in_place.step();
+        assert_eq!(held(&in_place), 0, "a world at rest keeps its joint rows");
+    }
+
     /// The shipped pile scene with `count` humans.
     fn pile(count: u32) -> SceneDesc {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
