@@ -44,10 +44,9 @@ pub struct TightCone {
 }
 
 /// A swing limit in body space.
-// The 0° cone's rows (an `AlignPart`, its impulses' turns in SIMD lanes) are larger
-// than a cone's: boxing them would put a pointer in the hot loop and lose `Copy`, which
-// the projection uses to measure a limit without touching its rows. Limited ball joints
-// are one per figure joint, a few dozen bytes each.
+// The 0° cone (a `TightCone`, with its rows) is the largest variant: boxing it would
+// put a pointer in the hot loop and lose `Copy`, which the projection uses to measure a
+// limit without touching the step's rows. It sets the size of every swing (132 B).
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Swing {
