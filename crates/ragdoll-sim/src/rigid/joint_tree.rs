@@ -174,7 +174,8 @@ pub struct JointTrees {
     built_from: Vec<f32>,
     built_joints: Vec<(usize, usize)>,
     /// Scratch of `solve`, kept between calls so the substeps allocate nothing: each
-    /// body node's linear and angular value, each joint node's.
+    /// body node's linear and angular value, each joint node's. Between solves the
+    /// bodies' values are zero (a solve zeroes them as it applies them).
     x_lin: Vec<Vec3A>,
     x_ang: Vec<Vec3A>,
     x_joint: Vec<Vec3A>,
@@ -589,11 +590,14 @@ impl JointTrees {
             x_joint,
             ..
         } = self;
-        // Right-hand sides: zero for bodies, −r for joints.
-        x_lin.clear();
-        x_lin.resize(bodies.len(), Vec3A::ZERO);
-        x_ang.clear();
-        x_ang.resize(bodies.len(), Vec3A::ZERO);
+        // Right-hand sides: zero for bodies (the apply below leaves them zero for the
+        // next solve), −r for joints.
+        if x_lin.len() != bodies.len() || x_ang.len() != bodies.len() {
+            x_lin.clear();
+            x_lin.resize(bodies.len(), Vec3A::ZERO);
+            x_ang.clear();
+            x_ang.resize(bodies.len(), Vec3A::ZERO);
+        }
         x_joint.clear();
         x_joint.extend(nodes.iter().map(|node| {
             let cdot = s.point_velocity(node.b, node.rb) - s.point_velocity(node.a, node.ra);
@@ -644,10 +648,12 @@ impl JointTrees {
             }
         }
         // Apply: bodies get s_m Δv', each joint's accumulated impulse decays by s_i.
-        for (k, body) in bodies.iter().enumerate() {
+        // Each body's values are zeroed as they are read: the next solve's right-hand
+        // side.
+        for ((body, lin), ang) in bodies.iter().zip(x_lin.iter_mut()).zip(x_ang.iter_mut()) {
             let b = body.body;
-            s.lin_vel[b] += x_lin[k] * soft.mass_scale;
-            s.ang_vel[b] += x_ang[k] * soft.mass_scale;
+            s.lin_vel[b] += std::mem::take(lin) * soft.mass_scale;
+            s.ang_vel[b] += std::mem::take(ang) * soft.mass_scale;
         }
         for (node, &y) in nodes.iter().zip(x_joint.iter()) {
             let lambda = -y;
