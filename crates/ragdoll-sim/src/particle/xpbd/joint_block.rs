@@ -33,13 +33,13 @@
 
 use super::super::bone::{Bone, Side};
 use super::super::joints::{Joint, JointType, hinge_turn_ratio};
-use super::super::limits::perpendicular;
-use super::joints::{Anchor, move_linear, rot, swing_correction};
+use super::super::limits::{Swing, SwingLimit, perpendicular};
+use super::joints::{Anchor, move_linear, rot};
 use super::particles::XParticles;
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DMat3, DVec3, Quat, Vec3};
 
 /// Most rows of a block: a point (3), a fixed joint's orientation (3), a swing limit
-/// and its twist and axis limits.
+/// (two at a pyramid's corner) and its twist and axis limits.
 const MAX_ROWS: usize = 10;
 
 /// Rows of the point, first in every block.
@@ -291,13 +291,8 @@ pub(crate) fn solve(
         _ => {}
     }
     let alpha = j.limit_compliance / (h * h);
-    if let Some(s) = &j.swing
-        && let Some(dphi) = swing_correction(s, bones, j.a, j.b, j.slack)
-    {
-        let l = dphi.length();
-        if l > 1e-9 && l.is_finite() {
-            rows.angle(dphi / l, l, alpha);
-        }
+    if let Some(s) = &j.swing {
+        swing_rows(&mut rows, s, qa, qb, j.slack, alpha);
     }
     for l in &j.angle_limits {
         // `C = φ − clamp(φ)` along its gradient `g` (per unit turn of body1), the range
@@ -325,6 +320,58 @@ pub(crate) fn solve(
     if let Some(i) = b.bone {
         let shift = (lin * b.inv_mass).as_vec3();
         move_linear(p, bones, i as usize, shift, (inv_b * ang_b).as_vec3());
+    }
+}
+
+/// The rows of swing limit `s` past its cone or pyramid widened by `slack` (rad,
+/// `Joint::slack`), for body1 at `qa` and body2 at `qb`: each a one-sided angle
+/// `C = φ − bound` along its own gradient `g = ∂φ/∂ω` (per unit turn `ω` of body1),
+/// a turn of `(bound − φ) / |g|` about `g / |g|` restoring it to first order.
+/// - Cone: `φ = atan2(|a × s|, a · s)` between the shaft `s` and the axis `a`,
+///   `g = (a × s) / sin φ` (unit).
+/// - Pyramid: a row per face, `φ = atan2(s · e, s · a)` for `e` each of its directions
+///   `u` (bound `h1`) and `v` (`h2`): with `d = s · e`, `z = s · a`,
+///   `g = s × (z e − d a) / (d² + z²)`, `|g| = 1 / √(d² + z²)`.
+///
+/// The angles come from `atan2`, exact to rounding at any size; through `acos` of the
+/// shaft's cosine to its nearest allowed direction, as the one-by-one solve
+/// (`joints::swing_correction`) measures, f32 resolves a breach only in steps of
+/// 3.4e-4 rad. A pyramid's face is corrected along its own gradient: a turn onto the
+/// nearest allowed direction by clamped angles is not, once the shaft is off the other
+/// face's plane, and its part along the face then works on the bone.
+#[inline(always)]
+fn swing_rows(rows: &mut Rows, s: &SwingLimit, qa: Quat, qb: Quat, slack: f32, alpha: f32) {
+    let shaft = qa * s.shaft_a;
+    let axis = qb * s.axis_b;
+    match s.kind {
+        Swing::Cone { half_angle, .. } => {
+            let bound = half_angle + slack;
+            let n = axis.cross(shaft);
+            let sin = n.length();
+            let phi = sin.atan2(shaft.dot(axis));
+            if phi > bound {
+                let g = if sin > 1e-6 {
+                    n / sin
+                } else {
+                    perpendicular(axis)
+                };
+                rows.angle(g, bound - phi, alpha);
+            }
+        }
+        Swing::Pyramid { h1, h2, u, v } => {
+            for (e, h) in [(qb * u, h1), (qb * v, h2)] {
+                let bound = h + slack;
+                let (d, z) = (shaft.dot(e), shaft.dot(axis));
+                let phi = d.atan2(z);
+                let target = phi.clamp(-bound, bound);
+                let r2 = d * d + z * z;
+                if target != phi && r2 > 1e-12 {
+                    // `g / |g| = s × (z e − d a) / √(d² + z²)`, `1 / |g| = √(d² + z²)`.
+                    let r = r2.sqrt();
+                    rows.angle(shaft.cross(e * z - axis * d) / r, (target - phi) * r, alpha);
+                }
+            }
+        }
     }
 }
 
