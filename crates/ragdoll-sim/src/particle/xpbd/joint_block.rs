@@ -23,10 +23,20 @@
 //! `(J M⁻¹ Jᵀ + α̃) Δλ = −C` and moves each side by `M⁻¹ Jᵀ Δλ`: a translation and a
 //! linear turn of its particles about their centre (`joints::move_linear`). The levers
 //! `r` and inertias `I` are those at the substep's start, where the particles are
-//! rigid (`joints::pull_rigid` says why); the errors are measured now. A limit enters
-//! only while it is violated (the active set is taken again every pass), so it pushes
-//! back into range and never pulls; rows that depend on others (a zero pivot) are left
-//! out of that pass.
+//! rigid (`joints::pull_rigid` says why); the errors are measured now. Rows that
+//! depend on others (a zero pivot) are left out of that pass.
+//!
+//! **Limits are one-sided.** A limit row `C = s (φ − bound) ≥ 0` breached (`s` the
+//! side) pushes with a multiplier `λ ≥ 0` summed over the substep's passes, the
+//! usual XPBD treatment of an inequality (projected Gauss–Seidel on it): the row
+//! enters in the first pass that finds it breached and stays in while its total
+//! `λ > 0`, inside its range too, where it pulls back to the bound what other rows
+//! pushed past it, up to what it pushed; a `Δλ` that would make the total pull is set
+//! to release the push exactly and the rest of the block solved again, at most once a
+//! row. Taken afresh each pass from whether it was breached, a row held at its bound
+//! under load switched in and out from pass to pass (breached by rounding, then in
+//! range by what the point rows moved back), and the figure resting on it did not
+//! settle.
 
 // Small dense factorisations read as the formulas with row and column indices.
 #![allow(clippy::needless_range_loop)]
@@ -44,6 +54,10 @@ const MAX_ROWS: usize = 10;
 
 /// Rows of the point, first in every block.
 const POINT_ROWS: usize = 3;
+
+/// Multipliers of a block's limit rows kept through a substep: the swing limit's (two
+/// for a pyramid's faces), then the angle limits'.
+const LIMIT_SLOTS: usize = MAX_ROWS - POINT_ROWS;
 
 /// One side of a block: its bone (if it takes corrections) and inverse mass at the
 /// substep's start. Its world inverse inertia then is the particles' own
@@ -96,6 +110,8 @@ struct Row {
     ang_b: DVec3,
     c: f64,
     alpha: f64,
+    /// `1 +` the limit slot of a limit row, 0 for the others.
+    slot: u8,
 }
 
 /// Index of entry `(i, m)`, `m ≤ i`, of a lower triangle packed row by row.
@@ -125,6 +141,8 @@ pub(crate) struct Start {
     /// ([`tri`]; the rest is zero), and whether each row is live.
     factor: [f64; tri(POINT_ROWS, 0)],
     live: [bool; POINT_ROWS],
+    /// Each limit slot's multiplier summed over the substep's passes so far (`≥ 0`).
+    lambda: [f64; LIMIT_SLOTS],
 }
 
 /// Each block joint's [`Start`] into `out` (a slot per joint; the others' stay unset
@@ -155,6 +173,7 @@ pub(crate) fn begin_substep(
                 ang_b: lever_b.cross(e),
                 c: 0.0,
                 alpha: 0.0,
+                slot: 0,
             }
         });
         let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
@@ -179,6 +198,7 @@ pub(crate) fn begin_substep(
             ib,
             factor,
             live: std::array::from_fn(|i| live[i]),
+            lambda: [0.0; LIMIT_SLOTS],
         })
     }));
 }
@@ -206,6 +226,48 @@ impl Rows {
             ang_b: -u,
             c: -(value as f64),
             alpha: alpha as f64,
+            slot: 0,
+        });
+    }
+
+    /// A limit row in `slot`: the angle `φ` with gradient `grad` (per unit turn of
+    /// body1) within `[lo, hi]`, if it is breached or its multiplier `lambda` still
+    /// pushes (module doc). On side `s` (+1 past `hi`, −1 past `lo`; while inside,
+    /// the nearer bound) `C = s (φ − bound) / |g|` along `−s g / |g|`: a turn of `C`
+    /// about it restores the bound to first order, and a push is `Δλ > 0`.
+    #[allow(clippy::too_many_arguments)]
+    fn limit(
+        &mut self,
+        slot: usize,
+        grad: Vec3,
+        phi: f32,
+        lo: f32,
+        hi: f32,
+        alpha: f32,
+        lambda: f64,
+    ) {
+        let g = grad.length();
+        if slot >= LIMIT_SLOTS || !(g > 1e-6 && g.is_finite()) {
+            return;
+        }
+        let upper = if phi > hi {
+            true
+        } else if phi < lo {
+            false
+        } else if lambda > 0.0 {
+            phi - lo > hi - phi
+        } else {
+            return;
+        };
+        let (side, bound) = if upper { (1.0, hi) } else { (-1.0, lo) };
+        let u = (grad * (-side / g)).as_dvec3();
+        self.push(Row {
+            lin: DVec3::ZERO,
+            ang_a: u,
+            ang_b: -u,
+            c: -((side * (phi - bound) / g) as f64),
+            alpha: alpha as f64,
+            slot: slot as u8 + 1,
         });
     }
 }
@@ -230,14 +292,13 @@ pub(crate) fn solve(
     bones: &mut [Bone],
     j: &Joint,
     ends: &[Anchor; 2],
-    start: &Option<Start>,
+    start: &mut Option<Start>,
     h: f32,
 ) {
     let [ea, eb] = ends;
     let Some(start) = start else {
         return;
     };
-    let (a, b) = (&start.a, &start.b);
     let mut rows = Rows {
         rows: [Row::default(); MAX_ROWS],
         n: 0,
@@ -250,6 +311,7 @@ pub(crate) fn solve(
             ang_b: start.ang_b[i],
             c: e.dot(delta),
             alpha: 0.0,
+            slot: 0,
         });
     }
     let (qa, qb) = (rot(bones, j.a), rot(bones, j.b));
@@ -292,21 +354,24 @@ pub(crate) fn solve(
     }
     let alpha = j.limit_compliance / (h * h);
     if let Some(s) = &j.swing {
-        swing_rows(&mut rows, s, qa, qb, j.slack, alpha);
+        swing_rows(&mut rows, s, qa, qb, j.slack, alpha, &start.lambda);
     }
-    for l in &j.angle_limits {
-        // `C = φ − clamp(φ)` along its gradient `g` (per unit turn of body1), the range
-        // widened by the joint's slack (`step::close_start_slack`): a turn of
-        // `(target − φ) / |g|` about `g / |g|` restores it.
+    for (i, l) in j.angle_limits.iter().enumerate() {
+        // The range widened by the joint's slack (`step::close_start_slack`).
         let (phi, grad) = l.angle(bones, j.a, j.b);
-        let target = phi.clamp(l.min - j.slack, l.max + j.slack);
-        let g = grad.length();
-        if target != phi && g > 1e-6 {
-            rows.angle(grad / g, (target - phi) / g, alpha);
+        let (lo, hi) = (l.min - j.slack, l.max + j.slack);
+        let slot = 2 + i;
+        let lambda = start.lambda.get(slot).copied().unwrap_or(0.0);
+        rows.limit(slot, grad, phi, lo, hi, alpha, lambda);
+    }
+    let (inv_a, inv_b) = (start.a.inv_inertia(p), start.b.inv_inertia(p));
+    let dl = solve_one_sided(&rows, start, inv_a, inv_b);
+    for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
+        if r.slot > 0 {
+            start.lambda[r.slot as usize - 1] += *l;
         }
     }
-    let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
-    let dl = solve_rows(&rows, start, inv_a, inv_b);
+    let (a, b) = (&start.a, &start.b);
     let (mut lin, mut ang_a, mut ang_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
         lin += r.lin * *l;
@@ -340,39 +405,106 @@ pub(crate) fn solve(
 /// nearest allowed direction by clamped angles is not, once the shaft is off the other
 /// face's plane, and its part along the face then works on the bone.
 #[inline(always)]
-fn swing_rows(rows: &mut Rows, s: &SwingLimit, qa: Quat, qb: Quat, slack: f32, alpha: f32) {
+fn swing_rows(
+    rows: &mut Rows,
+    s: &SwingLimit,
+    qa: Quat,
+    qb: Quat,
+    slack: f32,
+    alpha: f32,
+    lambda: &[f64; LIMIT_SLOTS],
+) {
     let shaft = qa * s.shaft_a;
     let axis = qb * s.axis_b;
     match s.kind {
         Swing::Cone { half_angle, .. } => {
-            let bound = half_angle + slack;
             let n = axis.cross(shaft);
             let sin = n.length();
             let phi = sin.atan2(shaft.dot(axis));
-            if phi > bound {
-                let g = if sin > 1e-6 {
-                    n / sin
-                } else {
-                    perpendicular(axis)
-                };
-                rows.angle(g, bound - phi, alpha);
-            }
+            let g = if sin > 1e-6 {
+                n / sin
+            } else {
+                perpendicular(axis)
+            };
+            rows.limit(
+                0,
+                g,
+                phi,
+                f32::NEG_INFINITY,
+                half_angle + slack,
+                alpha,
+                lambda[0],
+            );
         }
         Swing::Pyramid { h1, h2, u, v } => {
-            for (e, h) in [(qb * u, h1), (qb * v, h2)] {
+            for (slot, (e, h)) in [(qb * u, h1), (qb * v, h2)].into_iter().enumerate() {
                 let bound = h + slack;
                 let (d, z) = (shaft.dot(e), shaft.dot(axis));
-                let phi = d.atan2(z);
-                let target = phi.clamp(-bound, bound);
                 let r2 = d * d + z * z;
-                if target != phi && r2 > 1e-12 {
-                    // `g / |g| = s × (z e − d a) / √(d² + z²)`, `1 / |g| = √(d² + z²)`.
-                    let r = r2.sqrt();
-                    rows.angle(shaft.cross(e * z - axis * d) / r, (target - phi) * r, alpha);
+                if r2 > 1e-12 {
+                    let g = shaft.cross(e * z - axis * d) / r2;
+                    rows.limit(slot, g, d.atan2(z), -bound, bound, alpha, lambda[slot]);
                 }
             }
         }
     }
+}
+
+/// `Δλ` of the block (module doc) with its limit rows one-sided: a row whose total
+/// multiplier would pull (`λ + Δλ < 0`) is fixed at `Δλ = −λ`, releasing its push
+/// exactly, and the others solved again with the move of the fixed rows
+/// (`M⁻¹ Jₖᵀ Δλₖ`) in their errors, `Cᵢ + Σₖ Jᵢ M⁻¹ Jₖᵀ Δλₖ`; at most once a row.
+#[inline(always)]
+fn solve_one_sided(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f64; MAX_ROWS] {
+    let mut dl = solve_rows(rows, start, inv_a, inv_b);
+    if rows.rows[..rows.n].iter().all(|r| r.slot == 0) {
+        return dl;
+    }
+    let (a, b) = (&start.a, &start.b);
+    let w = a.inv_mass + b.inv_mass;
+    let mut fixed: [Option<f64>; MAX_ROWS] = [None; MAX_ROWS];
+    for _ in 0..LIMIT_SLOTS {
+        let pulls = (0..rows.n).find(|&k| {
+            let r = &rows.rows[k];
+            r.slot > 0 && fixed[k].is_none() && start.lambda[r.slot as usize - 1] + dl[k] < 0.0
+        });
+        let Some(k) = pulls else {
+            break;
+        };
+        fixed[k] = Some(-start.lambda[rows.rows[k].slot as usize - 1]);
+        // The rows not fixed, their errors moved by the fixed rows' pushes.
+        let mut free = Rows {
+            rows: [Row::default(); MAX_ROWS],
+            n: 0,
+        };
+        let mut index = [0usize; MAX_ROWS];
+        for (i, r) in rows.rows[..rows.n].iter().enumerate() {
+            if fixed[i].is_some() {
+                continue;
+            }
+            let mut r = *r;
+            for (f, l) in rows.rows[..rows.n].iter().zip(&fixed) {
+                if let Some(l) = l {
+                    let kif = r.lin.dot(f.lin) * w
+                        + r.ang_a.dot(inv_a * f.ang_a)
+                        + r.ang_b.dot(inv_b * f.ang_b);
+                    r.c += kif * l;
+                }
+            }
+            index[free.n] = i;
+            free.push(r);
+        }
+        let sub = solve_rows(&free, start, inv_a, inv_b);
+        for (m, &i) in index[..free.n].iter().enumerate() {
+            dl[i] = sub[m];
+        }
+        for (i, l) in fixed.iter().enumerate() {
+            if let Some(l) = l {
+                dl[i] = *l;
+            }
+        }
+    }
+    dl
 }
 
 /// Rows `from..n` of `K = J M⁻¹ Jᵀ + α̃` (lower triangle; `ia`, `ib` the rows'

@@ -126,7 +126,7 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
         }
         p.fix_start(&w.bones);
         joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
-        for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
+        for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&mut st.joint_start) {
             if !in_figure(&w.bones, j.a.or(j.b)) {
                 continue;
             }
@@ -255,7 +255,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 &mut w.bones,
                 pass % 2 == 1,
             );
-            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
+            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&mut st.joint_start) {
                 if joint_block::blocks(j) {
                     joint_block::solve(&mut st.particles, &mut w.bones, j, ends, start, h);
                 } else {
