@@ -61,7 +61,7 @@ use crate::method::Grab;
 /// takes back the velocity of that push. Left in a joint or a limit instead, the excess
 /// at the substep's end is closed by the next substep at once, at `excess / h`, and
 /// becomes velocity: landing from some heights, the lab humanoid's waist, hip and knee
-/// held their limits 0.4°–0.55° open for twenty substeps, a spring that gave back
+/// held their limits 0.2°–0.55° open for twenty substeps, a spring that gave back
 /// 55 J (8.4 % of its energy scale) when it let go.
 pub(crate) const PASSES: u32 = 8;
 
