@@ -60,6 +60,13 @@ impl JointSolve for BallJoint {
         self.update_limits(rows, s);
     }
 
+    fn prepare_moved(&mut self, rows: &mut BallRows, s: &BodyStates) {
+        if let Some(sw) = &mut self.swing {
+            sw.prepare_moved(&self.frame, s);
+        }
+        PointPart::prepare(&mut rows.point, &self.frame, s);
+    }
+
     fn warm_start(&self, rows: &BallRows, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(sw) = &self.swing {
@@ -71,21 +78,14 @@ impl JointSolve for BallJoint {
         self.point.warm_start(&rows.point, &self.frame, s);
     }
 
-    fn solve(
-        &mut self,
-        rows: &mut BallRows,
-        s: &mut BodyStates,
-        ctx: &StepContext,
-        use_bias: bool,
-    ) {
+    fn solve(&mut self, rows: &BallRows, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         if let Some(sw) = &mut self.swing {
             sw.solve(&rows.swing, &self.frame, s, ctx, use_bias);
         }
         if let Some(t) = &mut self.twist {
             t.solve(&rows.twist, &self.frame, s, ctx, use_bias);
         }
-        self.point
-            .solve(&mut rows.point, &self.frame, s, ctx, use_bias);
+        self.point.solve(&rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

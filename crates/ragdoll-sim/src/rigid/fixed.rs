@@ -31,6 +31,10 @@ impl JointSolve for FixedJoint {
         PointPart::weigh(rows, &self.frame, s);
     }
 
+    fn prepare_moved(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
+        PointPart::prepare(rows, &self.frame, s);
+    }
+
     fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {
         self.lock.warm_start(&self.frame, s);
         self.point.warm_start(rows, &self.frame, s);
@@ -38,7 +42,7 @@ impl JointSolve for FixedJoint {
 
     fn solve(
         &mut self,
-        rows: &mut PointRows<f32>,
+        rows: &PointRows<f32>,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,

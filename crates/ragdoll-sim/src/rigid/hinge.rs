@@ -66,6 +66,11 @@ impl JointSolve for HingeJoint {
         self.update_limit(&mut rows.limit, s);
     }
 
+    fn prepare_moved(&mut self, rows: &mut HingeRows, s: &BodyStates) {
+        self.align.prepare(&mut rows.align, &self.frame, s);
+        PointPart::prepare(&mut rows.point, &self.frame, s);
+    }
+
     fn warm_start(&self, rows: &HingeRows, s: &mut BodyStates) {
         self.friction.warm_start(&self.frame, s);
         if let Some(l) = &self.limit {
@@ -75,20 +80,12 @@ impl JointSolve for HingeJoint {
         self.point.warm_start(&rows.point, &self.frame, s);
     }
 
-    fn solve(
-        &mut self,
-        rows: &mut HingeRows,
-        s: &mut BodyStates,
-        ctx: &StepContext,
-        use_bias: bool,
-    ) {
+    fn solve(&mut self, rows: &HingeRows, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         if let Some(l) = &mut self.limit {
             l.solve(&rows.limit, &self.frame, s, ctx, use_bias);
         }
-        self.align
-            .solve(&mut rows.align, &self.frame, s, ctx, use_bias);
-        self.point
-            .solve(&mut rows.point, &self.frame, s, ctx, use_bias);
+        self.align.solve(&rows.align, &self.frame, s, ctx, use_bias);
+        self.point.solve(&rows.point, &self.frame, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {

@@ -114,21 +114,22 @@ pub(crate) trait JointSolve {
     fn prepare(&mut self, rows: &mut Self::Rows, s: &BodyStates);
     /// [`JointSolve::prepare`] on the pose the last relax pass solved on (no position
     /// has moved since, only the inertias were refreshed): the point and alignment rows,
-    /// which that pass prepared on this pose, only re-weigh their turns and effective
-    /// masses with the new inertias (the same bits as preparing them anew, for less).
+    /// prepared on this pose for the relax passes ([`JointSolve::prepare_moved`]), only
+    /// re-weigh their turns and effective masses with the new inertias (the same bits as
+    /// preparing them anew, for less).
     fn prepare_after_relax(&mut self, rows: &mut Self::Rows, s: &BodyStates) {
         self.prepare(rows, s);
     }
+    /// The rows the relax pass solves on the pose the substep moved to: the point and
+    /// alignment rows prepared on it (the limit rows keep the substep's). A function of
+    /// the pose, inertias and masses alone, none of which a velocity pass changes, so
+    /// every relax pass of a substep solves on this one preparation.
+    fn prepare_moved(&mut self, _rows: &mut Self::Rows, _s: &BodyStates) {}
     /// Re-applies the accumulated impulses.
     fn warm_start(&self, rows: &Self::Rows, s: &mut BodyStates);
-    /// One Gauss–Seidel update; `use_bias` false in the relax pass.
-    fn solve(
-        &mut self,
-        rows: &mut Self::Rows,
-        s: &mut BodyStates,
-        ctx: &StepContext,
-        use_bias: bool,
-    );
+    /// One Gauss–Seidel update; `use_bias` false in the relax pass, which solves on the
+    /// rows of [`JointSolve::prepare_moved`].
+    fn solve(&mut self, rows: &Self::Rows, s: &mut BodyStates, ctx: &StepContext, use_bias: bool);
     /// One position-projection update (see [`super::project`]); joints without a
     /// rigid part (springs) keep the default, which does nothing.
     fn project(&self, _s: &mut BodyStates) {}
@@ -156,7 +157,8 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
 /// and for lanes of four) are the joint's [`JointSolve::Rows`], passed in.
 ///
 /// `K⁻¹` is prepared once per substep and shared by the biased iterations; the relax
-/// pass comes after the positions moved and prepares again.
+/// passes come after the positions moved and share a second preparation
+/// ([`JointSolve::prepare_moved`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointPart {
     /// Accumulated impulse on b (world).
@@ -220,19 +222,16 @@ impl PointPart {
         PointPart::apply(rows, f, s, self.impulse);
     }
 
-    /// One soft Gauss–Seidel update; the relax pass (`use_bias` false) first prepares
-    /// again, since the positions have moved.
+    /// One soft Gauss–Seidel update (the relax pass, `use_bias` false, on the rows
+    /// prepared on the moved pose).
     pub(crate) fn solve(
         &mut self,
-        rows: &mut PointRows<f32>,
+        rows: &PointRows<f32>,
         f: &JointFrame,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
     ) {
-        if !use_bias {
-            PointPart::prepare(rows, f, s);
-        }
         if self.direct || !rows.on {
             return;
         }
@@ -396,19 +395,16 @@ impl AlignPart {
         v.store(s, f.a, f.b);
     }
 
-    /// One soft 2×2 block update; the relax pass (`use_bias` false) first prepares
-    /// again, since the positions have moved.
+    /// One soft 2×2 block update (the relax pass, `use_bias` false, on the rows
+    /// prepared on the moved pose).
     pub(crate) fn solve(
         &mut self,
-        rows: &mut AlignRows<f32>,
+        rows: &AlignRows<f32>,
         f: &JointFrame,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
     ) {
-        if !use_bias {
-            self.prepare(rows, f, s);
-        }
         if !rows.on {
             return;
         }
@@ -828,8 +824,8 @@ impl FrictionMotor {
         ctx: &StepContext,
         free: FreeTurns,
     ) {
-        // The offsets now: in the relax pass the positions have moved since the point
-        // rows were last prepared.
+        // The offsets now, measured here: the friction is solved without the point's
+        // rows (prepared on this same pose, in the relax passes too).
         let (ra, rb) = f.offsets(s);
         let (ra, rb) = (Vec3A::from(ra), Vec3A::from(rb));
         let (ia, ib) = (s.inv_inertia[f.a], s.inv_inertia[f.b]);

@@ -360,6 +360,23 @@ impl JointSet {
         });
     }
 
+    /// [`JointSolve::prepare_moved`] of joints touching an awake body: the rows of the
+    /// relax passes, once on the pose the substep moved to.
+    pub fn prepare_moved(&mut self, s: &BodyStates, awake: &[bool]) {
+        let (balls, hinges) = self.in_lanes();
+        if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
+            let rows = (&mut self.rows.ball[..], &mut self.rows.hinge[..]);
+            lanes.prepare_moved(rows, s);
+        }
+        for_each_type!(self, balls, hinges, (list, rows) => {
+            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+                if touches_awake(j.frame(), awake) {
+                    j.prepare_moved(r, s)
+                }
+            }
+        });
+    }
+
     /// Warm start of joints touching an awake body, type by type in the solve order.
     pub fn warm_start(&mut self, s: &mut BodyStates, awake: &[bool]) {
         let (balls, hinges) = self.in_lanes();
@@ -385,27 +402,26 @@ impl JointSet {
         self.solve_friction(s, awake, ctx);
         let (balls, hinges) = self.in_lanes();
         let trees = self.direct;
-        let rows = &mut self.rows;
+        let rows = &self.rows;
         match self.lanes.as_mut().filter(|_| balls) {
-            Some(l) => l.solve_balls(s, &mut self.ball, &mut rows.ball, trees, ctx, use_bias),
-            None => solve_each(&mut self.ball, &mut rows.ball, s, awake, ctx, use_bias),
+            Some(l) => l.solve_balls(s, &mut self.ball, trees, ctx, use_bias),
+            None => solve_each(&mut self.ball, &rows.ball, s, awake, ctx, use_bias),
         }
         match self.lanes.as_mut().filter(|_| hinges) {
-            Some(l) => l.solve_hinges(s, &mut self.hinge, &mut rows.hinge, trees, ctx, use_bias),
-            None => solve_each(&mut self.hinge, &mut rows.hinge, s, awake, ctx, use_bias),
+            Some(l) => l.solve_hinges(s, &mut self.hinge, trees, ctx, use_bias),
+            None => solve_each(&mut self.hinge, &rows.hinge, s, awake, ctx, use_bias),
         }
-        let r = rows;
         solve_each(
             &mut self.universal,
-            &mut r.universal,
+            &rows.universal,
             s,
             awake,
             ctx,
             use_bias,
         );
-        solve_each(&mut self.fixed, &mut r.fixed, s, awake, ctx, use_bias);
-        solve_each(&mut self.slider, &mut r.slider, s, awake, ctx, use_bias);
-        solve_each(&mut self.spring, &mut r.spring, s, awake, ctx, use_bias);
+        solve_each(&mut self.fixed, &rows.fixed, s, awake, ctx, use_bias);
+        solve_each(&mut self.slider, &rows.slider, s, awake, ctx, use_bias);
+        solve_each(&mut self.spring, &rows.spring, s, awake, ctx, use_bias);
     }
 
     /// One update of every joint friction touching an awake body, in the turns its
@@ -605,7 +621,7 @@ fn warm_start_each<J: JointSolve>(
 /// One iteration over `joints` touching an awake body, one by one.
 fn solve_each<J: JointSolve>(
     joints: &mut [J],
-    rows: &mut [J::Rows],
+    rows: &[J::Rows],
     s: &mut BodyStates,
     awake: &[bool],
     ctx: &StepContext,

@@ -665,7 +665,7 @@ impl JointLanes {
         self.update_limits(balls, hinges, (ball_rows, hinge_rows), s);
     }
 
-    /// A later substep's preparation, on the pose the relax pass prepared the rows on:
+    /// A later substep's preparation, on the pose the relax passes' rows were prepared on:
     /// the turns and effective masses with the inertias now, and the limit rows.
     pub fn prepare_after_relax(
         &mut self,
@@ -688,6 +688,26 @@ impl JointLanes {
             h.align.weigh(&h.lanes, ia, ib);
         }
         self.update_limits(balls, hinges, (ball_rows, hinge_rows), s);
+    }
+
+    /// The relax passes' point and axis rows, prepared on the pose the substep moved to
+    /// (see `JointSolve::prepare_moved`), and the point rows of the lanes in a tree
+    /// handed to their joints' rows, for the tree's factorisation.
+    pub fn prepare_moved(
+        &mut self,
+        (ball_rows, hinge_rows): (&mut [BallRows], &mut [HingeRows]),
+        s: &BodyStates,
+    ) {
+        for b in self.balls.iter_mut().filter(|x| x.lanes.is_live()) {
+            b.point.prepare(&b.lanes, &b.lanes.bodies(s));
+            b.point.hand_rows_to_trees(&b.lanes, ball_rows);
+        }
+        for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
+            let p = h.lanes.bodies(s);
+            h.align.prepare(&h.lanes, &p);
+            h.point.prepare(&h.lanes, &p);
+            h.point.hand_rows_to_trees(&h.lanes, hinge_rows);
+        }
     }
 
     /// Measures the live joints' limits one by one and copies their rows in.
@@ -775,15 +795,12 @@ impl JointLanes {
         }
     }
 
-    /// One iteration over the ball joints; the relax pass (`use_bias` false) prepares
-    /// the point rows first, since the positions have moved (and one by one, in `rows`,
-    /// those a tree solves, for the tree).
-    #[allow(clippy::too_many_arguments)]
+    /// One iteration over the ball joints (the relax pass, `use_bias` false, on the rows
+    /// of [`JointLanes::prepare_moved`]).
     pub fn solve_balls(
         &mut self,
         s: &mut BodyStates,
         balls: &mut [BallJoint],
-        rows: &mut [BallRows],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -795,10 +812,6 @@ impl JointLanes {
             if trees && !use_bias {
                 b.point.sync_direct(&b.lanes, balls);
             }
-            if !use_bias {
-                b.point.prepare(&b.lanes, &b.lanes.bodies(s));
-                b.point.hand_rows_to_trees(&b.lanes, rows);
-            }
             b.lanes.update_velocities(s, |v| {
                 b.cone.solve(v, &soft);
                 b.point.solve(v, &b.lanes, &soft);
@@ -806,15 +819,12 @@ impl JointLanes {
         }
     }
 
-    /// One iteration over the hinges; the relax pass prepares the point and axis rows
-    /// first. (A preparation reads poses and inertias, which the velocity solve does not
-    /// change, so preparing before the range rows' update is preparing after it.)
-    #[allow(clippy::too_many_arguments)]
+    /// One iteration over the hinges (the relax pass on the rows of
+    /// [`JointLanes::prepare_moved`]).
     pub fn solve_hinges(
         &mut self,
         s: &mut BodyStates,
         hinges: &mut [HingeJoint],
-        rows: &mut [HingeRows],
         trees: bool,
         ctx: &StepContext,
         use_bias: bool,
@@ -823,12 +833,6 @@ impl JointLanes {
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             if trees && !use_bias {
                 h.point.sync_direct(&h.lanes, hinges);
-            }
-            if !use_bias {
-                let p = h.lanes.bodies(s);
-                h.align.prepare(&h.lanes, &p);
-                h.point.prepare(&h.lanes, &p);
-                h.point.hand_rows_to_trees(&h.lanes, rows);
             }
             h.lanes.update_velocities(s, |v| {
                 h.limit[0].solve(v, &soft);

@@ -245,6 +245,14 @@ impl Swing {
         }
     }
 
+    /// The 0° cone's alignment rows prepared on the moved pose, for the relax pass
+    /// (see [`super::joint::JointSolve::prepare_moved`]); the other rows keep theirs.
+    pub(crate) fn prepare_moved(&mut self, f: &JointFrame, s: &BodyStates) {
+        if let Swing::Tight(t) = self {
+            t.part.prepare(&mut t.rows, f, s);
+        }
+    }
+
     /// One update of every row of `set`.
     pub(crate) fn solve(
         &mut self,
@@ -256,7 +264,7 @@ impl Swing {
     ) {
         match self {
             Swing::Cone { row, .. } => set[0].solve(&mut row.impulse, f, s, ctx, use_bias),
-            Swing::Tight(t) => t.part.solve(&mut t.rows, f, s, ctx, use_bias),
+            Swing::Tight(t) => t.part.solve(&t.rows, f, s, ctx, use_bias),
             Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
                 .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias)),
         }

@@ -70,7 +70,7 @@ impl JointSolve for SliderJoint {
         }
     }
 
-    fn solve(&mut self, _: &mut (), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(&mut self, _: &(), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         self.lock.solve(&self.frame, s, ctx, use_bias);
         let f = self.frame;
         let (uv, ra, rbd, d) = self.rows(s);

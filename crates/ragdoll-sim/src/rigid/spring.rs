@@ -64,7 +64,7 @@ impl JointSolve for SpringJoint {
         self.apply(s, n, ra, rb, total);
     }
 
-    fn solve(&mut self, _: &mut (), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    fn solve(&mut self, _: &(), s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
         let f = self.frame;
         let (n, len, ra, rb) = self.geometry(s);
         let (ja, jb) = (ra.cross(n), rb.cross(n));

@@ -94,7 +94,7 @@ pub fn solve(
         if sub == 0 {
             joints.prepare(s, awake);
         } else {
-            // The pose is the one the last relax pass prepared the joints on.
+            // The pose is the one the joints were prepared on for the relax passes.
             update_inertia(s, motion, awake);
             joints.prepare_after_relax(s, awake);
         }
@@ -108,8 +108,10 @@ pub fn solve(
             contacts.solve(s, &p.ctx, true);
         }
         integrate_positions(s, motion, awake, p.ctx.h, spin_offset, in_contact);
+        // The relax passes solve on the moved pose, prepared once: a preparation reads
+        // the pose, inertias and masses, which the velocity passes leave as they are.
+        joints.prepare_moved(s, awake);
         for pass in 0..RELAX_JOINT_PASSES {
-            // The first pass prepares the point rows on the moved pose.
             joints.solve(s, awake, &p.ctx, false);
             if pass == 0 && !trees.is_empty() {
                 trees.factor(joints, s);

@@ -101,6 +101,13 @@ impl JointSolve for UniversalJoint {
         self.set_angular_rows(rows, s);
     }
 
+    fn prepare_moved(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
+        if let Some(sw) = &mut self.swing {
+            sw.prepare_moved(&self.frame, s);
+        }
+        PointPart::prepare(&mut rows.point, &self.frame, s);
+    }
+
     fn warm_start(&self, rows: &UniversalRows, s: &mut BodyStates) {
         let f = &self.frame;
         self.friction.warm_start(f, s);
@@ -116,7 +123,7 @@ impl JointSolve for UniversalJoint {
 
     fn solve(
         &mut self,
-        rows: &mut UniversalRows,
+        rows: &UniversalRows,
         s: &mut BodyStates,
         ctx: &StepContext,
         use_bias: bool,
@@ -130,7 +137,7 @@ impl JointSolve for UniversalJoint {
         }
         rows.cross
             .solve(&mut self.cross_row.impulse, f, s, ctx, use_bias);
-        self.point.solve(&mut rows.point, f, s, ctx, use_bias);
+        self.point.solve(&rows.point, f, s, ctx, use_bias);
     }
 
     fn project(&self, s: &mut BodyStates) {
