@@ -1,10 +1,10 @@
 //! The XPBD solver drops the Doom 3-style mod's humanoid (assets/doom3, entity
 //! `monster_lab_human`, from its `af_pose` frame) onto flat ground from starts shifted
 //! sideways by a few millimetres: the same fall, so each gains no more than a small
-//! fraction of its energy scale. While its limit rows read a swing limit's breach
-//! through f32 `acos`, in steps of 3.4e-4 rad, and pushed a pyramid's face off its
-//! gradient, which start gained how much was a matter of rounding: the start shifted
-//! 7 mm gained 2.7 %.
+//! fraction of its energy scale. It holds only if the limit rows measure a swing
+//! limit's breach exactly (by `atan2`; through f32 `acos` a breach is resolved in steps
+//! of 3.4e-4 rad) and push each pyramid face along its own gradient: otherwise which
+//! start gains how much is a matter of rounding, and the start shifted 7 mm gains 2.7 %.
 
 use ragdoll_sim::Method;
 use ragdoll_sim::glam::Vec3;
