@@ -227,10 +227,9 @@ struct Part {
 const BOXES_TO_CUT: usize = 4096;
 
 /// Boxes from which the runs are cut on more threads than one: the trees are then built
-/// at once, and one tree over every box, built on one thread while the others wait, was
-/// the largest serial part of a 100-human pile's multibody step (a twelfth of it on one
-/// thread, where the solve that follows is shared out). Below this a tree costs less
-/// than waking a thread.
+/// at once, where one tree over every box would be built on one thread while the others
+/// wait: in a 100-human pile's multibody step that is about a twelfth of the work, the
+/// largest part left serial. Below this a tree costs less than waking a thread.
 const BOXES_TO_CUT_SHARED: usize = 1024;
 
 /// The share of boxes (1 / this) that may leave their fat boxes before [`Reused`]

@@ -122,7 +122,7 @@ fn ground_contacts(
 ) {
     let plane = ground_plane(ground);
     // On the pool, in bone order (rayon's collect keeps it): a test of every bone, four
-    // times a frame, was a serial part of a large pile's frame on several threads.
+    // times a frame, would otherwise be a serial part of a large pile's frame.
     let near: Vec<usize> = (0..bones.len())
         .into_par_iter()
         .with_min_len(BONES_PER_TASK)
@@ -713,7 +713,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
         sub += count;
     }
     // The batches' copies of their bones, freed on all threads: one by one on the
-    // stepping thread this was a serial part of a large pile's frame.
+    // stepping thread this would be a serial part of a large pile's frame.
     kept.into_par_iter().for_each(drop);
     let mut newly = Vec::new();
     let held = w
