@@ -55,6 +55,16 @@ use crate::method::Grab;
 /// 0.5 mm, joint gap 3.7 mm, asleep at 2.6 s); with 6 the capsule human gains 2.7 %
 /// of its energy scale (bound 2 %).
 ///
+/// The same budget spent as more substeps of fewer passes (Macklin et al. 2019) pays
+/// a substep's own work (the prediction, the frame reads, the velocities and their
+/// [`VELOCITY_PASSES`]) more often and loses quality first: 40 substeps of two or of
+/// three passes, or 20 of four, leave the capsule human gaining 3.6 %, 3.0 % and 3.5 %
+/// of its energy scale; 60 substeps of one pass hold scenes 1–9 and the closed forms,
+/// but the lab humanoid gains 1.0 % from every start (with these eight passes 0.03 %
+/// at the median of 72) and the human falls asleep at 8.6 s instead of 3.4 s. The
+/// sticks' projection in the last pass alone leaves the capsule human awake at 10 s.
+/// `docs/benchmarks.md` gives what each costs.
+///
 /// In each pass the contacts come first and the joints after them, so that what the
 /// passes leave unresolved of a joint loaded against the ground stays in the contacts.
 /// There it is an overlap, pushed out at no more than the push-out speed, and step 6
