@@ -10,7 +10,7 @@
 //! ```
 //!
 //! Defaults: 1000 humans, one thread, 600 frames at 1/60 s. `--each` prints every
-//! frame's time, phases and awake bodies. Wall-clock time counts other programs' turns
+//! frame's time, the stepping thread's CPU time, phases and awake bodies. Wall-clock time counts other programs' turns
 //! on a shared machine; the CPU time of the stepping thread does not, and on one thread
 //! it is the step's cost (on several it leaves out the other threads' share). The bench
 //! tables (`ragdoll-lab bench scale`) are the reference figures; this is the quick look.
@@ -97,7 +97,7 @@ fn run() -> Result<(), String> {
                 }
             }
             if each {
-                print!("frame {frame}: {ms:.2} ms:");
+                print!("frame {frame}: {ms:.2} ms, CPU {:.2} ms:", cpu[frame]);
                 for (name, s) in phases.phases() {
                     print!(" {name} {:.2}", s * 1e3);
                 }

@@ -165,7 +165,8 @@ impl Split {
 }
 
 /// The broad phase of one step's detections: the particle method detects four times a
-/// frame, each time with boxes that moved a little.
+/// frame, the multibody once per detection window of a step whose contacts turn fast,
+/// each time with boxes that moved a little.
 ///
 /// The first call builds trees from the moving boxes loosened by `fat`
 /// ([`Reused::fattened`]) and keeps the pairs that `keep` accepts of two moving boxes

@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{box_height_above_plane, moving_pairs_where, speculative_margin};
+use crate::broadphase::{Reused, box_height_above_plane, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::rolling_arm;
 use glam::{Quat, Vec3};
@@ -235,7 +235,15 @@ impl Contacts {
     /// `awake[i]` tells which bodies move; pairs between resting bodies keep their
     /// cached state untouched. `dt` widens the margins for fast bodies, `g` (the
     /// gravity's magnitude, m/s²) for falling ones ([`speculative_margin`]).
-    pub fn update(&mut self, s: &BodyStates, info: &[BodyInfo], awake: &[bool], dt: f32, g: f32) {
+    pub fn update(
+        &mut self,
+        s: &BodyStates,
+        info: &[BodyInfo],
+        awake: &[bool],
+        dt: f32,
+        g: f32,
+        tree: &mut Reused,
+    ) {
         let margin = speculative_margin(g, dt);
         let n = info.len();
         let anchor = n as u32;
@@ -270,7 +278,7 @@ impl Contacts {
         // most overlaps are a figure's jointed neighbours. Pairs of two resting bodies
         // are not looked for at all (`moving_pairs_where`).
         let excluded = &self.excluded;
-        moving_pairs_where(
+        tree.moving_pairs_where(
             &self.aabbs,
             |a| !awake[a as usize],
             |a, b| {

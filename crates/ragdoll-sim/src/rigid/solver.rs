@@ -34,6 +34,7 @@ use super::joint_set::JointSet;
 use super::parallel::{self, IslandTasks};
 use super::soft::{Softness, StepContext};
 use super::substeps::{SolveBuffers, SolveParams};
+use crate::broadphase::Reused;
 use crate::scene::Settings;
 use crate::timings::{PhaseClock, PhaseTimes};
 
@@ -77,13 +78,23 @@ pub fn step(
     }
     update_inertia(s, motion, awake);
     clock.skip();
-    contacts.update(s, info, awake, dt, g);
+    let substeps = settings.multibody_substep_count().max(1);
+    // The windows this step's speeds ask of the touching pairs the last step left: a
+    // guess made before the detection, which only decides whether the broad phase keeps
+    // its trees for a later window ([`DETECTION_FAT`]); no result depends on it.
+    let guess = detection_windows(s, contacts, awake, info.len(), dt, substeps);
+    let mut tree = if guess > 1 {
+        Reused::fattened(DETECTION_FAT)
+    } else {
+        Reused::default()
+    };
+    contacts.update(s, info, awake, dt, g, &mut tree);
     clock.lap(times, "collision");
     link_islands(
         s, info, motion, joints, contacts, islands, awake, dynamic, dt, g, times, &mut clock,
+        &mut tree,
     );
 
-    let substeps = settings.multibody_substep_count().max(1);
     let h = dt / substeps as f32;
     // Box2D caps contact stiffness at a quarter of the substep rate: stiffer is not
     // resolved by the integrator and only adds energy.
@@ -111,11 +122,11 @@ pub fn step(
             // that have turned towards each other since.
             update_inertia(s, motion, awake);
             clock.lap(times, "substeps");
-            contacts.update(s, info, awake, window_dt, g);
+            contacts.update(s, info, awake, window_dt, g, &mut tree);
             clock.lap(times, "collision");
             link_islands(
                 s, info, motion, joints, contacts, islands, awake, dynamic, window_dt, g, times,
-                &mut clock,
+                &mut clock, &mut tree,
             );
         }
         // Islands share no moving body, so they can be solved in any order, or at once:
@@ -174,6 +185,19 @@ pub fn refresh_awake(
 /// the landing being chaotic).
 const MAX_TURN_PER_DETECTION: f32 = 0.3;
 
+/// How far the broad phase's trees are loosened (m) in a step that detects in several
+/// windows, so that the later windows' detections reuse the first one's trees and
+/// candidate pairs ([`Reused`], with the same pairs as new trees).
+///
+/// The first detection loosens each box by how far the body may move over the whole
+/// step, a later window's by how far it may move over that window from the pose the
+/// earlier windows reached: a later box lies inside the first one unless the solve
+/// sped its body up, so a little fat keeps all but a few boxes inside their fat boxes
+/// and a later window's broad phase is a filter of the candidates and a few queries
+/// instead of new trees. A step with one window builds its trees without fat, which
+/// would only add candidates.
+const DETECTION_FAT: f32 = 0.01;
+
 /// Into how many windows the step's substeps are split, each starting with its own
 /// detection: enough that every touching pair with an awake body turns, at the step's
 /// start speeds, at most [`MAX_TURN_PER_DETECTION`] relative to its partner per window
@@ -217,6 +241,7 @@ fn link_islands(
     g: f32,
     times: &mut PhaseTimes,
     clock: &mut PhaseClock,
+    tree: &mut Reused,
 ) {
     let n = info.len();
     islands.reset_links();
@@ -245,7 +270,8 @@ fn link_islands(
         refresh_awake(s, info, islands, awake, dynamic);
         update_inertia(s, motion, awake);
         clock.lap(times, "islands");
-        contacts.update(s, info, awake, dt, g);
+        tree.forget();
+        contacts.update(s, info, awake, dt, g, tree);
         clock.lap(times, "collision");
     }
     clock.lap(times, "islands");
