@@ -186,6 +186,12 @@ impl ContactSet {
         reserve_kept(&mut self.points, extra);
     }
 
+    /// [`give_back_room`] of both arrays, once a detection has filled them.
+    pub fn give_back_room(&mut self) {
+        give_back_room(&mut self.manifolds);
+        give_back_room(&mut self.points);
+    }
+
     /// Appends another set's manifolds and points after this one's, its points'
     /// ranges moved by where they land: the same set as pushing them here in turn.
     pub fn append(&mut self, other: &ContactSet) {
@@ -207,6 +213,17 @@ impl ContactSet {
 pub(crate) fn reserve_kept<T>(v: &mut Vec<T>, extra: usize) {
     if v.capacity() - v.len() < extra {
         v.reserve_exact(extra.max(v.len() / 8));
+    }
+}
+
+/// Gives back the room of an array kept between uses ([`reserve_kept`]) once it fills
+/// less than half of it, keeping an eighth over its length: a pile's landing leaves its
+/// contact arrays at two to three times what the landed pile fills, held for good
+/// otherwise. Regrowing costs one copy per eighth of growth ([`reserve_kept`]), and
+/// the room only changes where the items live, never their values.
+pub(crate) fn give_back_room<T>(v: &mut Vec<T>) {
+    if v.capacity() > 2 * v.len() {
+        v.shrink_to(v.len() + v.len() / 8);
     }
 }
 
@@ -249,6 +266,11 @@ impl FilterKey {
 }
 
 impl Filter {
+    /// Heap bytes of its two arrays (`heap`).
+    pub fn heap_bytes(&self) -> super::heap::Bytes {
+        super::heap::vec(&self.first) + super::heap::vec(&self.partners)
+    }
+
     /// A filter excluding `pairs` (each in either order, repeats allowed) among `bones`.
     pub fn new(bones: usize, pairs: &[(usize, usize)]) -> Filter {
         let mut sorted: Vec<(u32, u32)> = pairs

@@ -27,8 +27,8 @@
 
 use super::bone::{Aim, Bone, advance_moving};
 use super::contacts::{
-    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, ground_pair, ground_plane,
-    point_runs, reaches_ground, shape_pair,
+    BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, give_back_room,
+    ground_pair, ground_plane, point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{
     BLOCK, point_velocity, solve_friction, solve_normal, solve_normals, solve_velocities,
@@ -107,6 +107,8 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     if let Some(ground) = &w.settings.ground {
         ground_contacts(bones, ground, &margins, &boxes, &mut contacts);
     }
+    contacts.give_back_room();
+    give_back_room(&mut pairs);
     w.contacts = contacts;
     w.pairs = pairs;
 }
