@@ -9,7 +9,6 @@ use super::ParticleWorld;
 use parry3d::query::{ContactManifold, TrackedContact};
 use std::mem::size_of;
 
-/// The bytes a `Vec`'s buffer holds: its capacity, used or not.
 /// The bytes a `Vec`'s buffer holds (its capacity) and uses (its length).
 pub(crate) fn vec<T>(v: &Vec<T>) -> Bytes {
     Bytes {
