@@ -164,7 +164,7 @@ pub fn is_installed() -> bool {
 }
 
 /// What one method holds for one scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Footprint {
     /// Heap bytes held after building and stepping.
     pub bytes: usize,
@@ -173,7 +173,16 @@ pub struct Footprint {
     /// Heap blocks held after building and stepping (each costs the system allocator
     /// a header and rounding beyond `bytes`).
     pub blocks: usize,
+    /// `bytes` by owner, in the order the method drops them
+    /// ([`ragdoll_sim::Method::drop_by_owner`]): the bytes freed when it dropped each
+    /// one. An owner named twice (a kind of array the world and its island batches
+    /// both keep) is summed; what the method held outside every named owner is
+    /// [`REST`].
+    pub owners: Vec<(&'static str, usize)>,
 }
+
+/// The owner of the bytes a method frees outside the owners it names.
+pub const REST: &str = "rest";
 
 /// Builds `flavor` for `scene`, steps it [`STEPS`] frames and reads its heap footprint.
 pub fn footprint(flavor: Flavor, scene: &ragdoll_sim::SceneDesc) -> Result<Footprint, AppError> {
@@ -207,11 +216,24 @@ pub fn footprint_after(
     let held = live_bytes() - base;
     let peak = peak_bytes() - base;
     let blocks = live_blocks() - base_blocks;
-    drop(method);
+    let mut owners: Vec<(&'static str, usize)> = Vec::with_capacity(32);
+    let mut last = live_bytes();
+    method.drop_by_owner(&mut |owner| {
+        let now = live_bytes();
+        let freed = (last - now).max(0) as usize;
+        last = now;
+        match owners.iter_mut().find(|(o, _)| *o == owner) {
+            Some((_, bytes)) => *bytes += freed,
+            None => owners.push((owner, freed)),
+        }
+    });
+    let named: usize = owners.iter().map(|&(_, b)| b).sum();
+    owners.push((REST, (held.max(0) as usize).saturating_sub(named)));
     Ok(Footprint {
         bytes: held.max(0) as usize,
         peak_bytes: peak.max(0) as usize,
         blocks: blocks.max(0) as usize,
+        owners,
     })
 }
 
@@ -325,7 +347,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
         rows.push(Value::Object(row));
     }
     table.note("Goal: at most 512 B per bone for every solver.");
-    let (pile_table, pile_rows) = pile_table(size, only)?;
+    let (pile_text, pile_rows) = pile_table(size, only)?;
     Ok(Report {
         json: json!({
             "bench": "memory",
@@ -334,7 +356,7 @@ pub fn run(size: Size, only: &RowFilter) -> Result<Report, AppError> {
             "pile_steps": PILE_STEPS,
             "pile_rows": pile_rows,
         }),
-        text: table.render() + &pile_table.render(),
+        text: table.render() + &pile_text,
     })
 }
 
@@ -343,7 +365,7 @@ pub const PILE_HUMANS: [u32; 4] = [1, 10, 100, 1000];
 
 /// Bytes per bone of the pile of humans, joints included: the rows whose number of
 /// humans `only` keeps.
-fn pile_table(size: Size, only: &RowFilter) -> Result<(Table, Vec<Value>), AppError> {
+fn pile_table(size: Size, only: &RowFilter) -> Result<(String, Vec<Value>), AppError> {
     let humans: &[u32] = match size {
         Size::Full => &PILE_HUMANS,
         Size::Quick => &PILE_HUMANS[..1],
@@ -363,6 +385,8 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(Table, Vec<Value>), AppEr
         ],
     );
     let mut rows = Vec::new();
+    // Per method, per pile row: its bytes by owner, and the row's bones.
+    let mut owners: Vec<Vec<(usize, Vec<(&'static str, usize)>)>> = vec![Vec::new(); MEASURED.len()];
     for &n in humans.iter().filter(|&&n| only.keeps(n as f64)) {
         progress(&format!("memory: pile of {n} humans"));
         let scene = super::scale::pile(n)?;
@@ -371,10 +395,13 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(Table, Vec<Value>), AppEr
         let mut row = serde_json::Map::new();
         row.insert("humans".into(), json!(n));
         row.insert("bones".into(), json!(bones));
-        for flavor in MEASURED {
+        for (m, flavor) in MEASURED.into_iter().enumerate() {
             let f = footprint_after(flavor, &scene, PILE_STEPS)?;
             let per_bone = f.bytes as f64 / bones as f64;
             cells.push(format!("{per_bone:.0}"));
+            let by_owner: serde_json::Map<String, Value> = (f.owners.iter())
+                .map(|&(o, b)| (o.to_string(), json!(b)))
+                .collect();
             row.insert(
                 flavor.key().into(),
                 json!({
@@ -382,8 +409,10 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(Table, Vec<Value>), AppEr
                     "bytes_per_bone": per_bone,
                     "peak_bytes": f.peak_bytes,
                     "blocks": f.blocks,
+                    "owners": by_owner,
                 }),
             );
+            owners[m].push((bones, f.owners));
         }
         table.row(cells);
         rows.push(Value::Object(row));
@@ -393,5 +422,47 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(Table, Vec<Value>), AppEr
         "Bytes asked of the allocator; each live block (JSON: blocks) costs it about 16 B \
          more of header and rounding.",
     );
-    Ok((table, rows))
+    let mut text = table.render();
+    for (flavor, per_row) in MEASURED.into_iter().zip(&owners) {
+        text += &owner_table(flavor, per_row).map_or(String::new(), |t| t.render());
+    }
+    Ok((text, rows))
+}
+
+/// Where one method's bytes per bone go on each pile row measured, owner by owner
+/// (`None` for a method that names no owners, or no rows).
+fn owner_table(flavor: Flavor, per_row: &[(usize, Vec<(&'static str, usize)>)]) -> Option<Table> {
+    // Every owner any row names, in the order they first come.
+    let mut names: Vec<&'static str> = Vec::new();
+    for (_, owners) in per_row {
+        for &(o, _) in owners {
+            if o != REST && !names.contains(&o) {
+                names.push(o);
+            }
+        }
+    }
+    if names.len() <= 1 {
+        return None;
+    }
+    names.push(REST);
+    let bones: Vec<String> = per_row.iter().map(|(b, _)| format!("{b} bones")).collect();
+    let mut header = vec!["Owner"];
+    header.extend(bones.iter().map(String::as_str));
+    let mut table = Table::new(
+        format!(
+            "Heap memory of the pile of humans by owner, {}, bytes per bone",
+            flavor.key()
+        ),
+        &header,
+    );
+    for owner in names {
+        let mut cells = vec![owner.to_string()];
+        for (bones, owners) in per_row {
+            let bytes = owners.iter().find(|(o, _)| *o == owner).map_or(0, |&(_, b)| b);
+            cells.push(format!("{:.0}", bytes as f64 / *bones as f64));
+        }
+        table.row(cells);
+    }
+    table.note("Bytes freed as the method dropped each owner in turn.");
+    Some(table)
 }

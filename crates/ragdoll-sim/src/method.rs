@@ -174,4 +174,12 @@ pub trait Method: Send {
     fn phase_times(&self) -> PhaseTimes {
         PhaseTimes::default()
     }
+    /// Drops the method one owner of heap memory at a time (its bodies, joints, contact
+    /// cache, ...), calling `dropped(owner)` after each: with a counting allocator, the
+    /// bytes freed since the previous call are what `owner` held. For the memory bench's
+    /// breakdown; a method that does not name its owners drops itself whole as `"all"`.
+    fn drop_by_owner(self: Box<Self>, dropped: &mut dyn FnMut(&'static str)) {
+        drop(self);
+        dropped("all");
+    }
 }

@@ -208,6 +208,32 @@ pub struct Contacts {
     pub hulls: Vec<SharedShape>,
 }
 
+impl Contacts {
+    /// Drops the contact state by owner (see `Method::drop_by_owner`): the pairs'
+    /// manifold points, the pair cache, the broad phase's boxes and candidates, the
+    /// excluded pairs, the ground and hull colliders.
+    pub(crate) fn drop_by_owner(self, dropped: &mut dyn FnMut(&'static str)) {
+        let Contacts {
+            mut pairs,
+            candidates,
+            aabbs,
+            excluded,
+            ground,
+            hulls,
+        } = self;
+        pairs.iter_mut().for_each(|p| p.points = Vec::new());
+        dropped("contact points");
+        drop(pairs);
+        dropped("contact pairs");
+        drop((candidates, aabbs));
+        dropped("broad phase");
+        drop(excluded);
+        dropped("excluded pairs");
+        drop((ground, hulls));
+        dropped("ground, hulls");
+    }
+}
+
 /// Upper bound of the speed of any point of body `i`.
 #[inline]
 fn point_speed(s: &BodyStates, info: &[BodyInfo], i: usize) -> f32 {

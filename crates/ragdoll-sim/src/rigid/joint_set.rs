@@ -330,6 +330,17 @@ impl JointSet {
         }
     }
 
+    /// Drops the joints by owner (see `Method::drop_by_owner`): the joints, the rows
+    /// of an in-place solve, the SIMD lanes.
+    pub(crate) fn drop_by_owner(mut self, dropped: &mut dyn FnMut(&'static str)) {
+        drop(std::mem::take(&mut self.rows));
+        dropped("joint rows");
+        drop(self.lanes.take());
+        dropped("joint lanes");
+        drop(self);
+        dropped("joints");
+    }
+
     /// Sizes each type's rows to its joints. Entries are overwritten by the preparation
     /// of their joint before any read, so kept or fresh they give the same solve; the
     /// arrays keep their capacity from step to step (a batch's, from batch to batch).

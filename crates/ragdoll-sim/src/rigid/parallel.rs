@@ -94,6 +94,47 @@ pub struct IslandTasks {
     pub(crate) in_place: Option<bool>,
 }
 
+impl IslandTasks {
+    /// Drops the batches' state by owner (see `Method::drop_by_owner`): the plan and
+    /// per-body map, the gathered arrays (split as a solve in place's are), the
+    /// batches' joint trees.
+    pub(crate) fn drop_by_owner(self, dropped: &mut dyn FnMut(&'static str)) {
+        let IslandTasks {
+            plan,
+            free,
+            trees,
+            local_of_moving,
+            ..
+        } = self;
+        drop((plan, local_of_moving));
+        dropped("batch plan");
+        drop(trees);
+        dropped("batch joint trees");
+        let free = free.into_inner().unwrap_or_else(PoisonError::into_inner);
+        for task in free {
+            let IslandTask {
+                bodies,
+                states,
+                motion,
+                awake,
+                mut joints,
+                joint_slots,
+                pairs,
+                buffers,
+                pair_slots,
+                ..
+            } = task;
+            drop((bodies, states, motion, awake));
+            dropped("batch body copies");
+            drop(std::mem::take(&mut joints.rows));
+            dropped("joint rows");
+            drop((joints, joint_slots, pairs, pair_slots));
+            dropped("batch joint, pair copies");
+            buffers.drop_by_owner(dropped);
+        }
+    }
+}
+
 /// What the batches' gathers and scatters read and write, behind one lock: the world's
 /// bodies, joints and pairs, and the per-batch and per-body bookkeeping. A batch reads
 /// and writes only its own moving bodies, joints, pairs and trees (and reads static

@@ -57,6 +57,24 @@ pub struct SolveBuffers {
 }
 
 impl SolveBuffers {
+    /// Drops the buffers by owner (see `Method::drop_by_owner`): the contact
+    /// constraints, the joint trees, the per-body arrays.
+    pub(crate) fn drop_by_owner(self, dropped: &mut dyn FnMut(&'static str)) {
+        let SolveBuffers {
+            contacts,
+            trees,
+            spin_offset,
+            touching,
+            in_contact,
+        } = self;
+        drop(contacts);
+        dropped("contact constraints");
+        drop(trees);
+        dropped("joint trees");
+        drop((spin_offset, touching, in_contact));
+        dropped("solve per-body arrays");
+    }
+
     /// The joint trees, for a caller that keeps them apart between solves.
     pub fn trees_mut(&mut self) -> &mut JointTrees {
         &mut self.trees

@@ -445,6 +445,39 @@ impl Method for MultibodyWorld {
         self.phase_times
     }
 
+    fn drop_by_owner(self: Box<Self>, dropped: &mut dyn FnMut(&'static str)) {
+        let MultibodyWorld {
+            settings,
+            states,
+            info,
+            names,
+            motion,
+            full_inertia,
+            joints,
+            contacts,
+            islands,
+            awake,
+            dynamic,
+            kinematic,
+            motors,
+            buffers,
+            island_tasks,
+            ..
+        } = *self;
+        drop(states);
+        dropped("body states");
+        drop((info, names, motion, full_inertia, awake, dynamic, kinematic));
+        dropped("body info, motion, flags");
+        joints.drop_by_owner(dropped);
+        contacts.drop_by_owner(dropped);
+        drop(islands);
+        dropped("islands, sleep");
+        buffers.drop_by_owner(dropped);
+        island_tasks.drop_by_owner(dropped);
+        drop((settings, motors));
+        dropped("settings, motors");
+    }
+
     fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {
         self.bodies().apply_impulse(body.index(), impulse, point);
     }
