@@ -386,7 +386,8 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(String, Vec<Value>), AppE
     );
     let mut rows = Vec::new();
     // Per method, per pile row: its bytes by owner, and the row's bones.
-    let mut owners: Vec<Vec<(usize, Vec<(&'static str, usize)>)>> = vec![Vec::new(); MEASURED.len()];
+    let mut owners: Vec<Vec<(usize, Vec<(&'static str, usize)>)>> =
+        vec![Vec::new(); MEASURED.len()];
     for &n in humans.iter().filter(|&&n| only.keeps(n as f64)) {
         progress(&format!("memory: pile of {n} humans"));
         let scene = super::scale::pile(n)?;
@@ -458,7 +459,10 @@ fn owner_table(flavor: Flavor, per_row: &[(usize, Vec<(&'static str, usize)>)]) 
     for owner in names {
         let mut cells = vec![owner.to_string()];
         for (bones, owners) in per_row {
-            let bytes = owners.iter().find(|(o, _)| *o == owner).map_or(0, |&(_, b)| b);
+            let bytes = owners
+                .iter()
+                .find(|(o, _)| *o == owner)
+                .map_or(0, |&(_, b)| b);
             cells.push(format!("{:.0}", bytes as f64 / *bones as f64));
         }
         table.row(cells);

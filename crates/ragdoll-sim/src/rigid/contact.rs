@@ -163,14 +163,15 @@ impl ContactPair {
             manifold.local_n2 = Vec3::ZERO;
         }
         self.points = manifold.points;
-        // A pair that parted keeps no room for points: most cached pairs of a landed
-        // pile are neighbours whose loosened boxes overlap while their shapes do not,
-        // and each would hold the four or eight points (76 bytes each) it had when it
-        // last touched. What parry reads back of an empty manifold is its normals, so
-        // the result is the same.
-        if self.points.is_empty() {
-            self.points = Vec::new();
-        }
+        // A pair keeps room for the points it has, no more (76 bytes each): a `Vec`
+        // grows to at least four and then doubles, so a resting pair of one or two
+        // points would hold four, and one that once had five would hold eight. A pair
+        // that parted keeps none: most cached pairs of a landed pile are neighbours
+        // whose loosened boxes overlap while their shapes do not. Parry reads back
+        // the points and normals, never the spare room, so the result is the same; a
+        // manifold of stable size is refilled in place (parry clears it and pushes as
+        // many points as before), and shrinking a block is done where it lies.
+        self.points.shrink_to_fit();
         self.manifold_n1 = manifold.local_n1;
         self.manifold_n2 = manifold.local_n2;
     }
