@@ -161,8 +161,10 @@ fn bilateral(ctx: &StepContext, use_bias: bool) -> Softness {
 /// ([`JointSolve::prepare_moved`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PointPart {
-    /// Accumulated impulse on b (world).
-    pub impulse: Vec3A,
+    /// Accumulated impulse on b (world). Kept as a `Vec3` (12 bytes) and widened where
+    /// it is used: a `Vec3A`'s 16-byte alignment would make the part 32 bytes, not 16,
+    /// in every joint; widening changes no bit of the products and sums.
+    pub impulse: Vec3,
     /// Solved with its tree's other point rows by [`super::joint_tree`], not here.
     pub direct: bool,
     /// In a tree of this solve (`direct` unless the tree's factorisation failed): the
@@ -219,7 +221,7 @@ impl PointPart {
 
     /// Re-applies last substep's impulse (after [`PointPart::prepare`]).
     pub(crate) fn warm_start(&self, rows: &PointRows<f32>, f: &JointFrame, s: &mut BodyStates) {
-        PointPart::apply(rows, f, s, self.impulse);
+        PointPart::apply(rows, f, s, Vec3A::from(self.impulse));
     }
 
     /// One soft Gauss–Seidel update (the relax pass, `use_bias` false, on the rows
@@ -240,7 +242,7 @@ impl PointPart {
         let soft = Soft::new(ctx, use_bias);
         rows.solve(&mut v, masses(f, s), &mut impulse, &soft, true);
         v.store(s, f.a, f.b);
-        self.impulse = impulse.lane(0).into();
+        self.impulse = impulse.lane(0);
     }
 
     /// Position projection: moves both bodies by `P = −K⁻¹ C` so the anchors meet, the
@@ -683,8 +685,9 @@ pub enum FreeTurns {
 pub struct FrictionMotor {
     /// Largest friction torque (N·m); 0 disables the motor.
     pub max_torque: f32,
-    /// Accumulated angular impulse on a (in the free turns of the last update).
-    pub impulse: Vec3A,
+    /// Accumulated angular impulse on a (in the free turns of the last update); a
+    /// `Vec3` widened where used, as [`PointPart::impulse`].
+    pub impulse: Vec3,
     /// Whether the last update held the joint (impulse below the cap: sticking).
     pub holding: bool,
 }
@@ -696,7 +699,7 @@ impl FrictionMotor {
     pub fn new(friction: f32, mass_a: f32, arm: f32, g: f32) -> FrictionMotor {
         FrictionMotor {
             max_torque: friction * mass_a * g * arm.max(0.05),
-            impulse: Vec3A::ZERO,
+            impulse: Vec3::ZERO,
             holding: false,
         }
     }
@@ -705,7 +708,7 @@ impl FrictionMotor {
     #[inline]
     pub fn warm_start(&self, f: &JointFrame, s: &mut BodyStates) {
         if self.max_torque > 0.0 {
-            f.apply_angular(s, self.impulse);
+            f.apply_angular(s, Vec3A::from(self.impulse));
         }
     }
 
@@ -756,7 +759,7 @@ impl FrictionMotor {
     /// is taken in the free turns (a hinge's axis turns with its bodies; what lay
     /// outside them is let go).
     fn update(&mut self, k: Mat3A, w: Vec3A, ctx: &StepContext, free: FreeTurns) -> Option<Vec3A> {
-        let old = self.impulse;
+        let old = Vec3A::from(self.impulse);
         let (kept, delta) = match free {
             FreeTurns::All => (old, -(invert(k)? * w)),
             FreeTurns::Axis(a) => {
@@ -782,7 +785,7 @@ impl FrictionMotor {
             }
         };
         let new = self.clamped(kept + delta, ctx);
-        self.impulse = new;
+        self.impulse = Vec3::from(new);
         Some(new - old)
     }
 

@@ -657,12 +657,14 @@ impl JointTrees {
         }
         for (node, &y) in nodes.iter().zip(x_joint.iter()) {
             let lambda = -y;
-            let decay = -soft.impulse_scale * point_of(joints, node.joint).impulse;
+            let decay = -soft.impulse_scale * Vec3A::from(point_of(joints, node.joint).impulse);
             if soft.impulse_scale != 0.0 {
                 let f = frame_of(joints, node.joint);
                 PointPart::apply(rows_of(joints, node.joint), &f, s, decay);
             }
-            point_of_mut(joints, node.joint).impulse += soft.mass_scale * lambda + decay;
+            let point = point_of_mut(joints, node.joint);
+            point.impulse =
+                Vec3::from(Vec3A::from(point.impulse) + (soft.mass_scale * lambda + decay));
         }
     }
 }

@@ -37,7 +37,7 @@ use super::joint_rows::{self, AlignRows, AngularRow, PointRows, Pose};
 use super::limits::{MARGIN, Swing};
 use super::soft::StepContext;
 use crate::lanes::{LANES, Mat3x4, Quatx4, Vec3x4, f4};
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 use wide::f32x4;
 
 /// No joint in this lane.
@@ -297,8 +297,8 @@ impl PointX4 {
         for k in (0..LANES).filter(|&k| is_set(l.live, k)) {
             let point = joints[l.joint(k)].point_mut();
             match (is_set(self.direct, k), is_set(now, k)) {
-                (true, false) => impulse[k] = Vec3::from(point.impulse),
-                (false, true) => point.impulse = Vec3A::from(impulse[k]),
+                (true, false) => impulse[k] = point.impulse,
+                (false, true) => point.impulse = impulse[k],
                 _ => {}
             }
         }
@@ -309,7 +309,7 @@ impl PointX4 {
     /// Takes the tree-solved lanes' impulses from their joints (for the warm start).
     fn take_direct<J: Pointed>(&mut self, l: &Lanes, joints: &[J]) {
         if self.direct.any() {
-            let from = Vec3x4::from_fn(|k| Vec3::from(joints[l.joint(k)].point().impulse));
+            let from = Vec3x4::from_fn(|k| joints[l.joint(k)].point().impulse);
             self.impulse = Vec3x4::select(self.direct, from, self.impulse);
         }
     }
@@ -638,7 +638,7 @@ impl JointLanes {
                 continue;
             };
             let j = |k: usize| &balls[b.lanes.joint(k)];
-            b.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
+            b.point.impulse = Vec3x4::from_fn(|k| j(k).point.impulse);
             b.cone.impulse = f4(|k| cone_state(j(k)).impulse);
             b.point.direct = mask(|k| is_set(b.lanes.live, k) && j(k).point.direct);
             b.point.in_tree = mask(|k| is_set(b.lanes.live, k) && j(k).point.in_tree);
@@ -651,7 +651,7 @@ impl JointLanes {
                 continue;
             };
             let j = |k: usize| &hinges[h.lanes.joint(k)];
-            h.point.impulse = Vec3x4::from_fn(|k| Vec3::from(j(k).point.impulse));
+            h.point.impulse = Vec3x4::from_fn(|k| j(k).point.impulse);
             h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
             for (r, row) in h.limit.iter_mut().enumerate() {
                 row.impulse = f4(|k| limit_states(j(k))[r].impulse);
@@ -850,7 +850,7 @@ impl JointLanes {
             for k in (0..LANES).filter(|&k| is_set(b.lanes.live, k)) {
                 let j = &mut balls[b.lanes.joints[k] as usize];
                 if !is_set(b.point.direct, k) {
-                    j.point.impulse = Vec3A::from(b.point.impulse.lane(k));
+                    j.point.impulse = b.point.impulse.lane(k);
                 }
                 cone_state_mut(j).impulse = b.cone.impulse.as_array()[k];
             }
@@ -859,7 +859,7 @@ impl JointLanes {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
                 let j = &mut hinges[h.lanes.joints[k] as usize];
                 if !is_set(h.point.direct, k) {
-                    j.point.impulse = Vec3A::from(h.point.impulse.lane(k));
+                    j.point.impulse = h.point.impulse.lane(k);
                 }
                 j.align.impulse = h.align.impulse.map(|i| i.as_array()[k]);
                 let rows = &mut j.limit.as_mut().expect("hinge_fits checked the range").rows;
