@@ -341,8 +341,10 @@ pub struct AngleGauge {
     pub axis_b: Vec3,
     /// Reference direction in b (where the angle reads 0, for drawing).
     pub ref_b: Vec3,
-    /// `q₀⁻¹`: the inverse of body1's rest orientation seen from body2.
-    rest_inv: Quat,
+    /// `q₀⁻¹`: the inverse of body1's rest orientation seen from body2, as the
+    /// quaternion's `[x, y, z, w]`: a `Quat`'s 16-byte alignment would pad every limit,
+    /// and with it every joint holding one, to a multiple of 16 bytes.
+    rest_inv: [f32; 4],
     /// Last unwrapped angle (rad).
     pub angle: f32,
     /// Measure about body2's copy of the axis, swinging body1's reference onto it.
@@ -356,7 +358,7 @@ impl AngleGauge {
             axis_a: f.dir_in_a(s, axis),
             axis_b: f.dir_in_b(s, axis),
             ref_b: f.dir_in_b(s, axis.any_orthonormal_vector()),
-            rest_inv: (s.rot[f.b].inverse() * s.rot[f.a]).inverse(),
+            rest_inv: (s.rot[f.b].inverse() * s.rot[f.a]).inverse().to_array(),
             angle: 0.0,
             on_body2: false,
         }
@@ -365,7 +367,7 @@ impl AngleGauge {
     /// Current world axis (body1's, or body2's with [`AngleGauge::on_body2`]) and
     /// unwrapped angle, without updating the memory.
     pub fn measure(&self, f: &JointFrame, s: &BodyStates) -> (Vec3, f32) {
-        let d = s.rot[f.b].inverse() * s.rot[f.a] * self.rest_inv;
+        let d = s.rot[f.b].inverse() * s.rot[f.a] * Quat::from_array(self.rest_inv);
         // `d` and `−d` are the same rotation; with `d_w ≥ 0` the angle is in [−π, π].
         let (sin, cos) = (d.xyz().dot(self.axis_b), d.w);
         let raw = 2.0
