@@ -111,6 +111,15 @@ fn every_bench_prints_its_json_shape() {
             let bytes = positive(&row[f]["bytes"], "pile bytes");
             let per_bone = positive(&row[f]["bytes_per_bone"], "pile bytes per bone");
             assert!((bytes / bones - per_bone).abs() < 1e-6);
+            // The bytes by owner account for every byte held, each once.
+            let owners = row[f]["owners"].as_object().expect("owners");
+            let sum: f64 = owners.values().map(|b| b.as_f64().unwrap()).sum();
+            assert_eq!(sum, bytes, "{f}: owners {owners:?}");
+        }
+        // The multibody names its owners: a landed human holds joints and contacts.
+        let owners = &row["multibody"]["owners"];
+        for owner in ["body states", "joints", "contact points", "contact pairs"] {
+            positive(&owners[owner], owner);
         }
     }
 

@@ -12,7 +12,10 @@
 //!
 //! Test 9's stack has no joints; a second table measures the pile of humans (scene 10),
 //! 16 bones and 15 joints each, so that a ragdoll's joints (and the multibody method's
-//! joint lanes) are in the figure per bone.
+//! joint lanes) are in the figure per bone. Its rows also give each method's bytes by
+//! owner (bodies, joints, contact points and pairs, broad phase, islands, solve
+//! buffers, ...): the method drops one owner at a time
+//! ([`ragdoll_sim::Method::drop_by_owner`]) and the counter reads what each frees.
 //!
 //! What is counted: every heap byte a method holds after it has been built from the
 //! scene and stepped [`STEPS`] frames (so contact caches, islands and scratch buffers
@@ -178,8 +181,11 @@ pub struct Footprint {
     /// one. An owner named twice (a kind of array the world and its island batches
     /// both keep) is summed; what the method held outside every named owner is
     /// [`REST`].
-    pub owners: Vec<(&'static str, usize)>,
+    pub owners: Owners,
 }
+
+/// Bytes by owner ([`Footprint::owners`]).
+pub type Owners = Vec<(&'static str, usize)>;
 
 /// The owner of the bytes a method frees outside the owners it names.
 pub const REST: &str = "rest";
@@ -216,7 +222,7 @@ pub fn footprint_after(
     let held = live_bytes() - base;
     let peak = peak_bytes() - base;
     let blocks = live_blocks() - base_blocks;
-    let mut owners: Vec<(&'static str, usize)> = Vec::with_capacity(32);
+    let mut owners: Owners = Vec::with_capacity(32);
     let mut last = live_bytes();
     method.drop_by_owner(&mut |owner| {
         let now = live_bytes();
@@ -386,8 +392,7 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(String, Vec<Value>), AppE
     );
     let mut rows = Vec::new();
     // Per method, per pile row: its bytes by owner, and the row's bones.
-    let mut owners: Vec<Vec<(usize, Vec<(&'static str, usize)>)>> =
-        vec![Vec::new(); MEASURED.len()];
+    let mut owners: Vec<Vec<(usize, Owners)>> = vec![Vec::new(); MEASURED.len()];
     for &n in humans.iter().filter(|&&n| only.keeps(n as f64)) {
         progress(&format!("memory: pile of {n} humans"));
         let scene = super::scale::pile(n)?;
@@ -432,7 +437,7 @@ fn pile_table(size: Size, only: &RowFilter) -> Result<(String, Vec<Value>), AppE
 
 /// Where one method's bytes per bone go on each pile row measured, owner by owner
 /// (`None` for a method that names no owners, or no rows).
-fn owner_table(flavor: Flavor, per_row: &[(usize, Vec<(&'static str, usize)>)]) -> Option<Table> {
+fn owner_table(flavor: Flavor, per_row: &[(usize, Owners)]) -> Option<Table> {
     // Every owner any row names, in the order they first come.
     let mut names: Vec<&'static str> = Vec::new();
     for (_, owners) in per_row {
