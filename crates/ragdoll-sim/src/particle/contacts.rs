@@ -266,11 +266,6 @@ impl FilterKey {
 }
 
 impl Filter {
-    /// Heap bytes of its two arrays (`heap`).
-    pub fn heap_bytes(&self) -> super::heap::Bytes {
-        super::heap::vec(&self.first) + super::heap::vec(&self.partners)
-    }
-
     /// A filter excluding `pairs` (each in either order, repeats allowed) among `bones`.
     pub fn new(bones: usize, pairs: &[(usize, usize)]) -> Filter {
         let mut sorted: Vec<(u32, u32)> = pairs

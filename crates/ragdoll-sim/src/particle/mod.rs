@@ -17,7 +17,6 @@ mod bone;
 mod bone_lanes;
 mod contacts;
 mod friction;
-mod heap;
 mod impulse;
 mod islands;
 mod joint_lanes;
@@ -48,7 +47,6 @@ use crate::timings::{PhaseClock, PhaseTimes};
 use bone::{Bone, EDGES};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
-pub use heap::HeapOwner;
 use joints::{Joint, Link, RestFrames};
 use parry3d::query::{ContactManifold, Ray};
 use parry3d::shape::SharedShape;
@@ -762,6 +760,48 @@ impl Method for ParticleWorld {
 
     fn phase_times(&self) -> PhaseTimes {
         self.phase_times
+    }
+
+    fn drop_by_owner(self: Box<Self>, dropped: &mut dyn FnMut(&'static str)) {
+        let ParticleWorld {
+            shapes,
+            particles,
+            frame_starts,
+            bones,
+            joints,
+            links,
+            filter,
+            contacts,
+            pairs,
+            manifolds,
+            paper,
+            xpbd,
+            kinematic,
+            motors,
+            ..
+        } = *self;
+        drop(bones);
+        dropped("bones");
+        drop((joints, links, filter, motors, kinematic));
+        dropped("joints, links, filter");
+        drop(contacts);
+        dropped("contact points");
+        drop((pairs, manifolds));
+        dropped("contact pairs");
+        drop((particles, frame_starts, shapes));
+        dropped("particles, frame starts, shapes");
+        drop(paper);
+        dropped("paper: sticks, limits");
+        if let Some(st) = xpbd {
+            drop(st.contacts);
+            dropped("xpbd: contact points");
+            drop(st.scratch);
+            dropped("xpbd: detection scratch");
+            drop(st.joint_start);
+            dropped("xpbd: joint block starts");
+            drop((st.particles, st.rest_inv, st.anchors, st.rest));
+            dropped("xpbd: particles");
+        }
     }
 
     fn apply_impulse(&mut self, body: BodyId, impulse: Vec3, point: Vec3) {

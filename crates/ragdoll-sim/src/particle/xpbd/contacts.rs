@@ -94,29 +94,6 @@ pub(crate) struct Scratch {
     taken: Vec<bool>,
 }
 
-impl Scratch {
-    /// Heap bytes of each of its arrays (`particle::heap`).
-    pub fn heap_owners(&self) -> [(&'static str, crate::particle::heap::Bytes); 8] {
-        use crate::particle::heap::vec;
-        [
-            ("xpbd.scratch.pairs", vec(&self.pairs)),
-            (
-                "xpbd.scratch.manifolds",
-                crate::particle::heap::manifolds(&self.manifolds),
-            ),
-            (
-                "xpbd.scratch.margins+speeds",
-                vec(&self.margins) + vec(&self.speeds),
-            ),
-            ("xpbd.scratch.levers", vec(&self.levers)),
-            ("xpbd.scratch.friction", vec(&self.friction)),
-            ("xpbd.scratch.normal", vec(&self.normal)),
-            ("xpbd.scratch.rigid", vec(&self.rigid)),
-            ("xpbd.scratch.taken", vec(&self.taken)),
-        ]
-    }
-}
-
 /// A point given in world coordinates, attached to bone `i`'s particles.
 fn attach(bones: &[Bone], rest_inv: &[Mat3], i: usize, world: Vec3) -> Anchor {
     let b = &bones[i];
