@@ -268,7 +268,8 @@ pub const NOTICE_SECONDS: f32 = 6.0;
 pub struct SettingsOverride {
     /// Timestep (s).
     pub timestep: Option<f32>,
-    /// Constraint iterations.
+    /// Constraint iterations, for both methods (a scene's `multibodyIterations` gives
+    /// way to it).
     pub iterations: Option<u32>,
     /// Substeps, for both methods (a scene's `multibodySubsteps` gives way to it).
     pub substeps: Option<u32>,
@@ -297,6 +298,7 @@ impl SettingsOverride {
         }
         if let Some(n) = self.iterations {
             s.iterations = n;
+            s.multibody_iterations = None;
         }
         if let Some(n) = self.substeps {
             s.substeps = n;
@@ -310,9 +312,10 @@ impl SettingsOverride {
     pub fn without_changed(self, before: &Settings, after: &Settings) -> SettingsOverride {
         SettingsOverride {
             timestep: self.timestep.filter(|_| before.timestep == after.timestep),
-            iterations: self
-                .iterations
-                .filter(|_| before.iterations == after.iterations),
+            iterations: self.iterations.filter(|_| {
+                before.iterations == after.iterations
+                    && before.multibody_iterations == after.multibody_iterations
+            }),
             substeps: self.substeps.filter(|_| {
                 before.substeps == after.substeps
                     && before.multibody_substeps == after.multibody_substeps

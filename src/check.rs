@@ -87,9 +87,11 @@ pub fn summary(file: &str, scene: &AfScene) -> String {
     };
     let _ = writeln!(
         out,
-        "settings: timestep {:.4} s, {} iterations, {} substeps{}, {ground}",
+        "settings: timestep {:.4} s, {} iterations{}, {} substeps{}, {ground}",
         st.timestep,
         st.iterations,
+        st.multibody_iterations
+            .map_or(String::new(), |n| format!(" ({n} multibody)")),
         st.substeps,
         st.multibody_substeps
             .map_or(String::new(), |n| format!(" ({n} multibody)"))

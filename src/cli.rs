@@ -95,7 +95,7 @@ pub struct ViewArgs {
     /// Override the scene's timestep (s); kept across resets, as the panel's slider.
     #[arg(long)]
     pub timestep: Option<f32>,
-    /// Override the scene's iterations.
+    /// Override the scene's iterations (both methods).
     #[arg(long)]
     pub iterations: Option<u32>,
     /// Override the scene's substeps (both methods).
@@ -165,7 +165,7 @@ pub struct StatsArgs {
     /// Override the scene's timestep (s).
     #[arg(long)]
     pub timestep: Option<f32>,
-    /// Override the scene's iterations.
+    /// Override the scene's iterations (both methods).
     #[arg(long)]
     pub iterations: Option<u32>,
     /// Override the scene's substeps.

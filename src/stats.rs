@@ -261,7 +261,9 @@ pub fn run(args: StatsArgs) -> Result<(), AppError> {
         s.timestep = dt;
     }
     if let Some(it) = args.iterations {
+        // An override is for both methods, whatever the scene gave the multibody one.
         s.iterations = it;
+        s.multibody_iterations = None;
     }
     if let Some(n) = args.substeps {
         // An override is for both methods, whatever the scene gave the multibody one.

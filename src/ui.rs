@@ -1001,6 +1001,8 @@ fn settings_sliders(
     ) {
         chosen.timestep = Some(timestep_ms * 1e-3);
     }
+    // The slider sets both methods' iterations; the multibody's own count
+    // (`multibodyIterations`, shown in the solver labels) gives way to it once moved.
     if slider(ui, egui::Slider::new(&mut iterations, 1..=50), "iterations") {
         chosen.iterations = Some(iterations);
     }

@@ -15,8 +15,7 @@
 //! 4. integrate positions, each body without a contact turned with its angular
 //!    momentum held;
 //! 5. relax: solve again without bias, removing the velocity the position feedback
-//!    added, so pushing out does not become bouncing (joints in
-//!    `substeps::RELAX_JOINT_PASSES` passes).
+//!    added, so pushing out does not become bouncing (joints in `relax_passes` passes).
 //!
 //! After the substeps, the restitution pass, the position projection ([`super::project`]:
 //! what the soft constraints let give way is put back, positions only); then sleeping.
@@ -110,7 +109,8 @@ pub fn step(
             max_push_out: settings.max_push_out_speed,
         },
         substeps: substeps / windows,
-        iterations: settings.iterations.max(1),
+        iterations: settings.multibody_iteration_count().max(1),
+        relax_passes: settings.relax_passes.max(1),
         gravity: settings.gravity,
         restitution_threshold: settings.restitution_threshold,
         sleep: &settings.sleep,

@@ -13,14 +13,6 @@ use super::soft::StepContext;
 use crate::scene::SleepSettings;
 use glam::Vec3;
 
-/// Joint passes of the relax step. The relax takes back the velocity the biased
-/// iterations added to push errors out; one Gauss–Seidel pass does not: a joint's
-/// angular rows (a limit, an alignment) act about the centre of mass, the point row
-/// then holds the anchor, and the two undo each other's work. A hinge door started
-/// 10° outside its range kept 2.6 % of the scene's energy scale as speed after one
-/// pass, 1.2 % after two, 0.6 % after three.
-const RELAX_JOINT_PASSES: u32 = 2;
-
 /// What every island's solve needs besides its bodies and constraints: the same for all
 /// islands of a step.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +23,8 @@ pub struct SolveParams<'a> {
     pub substeps: u32,
     /// Biased velocity iterations per substep.
     pub iterations: u32,
+    /// Joint passes of each substep's relax step ([`crate::scene::Settings::relax_passes`]).
+    pub relax_passes: u32,
     /// Gravity (m/s²).
     pub gravity: Vec3,
     /// Approach speed below which contacts do not bounce (m/s).
@@ -129,7 +123,7 @@ pub fn solve(
         // The relax passes solve on the moved pose, prepared once: a preparation reads
         // the pose, inertias and masses, which the velocity passes leave as they are.
         joints.prepare_moved(s, awake);
-        for pass in 0..RELAX_JOINT_PASSES {
+        for pass in 0..p.relax_passes {
             joints.solve(s, awake, &p.ctx, false);
             if pass == 0 && !trees.is_empty() {
                 trees.factor(joints, s);

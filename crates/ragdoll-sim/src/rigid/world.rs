@@ -258,9 +258,10 @@ impl Method for MultibodyWorld {
     fn solver_label(&self) -> String {
         let s = &self.settings;
         format!(
-            "soft step, {} substeps × {} iterations",
+            "soft step, {} substeps × ({} iterations + {} relax)",
             s.multibody_substep_count(),
-            s.iterations
+            s.multibody_iteration_count(),
+            s.relax_passes
         )
     }
 

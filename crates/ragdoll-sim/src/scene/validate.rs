@@ -220,6 +220,20 @@ fn validate_settings(s: &Settings) -> Result<(), SceneError> {
             what: format!("{n} is not in 1..=1000"),
         });
     }
+    if let Some(n) = s.multibody_iterations
+        && (n == 0 || n > 1000)
+    {
+        return Err(SceneError::BadSetting {
+            setting: "multibodyIterations",
+            what: format!("{n} is not in 1..=1000"),
+        });
+    }
+    if s.relax_passes == 0 || s.relax_passes > 1000 {
+        return Err(SceneError::BadSetting {
+            setting: "relaxPasses",
+            what: format!("{} is not in 1..=1000", s.relax_passes),
+        });
+    }
     if !s.gravity.is_finite() {
         return Err(SceneError::BadSetting {
             setting: "gravity",

@@ -598,12 +598,14 @@ pub(super) fn read_settings(
             "iterations" => s.iterations = count(ctx, e)?,
             "substeps" => s.substeps = count(ctx, e)?,
             "multibodysubsteps" => s.multibody_substeps = Some(count(ctx, e)?),
+            "multibodyiterations" => s.multibody_iterations = Some(count(ctx, e)?),
+            "relaxpasses" => s.relax_passes = count(ctx, e)?,
             "contacthertz" => s.contact_hertz = ctx.nonneg(e)?,
             "jointhertz" => s.joint_hertz = ctx.nonneg(e)?,
             "dampingratio" => s.damping_ratio = ctx.nonneg(e)?,
             "maxpushoutspeed" => s.max_push_out_speed = ctx.nonneg(e)? * scale,
             "restitutionthreshold" => s.restitution_threshold = ctx.nonneg(e)? * scale,
-            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, linearFriction, angularFriction, contactFriction, constraintFriction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, multibodySubsteps, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
+            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, linearFriction, angularFriction, contactFriction, constraintFriction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, multibodySubsteps, multibodyIterations, relaxPasses, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
         }
     }
     Ok(())
