@@ -70,9 +70,11 @@ pub fn three_bones(timestep: f32) -> SceneDesc {
 /// grid, far enough apart that each falls onto the ground on its own, stepped at
 /// `timestep` with `iterations`.
 pub fn figures(count: usize, timestep: f32, iterations: u32) -> SceneDesc {
+    // The paper's N for both methods: the multibody's velocity iterations follow it.
     let settings = Settings {
         timestep,
         iterations,
+        multibody_iterations: None,
         ..Settings::default()
     };
     let mut scene = base_scene(format!("bench-figures-{}", 3 * count), settings);
@@ -93,9 +95,11 @@ pub fn figures(count: usize, timestep: f32, iterations: u32) -> SceneDesc {
 /// Test 12: nine boxes, three three-bone figures dropped crosswise onto each other so
 /// contacts and joints both need the iterations.
 pub fn nine_boxes(iterations: u32) -> SceneDesc {
+    // The swept iterations for both methods: the multibody's follow them.
     let settings = Settings {
         timestep: 0.01,
         iterations,
+        multibody_iterations: None,
         ..Settings::default()
     };
     let mut scene = base_scene("bench-nine-boxes".into(), settings);

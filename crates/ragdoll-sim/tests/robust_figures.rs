@@ -34,6 +34,7 @@ fn variations(base: &SceneDesc) -> Vec<(String, SceneDesc, f32)> {
     for it in [1, 40] {
         let mut s = base.clone();
         s.settings.iterations = it;
+        s.settings.multibody_iterations = Some(it);
         out.push((format!("{it} iterations"), s, 2.0));
     }
     out
@@ -104,6 +105,7 @@ fn multibody_figures_stay_bounded_across_timestep_iteration_and_substep_combinat
             let mut s = base.clone();
             s.settings.timestep = dt;
             s.settings.iterations = iterations;
+            s.settings.multibody_iterations = Some(iterations);
             s.settings.substeps = substeps;
             s.settings.multibody_substeps = Some(substeps);
             let what = format!("{name}, dt {dt}, {iterations} iterations, {substeps} substeps");

@@ -593,8 +593,8 @@ pub struct Settings {
     pub timestep: f32,
     /// Constraint iterations: relaxation + projection rounds per step in the particle
     /// method's paper mode (the paper's N); the rigid-frames and XPBD solvers run
-    /// substeps × iterations substeps; the multibody method's velocity iterations per
-    /// substep unless [`Settings::multibody_iterations`] gives its own.
+    /// substeps × iterations substeps. The multibody method's velocity iterations are
+    /// [`Settings::multibody_iterations`].
     pub iterations: u32,
     /// Substeps per step for the improved particle solver and the multibody solver.
     pub substeps: u32,
@@ -604,7 +604,15 @@ pub struct Settings {
     /// substep rate.
     pub multibody_substeps: Option<u32>,
     /// Biased velocity iterations per substep for the multibody solver alone (`None`:
-    /// [`Settings::iterations`]).
+    /// [`Settings::iterations`]). Default 4: at 4 substeps the warm start carries most
+    /// of the impulses from one substep to the next, and four iterations hold every
+    /// closed form and robustness test and keep the pile of humans within 5.8 mm of
+    /// penetration and 1.3° of limit excess, asleep as with five (1.4 s), for 7 % fewer
+    /// instructions on the busy pile. At three a stack of ten boxes collapses (22 cm of
+    /// penetration), a heavy box dropped on a light one sinks into it and hinge friction
+    /// slips. A figure landing on one limb at 16 substeps and 240 Hz needs five
+    /// ([`Settings::multibody_substeps`]): at three the paper's human falls asleep in 52
+    /// of 72 nearby starts instead of 71.
     pub multibody_iterations: Option<u32>,
     /// Joint passes of the multibody solver's relax step per substep. The relax takes
     /// back the velocity the biased iterations added to push errors out; one
@@ -661,7 +669,7 @@ impl Default for Settings {
             iterations: 5,
             substeps: 4,
             multibody_substeps: None,
-            multibody_iterations: None,
+            multibody_iterations: Some(4),
             relax_passes: 2,
             total_mass: None,
             sleep: SleepSettings::default(),
