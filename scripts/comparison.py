@@ -10,7 +10,7 @@ Cost: µs per awake body per step in the moving pile with sleeping off, one thre
 (`ragdoll-lab bench scale --only 10,100 --no-sleep --json --particle-solver S`; each run
 times the multibody beside, whose column shows the median of the three runs), how that
 figure grows from 10 to 100 humans, and bytes per bone (`ragdoll-lab bench memory
---only 4096 --json`: the jointless stack of 4096 boxes and the landed pile of 1000
+--only 4096 --json`: the jointless stack of 4096 boxes and the pile of 1000
 humans).
 
 The table replaces what stands between `<!-- comparison:begin -->` and
@@ -204,7 +204,7 @@ def table(binary):
           else f"{b[n_hi] / b[n_lo]:.2f}×" for b in busy_cols]),
         (f"memory, B per bone: jointless stack of {STACK_BONES} boxes",
          [fmt(mem.get(mkey, (None, None))[0], "{:.0f}") for _, _, _, _, _, mkey, _ in SOLVERS]),
-        (f"memory, B per bone: landed pile of {PILE_HUMANS} humans",
+        (f"memory, B per bone: pile of {PILE_HUMANS} humans after 90 frames",
          [fmt(mem.get(mkey, (None, None))[1], "{:.0f}") for _, _, _, _, _, mkey, _ in SOLVERS]),
     ]
     head = "| | " + " | ".join(title for title, *_ in SOLVERS) + " |\n"
