@@ -4,7 +4,7 @@
 //! seconds each.
 //!
 //! ```text
-//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM] [--multibody | --xpbd]
+//! cargo run --release -p ragdoll-sim --example ensemble -- hinge-chain 3 [--each] [--from MM] [--multibody | --xpbd [--schedule SxP]]
 //! ```
 //!
 //! The name `lab-human` runs our Doom 3-style mod's humanoid (assets/doom3, entity
@@ -19,7 +19,8 @@
 //! over the starts. `--each` prints every start too; `--from MM` shifts by
 //! MM … MM + 23 mm instead, another 72 starts; `--multibody` runs the multibody method
 //! instead, whose state energy is the sample's (its velocities are the state's own);
-//! `--xpbd` the particle method's XPBD solver instead of its rigid frames.
+//! `--xpbd` the particle method's XPBD solver instead of its rigid frames; `--schedule SxP`
+//! runs it at S substeps of P passes (`Settings::xpbd_substeps`, `Settings::xpbd_passes`).
 
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
@@ -131,10 +132,30 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    let schedule = match args
+        .iter()
+        .position(|a| a == "--schedule")
+        .map(|i| args.get(i + 1))
+    {
+        None => None,
+        Some(v) => match v
+            .and_then(|v| v.split_once('x'))
+            .map(|(s, p)| (s.parse(), p.parse()))
+        {
+            Some((Ok(s), Ok(p))) => Some((s, p)),
+            _ => {
+                eprintln!("error: --schedule takes substeps x passes, such as 60x1");
+                return ExitCode::FAILURE;
+            }
+        },
+    };
     let mut plain = args
         .iter()
         .enumerate()
-        .filter(|&(i, a)| !a.starts_with("--") && (i == 0 || args[i - 1] != "--from"))
+        .filter(|&(i, a)| {
+            !a.starts_with("--")
+                && (i == 0 || !["--from", "--schedule"].contains(&args[i - 1].as_str()))
+        })
         .map(|(_, a)| a);
     let name = plain.next().map_or("hinge-chain", String::as_str);
     let variant = match plain.next().map(|v| v.parse::<u32>()) {
@@ -146,7 +167,13 @@ fn main() -> ExitCode {
         }
     };
     let base = match scene(name, variant) {
-        Ok(s) => s,
+        Ok(mut s) => {
+            if let Some((substeps, passes)) = schedule {
+                s.settings.xpbd_substeps = Some(substeps);
+                s.settings.xpbd_passes = passes;
+            }
+            s
+        }
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;

@@ -34,6 +34,9 @@ mod set_pose;
 mod sleeping;
 mod xpbd;
 
+/// The XPBD solver's default passes per substep ([`crate::scene::Settings::xpbd_passes`]).
+pub(crate) use xpbd::step::PASSES as XPBD_PASSES;
+
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
     BodyCollider, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider,
@@ -512,13 +515,16 @@ impl Method for ParticleWorld {
                 s.substeps.max(1),
                 s.iterations.max(1)
             ),
-            ParticleSolver::Xpbd => format!(
-                "xpbd particles, {} substeps × {} passes ({} × {} iterations)",
-                rigid_frames::substeps(s),
-                xpbd::step::PASSES,
-                s.substeps.max(1),
-                s.iterations.max(1)
-            ),
+            ParticleSolver::Xpbd => match s.xpbd_substeps {
+                None => format!(
+                    "xpbd particles, {} substeps × {} passes ({} × {} iterations)",
+                    rigid_frames::substeps(s),
+                    s.xpbd_passes,
+                    s.substeps.max(1),
+                    s.iterations.max(1)
+                ),
+                Some(n) => format!("xpbd particles, {n} substeps × {} passes", s.xpbd_passes),
+            },
         }
     }
 

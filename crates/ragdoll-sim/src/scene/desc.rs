@@ -621,6 +621,14 @@ pub struct Settings {
     /// each other's work. A hinge door started 10° outside its range kept 2.6 % of the
     /// scene's energy scale as speed after one pass, 1.2 % after two, 0.6 % after three.
     pub relax_passes: u32,
+    /// Substeps per step for the XPBD particle solver alone (`None`: substeps ×
+    /// iterations, as the rigid-frames solver runs), each of
+    /// [`Settings::xpbd_passes`] passes.
+    pub xpbd_substeps: Option<u32>,
+    /// Gauss–Seidel passes per substep of the XPBD particle solver over its contacts,
+    /// joints and sticks. Default 8; `docs/benchmarks.md` weighs other schedules of
+    /// substeps and passes against the gates.
+    pub xpbd_passes: u32,
     /// Doom 3 `totalMass`: if > 0, every dynamic body's mass is scaled to make this total.
     pub total_mass: Option<f32>,
     /// When bodies may sleep.
@@ -671,6 +679,8 @@ impl Default for Settings {
             multibody_substeps: None,
             multibody_iterations: Some(4),
             relax_passes: 2,
+            xpbd_substeps: None,
+            xpbd_passes: crate::particle::XPBD_PASSES,
             total_mass: None,
             sleep: SleepSettings::default(),
             camera: CameraDesc::default(),

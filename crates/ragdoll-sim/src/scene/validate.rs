@@ -234,6 +234,20 @@ fn validate_settings(s: &Settings) -> Result<(), SceneError> {
             what: format!("{} is not in 1..=1000", s.relax_passes),
         });
     }
+    if let Some(n) = s.xpbd_substeps
+        && (n == 0 || n > 1000)
+    {
+        return Err(SceneError::BadSetting {
+            setting: "xpbdSubsteps",
+            what: format!("{n} is not in 1..=1000"),
+        });
+    }
+    if s.xpbd_passes == 0 || s.xpbd_passes > 1000 {
+        return Err(SceneError::BadSetting {
+            setting: "xpbdPasses",
+            what: format!("{} is not in 1..=1000", s.xpbd_passes),
+        });
+    }
     if !s.gravity.is_finite() {
         return Err(SceneError::BadSetting {
             setting: "gravity",

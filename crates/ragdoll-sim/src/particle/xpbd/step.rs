@@ -2,11 +2,11 @@
 //!
 //! Per frame, [`DETECTIONS_PER_FRAME`] collision detections or one per
 //! [`DETECTION_SPAN`], whichever is more (`contacts::detect`); per
-//! substep `h` (the scene's substeps × iterations, one pass each: Macklin et al. 2019):
+//! substep `h` ([`substep_count`] a frame: Macklin et al. 2019):
 //! 1. predict every awake particle: `x_prev = x`, `v += g h`, `x += v h`;
 //! 2. read each bone's frame from its particles (`frame::read`);
-//! 3. [`PASSES`] passes of: each contact manifold's normal pushes as one block
-//!    (`contact_block`), then its friction on barycentric weights (`contacts::solve`);
+//! 3. [`Settings::xpbd_passes`] passes (by default [`PASSES`]) of: each contact
+//!    manifold's normal pushes as one block (`contact_block`), then its friction on barycentric weights (`contacts::solve`);
 //!    each joint's point, angular parts and violated limits as one block, moving each
 //!    bone's particles along the gradients at the substep's start (`joint_block`; a
 //!    slider's and a spring's parts one by one, `joints::solve_angular`,
@@ -39,9 +39,10 @@ use super::{
 };
 use crate::broadphase::Reused;
 use crate::method::Grab;
+use crate::scene::Settings;
 
 /// Gauss–Seidel passes per substep over the joints, the contacts and the sticks'
-/// projection. Each joint's point, angular parts and violated limits are one block
+/// projection by default ([`Settings::xpbd_passes`]). Each joint's point, angular parts and violated limits are one block
 /// (`joint_block`), each manifold's normal pushes one block (`contact_block`), both
 /// moving the bones as rigid bodies would, which the projection then keeps; what the
 /// passes still resolve is the coupling between joints and manifolds. Solved part by
@@ -162,6 +163,12 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
     }
 }
 
+/// Substeps per frame: [`Settings::xpbd_substeps`], or the scene's substeps ×
+/// iterations.
+pub(crate) fn substep_count(s: &Settings) -> u32 {
+    s.xpbd_substeps.unwrap_or_else(|| substeps(s))
+}
+
 /// Reads every moving bone's frame from its particles.
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
     for (i, b) in w.bones.iter_mut().enumerate() {
@@ -208,7 +215,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             st.particles.set_asleep(i, false);
         }
     }
-    let n = substeps(&w.settings);
+    let n = substep_count(&w.settings);
     let h = dt / n as f32;
     let g = w.settings.gravity;
     close_start_slack(w, st, h);
@@ -258,7 +265,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
         contact_block::begin_substep(&mut st.contacts, p, &w.bones);
         read_frames(w, st);
-        for pass in 0..PASSES {
+        for pass in 0..w.settings.xpbd_passes {
             contacts::solve(
                 &mut st.contacts,
                 &mut st.particles,

@@ -603,12 +603,14 @@ pub(super) fn read_settings(
             "multibodysubsteps" => s.multibody_substeps = Some(count(ctx, e)?),
             "multibodyiterations" => s.multibody_iterations = Some(count(ctx, e)?),
             "relaxpasses" => s.relax_passes = count(ctx, e)?,
+            "xpbdsubsteps" => s.xpbd_substeps = Some(count(ctx, e)?),
+            "xpbdpasses" => s.xpbd_passes = count(ctx, e)?,
             "contacthertz" => s.contact_hertz = ctx.nonneg(e)?,
             "jointhertz" => s.joint_hertz = ctx.nonneg(e)?,
             "dampingratio" => s.damping_ratio = ctx.nonneg(e)?,
             "maxpushoutspeed" => s.max_push_out_speed = ctx.nonneg(e)? * scale,
             "restitutionthreshold" => s.restitution_threshold = ctx.nonneg(e)? * scale,
-            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, linearFriction, angularFriction, contactFriction, constraintFriction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, multibodySubsteps, multibodyIterations, relaxPasses, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
+            _ => return Err(unknown_key(ctx, e, "settings", "mesh, model, anim, skin, friction, linearFriction, angularFriction, contactFriction, constraintFriction, selfCollision, suspendSpeed, totalMass, noMoveTime, noMoveTranslation, noMoveRotation, minMoveTime, maxMoveTime, contents, clipMask; ours: name, units, up, gravity, timestep, iterations, substeps, multibodySubsteps, multibodyIterations, relaxPasses, xpbdSubsteps, xpbdPasses, contactHertz, jointHertz, dampingRatio, maxPushOutSpeed, restitutionThreshold")),
         }
     }
     Ok(())
@@ -791,5 +793,21 @@ mod tests {
             (s.multibody_substeps, s.contact_hertz, s.joint_hertz),
             (d.multibody_substeps, d.contact_hertz, d.joint_hertz)
         );
+    }
+
+    #[test]
+    fn the_xpbd_schedule_is_read_from_the_settings() {
+        let body = "body \"b\" { model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 10 ) }\n";
+        let d = crate::scene::Settings::default();
+        let s = settings(body);
+        assert_eq!((s.xpbd_substeps, s.xpbd_passes), (None, d.xpbd_passes));
+        let s = settings(&format!(
+            "settings {{ xpbdSubsteps 60 xpbdPasses 1 }}\n{body}"
+        ));
+        assert_eq!((s.xpbd_substeps, s.xpbd_passes), (Some(60), 1));
+        // No pass at all is no schedule.
+        let text = format!("settings {{ xpbdPasses 0 }}\n{body}");
+        let err = parse(&text, Path::new("t.af"), &AfOptions::default()).err();
+        assert!(err.is_some_and(|e| e.to_string().contains("xpbdPasses")));
     }
 }
