@@ -803,9 +803,9 @@ impl Method for ParticleWorld {
             dropped("xpbd: contact points");
             drop(st.scratch);
             dropped("xpbd: detection scratch");
-            drop(st.joint_start);
+            drop((st.joint_start, st.limit_lambda));
             dropped("xpbd: joint block starts");
-            drop((st.particles, st.rest_inv, st.anchors, st.rest));
+            drop((st.particles, st.anchors, st.rest));
             dropped("xpbd: particles");
         }
     }

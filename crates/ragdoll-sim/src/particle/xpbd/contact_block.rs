@@ -30,7 +30,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::super::bone::Bone;
-use super::contacts::Contact;
+use super::super::contacts::reserve_kept;
+use super::contacts::{Contact, Work};
 use super::joints::{Anchor, move_linear};
 use super::particles::XParticles;
 use glam::{DMat3, DVec3};
@@ -107,29 +108,45 @@ pub(crate) fn block_len_back(contacts: &[Contact]) -> usize {
     same_pair_run(contacts.iter().rev())
 }
 
-/// Each contact's angular Jacobians and their `I⁻¹ J` at the substep's start
-/// ([`Contact::turn`]), with the arithmetic the passes used: the levers from the
-/// bodies' centres then (`joints::pull_rigid`), fixed through the substep. Once
-/// `contacts::begin_substep` and `XParticles::fix_start` ran.
-pub(crate) fn begin_substep(contacts: &mut [Contact], p: &XParticles, bones: &[Bone]) {
-    for ct in contacts.iter_mut() {
+/// Each contact's angular Jacobians and their `I⁻¹ J` at the substep's start into its
+/// slot of `work` ([`Work::Position`]), with the arithmetic the passes use: the levers
+/// from the bodies' centres then (`joints::pull_rigid`), fixed through the substep.
+/// Once `contacts::begin_substep` and `XParticles::fix_start` ran. The slots are kept
+/// at the largest count of contacts, not doubled past it.
+pub(crate) fn begin_substep(
+    contacts: &[Contact],
+    work: &mut Vec<Work>,
+    p: &XParticles,
+    bones: &[Bone],
+) {
+    work.clear();
+    reserve_kept(work, contacts.len());
+    work.extend(contacts.iter().map(|ct| {
         let a = Body::of(p, bones, &ct.a);
         let b = Body::of(p, bones, &ct.b);
         let n = ct.n.as_dvec3();
-        ct.turn = [DVec3::ZERO; 2];
+        let start = ct.start(p);
+        let mut turn = [DVec3::ZERO; 2];
         if a.bone.is_some() {
-            ct.turn[0] = (ct.start[0] - a.centre).cross(n);
+            turn[0] = (start[0] - a.centre).cross(n);
         }
         if b.bone.is_some() {
-            ct.turn[1] = (ct.start[1] - b.centre).cross(n);
+            turn[1] = (start[1] - b.centre).cross(n);
         }
-        ct.inv_turn = [a.inv_inertia * ct.turn[0], b.inv_inertia * ct.turn[1]];
-    }
+        let inv_turn = [a.inv_inertia * turn[0], b.inv_inertia * turn[1]];
+        Work::Position { turn, inv_turn }
+    }));
 }
 
-/// The normal pushes of the block `group` (one pair of bodies; module doc); marks each
-/// contact active where its total push is positive.
-pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bone]) {
+/// The normal pushes of the block `group` (one pair of bodies; module doc), `work`
+/// their slots ([`begin_substep`]); each contact is active where its total push is
+/// positive.
+pub(crate) fn normals(
+    group: &mut [Contact],
+    work: &[Work],
+    p: &mut XParticles,
+    bones: &mut [Bone],
+) {
     let m = group.len().min(MAX_POINTS);
     let group = &mut group[..m];
     let a = Body::of(p, bones, &group[0].a);
@@ -153,8 +170,7 @@ pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bo
         active[i] = d < 0.0 || ct.lambda > 0.0;
         any |= active[i];
         n[i] = ct.n.as_dvec3();
-        [ja[i], jb[i]] = ct.turn;
-        [ia[i], ib[i]] = ct.inv_turn;
+        ([ja[i], jb[i]], [ia[i], ib[i]]) = work[i].turns();
     }
     if !any {
         return;
@@ -211,7 +227,6 @@ pub(crate) fn normals(group: &mut [Contact], p: &mut XParticles, bones: &mut [Bo
         tb += jb[i] * dl[i];
         let ct = &mut group[i];
         ct.lambda = (ct.lambda as f64 + dl[i]).max(0.0) as f32;
-        ct.active = ct.lambda > 0.0;
     }
     if let Some(i) = a.bone {
         move_linear(

@@ -53,41 +53,93 @@ pub(crate) struct Contact {
     pub roll: f32,
     /// Relative normal velocity `(v_b − v_a) · n` before the substep (< 0: closing).
     pub vn_before: f32,
-    /// Whether the contact pushed during the substep.
-    pub active: bool,
-    /// Its normal push so far this substep, `λ_n ≥ 0` (m·kg).
+    /// Its normal push so far this substep, `λ_n ≥ 0` (m·kg); the contact is active
+    /// ([`Contact::active`]) while it is positive.
     pub lambda: f32,
     /// Its friction so far this substep, a tangential `λ_t` with `|λ_t| ≤ μ λ_n`.
     pub lambda_t: Vec3,
     /// The least separation the substep must reach (m, ≤ 0): 0, or for a contact
     /// that started the substep in penetration its depth less `max_push_out_speed · h`.
     pub floor: f32,
-    /// Its two points at the substep's start (`begin_substep`), `prev_point64` of `a`
-    /// and `b`: the levers of its block and the origin of its friction's slip.
-    pub start: [DVec3; 2],
     /// Its points' barycentric inverse mass, `Σ_a β² w + Σ_b β² w` (friction), fixed
     /// through the substep.
     pub inv_mass: f32,
-    /// Its normal row's angular Jacobians `r × n` on `a` and `b` and their `I⁻¹ (r × n)`
-    /// at the substep's start (`contact_block::begin_substep`); 0 on a side that takes
-    /// no correction.
-    pub turn: [DVec3; 2],
-    pub inv_turn: [DVec3; 2],
 }
 
-/// What a detection reuses from the last: candidate pairs and parry's manifolds.
+/// What a contact point holds through one part of a substep, beside the [`Contact`]:
+/// the position passes and the velocity step each need their own, never both at once,
+/// so one array serves both (`Scratch::work`, a slot per contact), set for the
+/// position passes by `contact_block::begin_substep` and for the velocity step by
+/// [`solve_velocities`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Work {
+    /// Through the position passes: its normal row's angular Jacobians `r × n` on `a`
+    /// and `b` and their `I⁻¹ (r × n)` at the substep's start; 0 on a side that takes
+    /// no correction.
+    Position {
+        turn: [DVec3; 2],
+        inv_turn: [DVec3; 2],
+    },
+    /// Through the velocity step: its two sides' arms ([`Lever::arm`]; the bones are
+    /// the contact's), and its friction and normal impulses so far.
+    Velocity {
+        arms: [Vec3; 2],
+        friction: Vec3,
+        normal: f32,
+    },
+}
+
+impl Work {
+    /// The position passes' angular Jacobians and their `I⁻¹ J` (zero outside them).
+    #[inline(always)]
+    pub fn turns(&self) -> ([DVec3; 2], [DVec3; 2]) {
+        match *self {
+            Work::Position { turn, inv_turn } => (turn, inv_turn),
+            Work::Velocity { .. } => ([DVec3::ZERO; 2], [DVec3::ZERO; 2]),
+        }
+    }
+
+    /// The velocity step's arms and its friction and normal impulses so far (zero
+    /// outside it).
+    #[inline(always)]
+    fn velocity(&self) -> ([Vec3; 2], Vec3, f32) {
+        match *self {
+            Work::Velocity {
+                arms,
+                friction,
+                normal,
+            } => (arms, friction, normal),
+            Work::Position { .. } => ([Vec3::ZERO; 2], Vec3::ZERO, 0.0),
+        }
+    }
+}
+
+impl Contact {
+    /// Whether it pushes this substep, `λ_n > 0`.
+    #[inline]
+    pub fn active(&self) -> bool {
+        self.lambda > 0.0
+    }
+
+    /// Its two points at the substep's start, `prev_point64` of `a` and `b`: the
+    /// levers of its block and the origin of its friction's slip. Formed from the
+    /// particles' `x_prev` wherever needed, with the same arithmetic as the points now.
+    #[inline]
+    pub fn start(&self, p: &XParticles) -> [DVec3; 2] {
+        [self.a.prev_point64(p), self.b.prev_point64(p)]
+    }
+}
+
+/// What a detection reuses from the last (candidate pairs and parry's manifolds), and
+/// what the contacts' substep works in.
 #[derive(Default)]
 pub(crate) struct Scratch {
     pairs: Vec<(usize, usize)>,
     manifolds: Vec<ContactManifold<(), ()>>,
     margins: Vec<f32>,
     speeds: Vec<f32>,
-    /// Per contact, its two sides' levers for the velocity step.
-    levers: Vec<[Lever; 2]>,
-    /// Per contact, the friction impulse of the velocity step so far.
-    friction: Vec<Vec3>,
-    /// Per contact, the normal impulse of the velocity step so far.
-    normal: Vec<f32>,
+    /// Per contact, what the part of the substep under way keeps ([`Work`]).
+    pub work: Vec<Work>,
     /// Per bone, its rigid body for the velocity step, taken at the first contact that
     /// needs it (`Rigid::of`); `taken` says which are.
     rigid: Vec<Rigid>,
@@ -95,10 +147,10 @@ pub(crate) struct Scratch {
 }
 
 /// A point given in world coordinates, attached to bone `i`'s particles.
-fn attach(bones: &[Bone], rest_inv: &[Mat3], i: usize, world: Vec3) -> Anchor {
+fn attach(bones: &[Bone], i: usize, world: Vec3) -> Anchor {
     let b = &bones[i];
     let local = b.rot.inverse() * (world - Vec3::from(b.center()));
-    Anchor::Bone(i as u32, weights(&rest_inv[i], b.rest[0], local))
+    Anchor::Bone(i as u32, weights(&b.rest, local))
 }
 
 /// Finds the contacts of the next `span` seconds into `out` (module doc). `tree` is
@@ -109,7 +161,6 @@ pub(crate) fn detect(
     tree: &mut Reused,
     p: &XParticles,
     bones: &[Bone],
-    rest_inv: &[Mat3],
     filter: &Filter,
     settings: &Settings,
     span: f32,
@@ -164,21 +215,17 @@ pub(crate) fn detect(
             |pa, pb, n, _| {
                 reserve_kept(out, 1);
                 out.push(Contact {
-                    a: attach(bones, rest_inv, i, pa),
-                    b: attach(bones, rest_inv, j, pb),
+                    a: attach(bones, i, pa),
+                    b: attach(bones, j, pb),
                     n,
                     mu,
                     restitution,
                     roll,
                     vn_before: 0.0,
-                    active: false,
                     lambda: 0.0,
                     lambda_t: Vec3::ZERO,
                     floor: 0.0,
-                    start: [DVec3::ZERO; 2],
                     inv_mass: 0.0,
-                    turn: [DVec3::ZERO; 2],
-                    inv_turn: [DVec3::ZERO; 2],
                 });
             },
         );
@@ -201,21 +248,17 @@ pub(crate) fn detect(
                 |pa, pb, n, _| {
                     reserve_kept(out, 1);
                     out.push(Contact {
-                        a: attach(bones, rest_inv, i, pa),
+                        a: attach(bones, i, pa),
                         b: Anchor::World(pb),
                         n,
                         mu,
                         restitution,
                         roll,
                         vn_before: 0.0,
-                        active: false,
                         lambda: 0.0,
                         lambda_t: Vec3::ZERO,
                         floor: 0.0,
-                        start: [DVec3::ZERO; 2],
                         inv_mass: 0.0,
-                        turn: [DVec3::ZERO; 2],
-                        inv_turn: [DVec3::ZERO; 2],
                     });
                 },
             );
@@ -236,24 +279,22 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
 /// ground left it at 175 m/s).
 ///
 /// Runs at the substep's start, before the prediction: the points now are the points
-/// at the start (`x_prev = x`), kept in [`Contact::start`]. A capsule's ground points
+/// at the start (`x_prev = x`, `Contact::start`). A capsule's ground points
 /// are first rolled to its bottom ([`roll_ground_points`]; `bones` hold the frames
-/// read from the particles now, `rest_inv` each bone's `D⁻¹`).
+/// read from the particles now).
 pub(crate) fn begin_substep(
     contacts: &mut [Contact],
     p: &XParticles,
-    (bones, rest_inv): (&[Bone], &[Mat3]),
+    bones: &[Bone],
     push_speed: f32,
     h: f32,
 ) {
-    roll_ground_points(contacts, bones, rest_inv);
+    roll_ground_points(contacts, bones);
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
-        c.active = false;
         c.lambda = 0.0;
         c.lambda_t = Vec3::ZERO;
-        c.start = [c.a.point64(p), c.b.point64(p)];
-        let depth = (c.start[1] - c.start[0]).as_vec3().dot(c.n);
+        let depth = (c.b.point64(p) - c.a.point64(p)).as_vec3().dot(c.n);
         c.floor = (depth + push_speed * h).min(0.0);
         c.inv_mass = c.a.inv_mass(p) + c.b.inv_mass(p);
     }
@@ -269,7 +310,7 @@ pub(crate) fn begin_substep(
 /// in 9 s. The rigid-frames solver rolls its ground points the same way
 /// (`rigid_frames::roll_contact`). Ground contacts only: between two bones the normal
 /// is no one side's.
-fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], rest_inv: &[Mat3]) {
+fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone]) {
     for c in contacts.iter_mut() {
         let (Anchor::Bone(i, w), Anchor::World(_)) = (c.a, c.b) else {
             continue;
@@ -277,7 +318,7 @@ fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], rest_inv: &[Mat3
         let b = &bones[i as usize];
         let local = combine(&b.rest, &w);
         if let Some(rolled) = rolled_point(b, local, Vec3A::from(c.n)) {
-            c.a = Anchor::Bone(i, weights(&rest_inv[i as usize], b.rest[0], rolled));
+            c.a = Anchor::Bone(i, weights(&b.rest, rolled));
         }
     }
 }
@@ -289,8 +330,6 @@ fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], rest_inv: &[Mat3
 struct Rigid {
     /// The bone's `1/M`; 0 for a bone that takes no correction.
     inv_total: f32,
-    /// The particles' centre `c`.
-    centre: DVec3,
     /// `I⁻¹` (world) of the particles about their centre.
     inv_inertia: Mat3,
     /// The particles about their centre, `r_k = x_k − c`.
@@ -321,7 +360,6 @@ impl Rigid {
         };
         Rigid {
             inv_total: 1.0 / p.mass[f..f + PER_BONE].iter().sum::<f32>(),
-            centre: c,
             inv_inertia,
             arms: std::array::from_fn(|k| (p.x[f + k] - c).as_vec3()),
         }
@@ -330,8 +368,10 @@ impl Rigid {
 
 /// One side of a contact at the velocity level: its bone's [`Rigid`] body seen from
 /// the contact point. The body's `1/M` and `I⁻¹` are read from its [`Rigid`], shared
-/// by the bone's contacts, not copied into each lever.
-#[derive(Clone, Copy, Debug, Default)]
+/// by the bone's contacts, not copied into each lever; only the arm is kept a contact
+/// through the passes (`Scratch::arms`), the bone being the contact's side
+/// ([`Lever::on`]).
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Lever {
     /// The bone ([`Lever::WORLD`] for the world).
     bone: u32,
@@ -343,6 +383,16 @@ pub(crate) struct Lever {
 impl Lever {
     /// The `bone` of the world's side.
     const WORLD: u32 = u32::MAX;
+
+    /// The lever of `side` with the arm `arm` kept for it.
+    #[inline(always)]
+    fn on(side: &Anchor, arm: Vec3) -> Lever {
+        let bone = match *side {
+            Anchor::Bone(i, _) => i,
+            Anchor::World(_) => Lever::WORLD,
+        };
+        Lever { bone, arm }
+    }
 
     /// The lever of `side`, its bone's rigid body taken into `rigid` if not yet
     /// (`taken`).
@@ -365,9 +415,11 @@ impl Lever {
                 arm: Vec3::ZERO,
             };
         }
+        // The centre `c` of `Rigid::of`, formed again: positions stay put through
+        // the velocity step.
         Lever {
             bone: i,
-            arm: (side.point64(p) - r.centre).as_vec3(),
+            arm: (side.point64(p) - p.centre(b)).as_vec3(),
         }
     }
 
@@ -486,36 +538,36 @@ pub(crate) fn solve_velocities(
     scratch.taken.clear();
     scratch.taken.resize(bones, false);
     scratch.rigid.resize(bones, Rigid::default());
-    // Each per-contact array is kept at the largest count, not doubled past it.
-    scratch.levers.clear();
-    reserve_kept(&mut scratch.levers, contacts.len());
-    for c in contacts {
-        scratch.levers.push(if c.active {
+    // Each contact's slot from the position passes (`contact_block::begin_substep`).
+    debug_assert_eq!(scratch.work.len(), contacts.len());
+    for (c, work) in contacts.iter().zip(&mut scratch.work) {
+        let arms = if c.active() {
             let (rigid, taken) = (&mut scratch.rigid, &mut scratch.taken);
             [
-                Lever::of(&c.a, p, rigid, taken),
-                Lever::of(&c.b, p, rigid, taken),
+                Lever::of(&c.a, p, rigid, taken).arm,
+                Lever::of(&c.b, p, rigid, taken).arm,
             ]
         } else {
-            [Lever::default(); 2]
-        });
+            [Vec3::ZERO; 2]
+        };
+        *work = Work::Velocity {
+            arms,
+            friction: Vec3::ZERO,
+            normal: 0.0,
+        };
     }
-    scratch.friction.clear();
-    reserve_kept(&mut scratch.friction, contacts.len());
-    scratch.friction.resize(contacts.len(), Vec3::ZERO);
-    scratch.normal.clear();
-    reserve_kept(&mut scratch.normal, contacts.len());
-    scratch.normal.resize(contacts.len(), 0.0);
     let rigid = &scratch.rigid;
     let n = contacts.len();
     for pass in 0..passes {
         let backwards = pass % 2 == 1;
         for k in 0..n {
             let k = if backwards { n - 1 - k } else { k };
-            let (c, [la, lb]) = (&contacts[k], &scratch.levers[k]);
-            if !c.active {
+            let c = &contacts[k];
+            if !c.active() {
                 continue;
             }
+            let ([ra, rb], mut friction, mut normal) = scratch.work[k].velocity();
+            let (la, lb) = (Lever::on(&c.a, ra), Lever::on(&c.b, rb));
             let e = if -c.vn_before > threshold {
                 c.restitution
             } else {
@@ -528,7 +580,7 @@ pub(crate) fn solve_velocities(
                 continue;
             }
             if dv.abs() >= 1e-9 {
-                scratch.normal[k] += dv / w;
+                normal += dv / w;
                 let j = c.n * (dv / w);
                 la.kick(rigid, p, -j);
                 lb.kick(rigid, p, j);
@@ -536,10 +588,14 @@ pub(crate) fn solve_velocities(
             // The substep's net normal impulse is the position step's push `λ_n / h`
             // plus this step's so far (negative where it takes back a push-out): the
             // cone is on that, not on the push alone.
-            let cap =
-                (c.mu * (c.lambda / h + scratch.normal[k]) - c.lambda_t.length() / h).max(0.0);
-            let old = scratch.friction[k];
+            let cap = (c.mu * (c.lambda / h + normal) - c.lambda_t.length() / h).max(0.0);
+            let old = friction;
             if cap == 0.0 && old == Vec3::ZERO {
+                scratch.work[k] = Work::Velocity {
+                    arms: [ra, rb],
+                    friction,
+                    normal,
+                };
                 continue;
             }
             let rel = c.b.velocity(p) - c.a.velocity(p);
@@ -562,7 +618,12 @@ pub(crate) fn solve_velocities(
                     Vec3::ZERO
                 };
             }
-            scratch.friction[k] = total;
+            friction = total;
+            scratch.work[k] = Work::Velocity {
+                arms: [ra, rb],
+                friction,
+                normal,
+            };
             la.kick(rigid, p, old - total);
             lb.kick(rigid, p, total - old);
         }
@@ -580,7 +641,7 @@ fn roll(contacts: &[Contact], p: &mut XParticles, scratch: &Scratch, h: f32) {
         let run = start..start + block_len(&contacts[start..]);
         start = run.end;
         // Levers are taken for the active points only; a run with none pushed nothing.
-        let Some(first) = run.clone().find(|&k| contacts[k].active) else {
+        let Some(first) = run.clone().find(|&k| contacts[k].active()) else {
             continue;
         };
         let arm = contacts[first].roll;
@@ -588,10 +649,12 @@ fn roll(contacts: &[Contact], p: &mut XParticles, scratch: &Scratch, h: f32) {
             continue;
         }
         let normal: f32 = run
-            .filter(|&k| contacts[k].active)
-            .map(|k| contacts[k].lambda / h + scratch.normal[k])
+            .filter(|&k| contacts[k].active())
+            .map(|k| contacts[k].lambda / h + scratch.work[k].velocity().2)
             .sum();
-        let [la, lb] = &scratch.levers[first];
+        let ([ra, rb], ..) = scratch.work[first].velocity();
+        let c = &contacts[first];
+        let (la, lb) = (Lever::on(&c.a, ra), Lever::on(&c.b, rb));
         let rigid = &scratch.rigid;
         let spin = lb.spin(rigid, p) - la.spin(rigid, p);
         let (inv_a, inv_b) = (la.inv_inertia(rigid), lb.inv_inertia(rigid));
@@ -609,6 +672,7 @@ fn roll(contacts: &[Contact], p: &mut XParticles, scratch: &Scratch, h: f32) {
 /// (a box hitting a wall at 50 m/s left it spinning). Then each point's friction.
 pub(crate) fn solve(
     contacts: &mut [Contact],
+    work: &[Work],
     p: &mut XParticles,
     bones: &mut [Bone],
     backwards: bool,
@@ -623,8 +687,9 @@ pub(crate) fn solve(
             done..done + block_len(&contacts[done..])
         };
         done += range.len();
+        let turns = &work[range.clone()];
         let group = &mut contacts[range];
-        normals(group, p, bones);
+        normals(group, turns, p, bones);
         let m = group.len();
         for k in 0..m {
             friction(&mut group[if backwards { m - 1 - k } else { k }], p);
@@ -644,7 +709,8 @@ fn friction(c: &mut Contact, p: &mut XParticles) {
         return;
     }
     // Relative motion of the points over the substep, its tangential part.
-    let moved = ((c.a.point64(p) - c.start[0]) - (c.b.point64(p) - c.start[1])).as_vec3();
+    let start = c.start(p);
+    let moved = ((c.a.point64(p) - start[0]) - (c.b.point64(p) - start[1])).as_vec3();
     let slip = moved - c.n * c.n.dot(moved);
     // Undo the slip (`Δλ_t = −slip / w`, moving `a` back along it) as far as the cone `|λ_t| ≤ μ λ_n` allows,
     // on the substep's totals: where the normal push is taken back, so is the

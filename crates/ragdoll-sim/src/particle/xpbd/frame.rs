@@ -37,9 +37,12 @@ pub(crate) fn rest_inverse(rest: &[Vec3; 4]) -> Mat3 {
     Mat3::from_cols(rest[1] - rest[0], rest[2] - rest[0], rest[3] - rest[0]).inverse()
 }
 
-/// The barycentric weights of `local` (a point in the bone frame).
-pub(crate) fn weights(rest_inv: &Mat3, rest0: Vec3, local: Vec3) -> [f32; 4] {
-    let b = *rest_inv * (local - rest0);
+/// The barycentric weights of `local` (a point in the bone frame) on the rest
+/// tetrahedron `rest`. Its `D⁻¹` ([`rest_inverse`]) is formed here, not kept per bone:
+/// weights are taken at a detection, a joint's creation, a grab and a capsule's rolled
+/// ground point, never in the passes.
+pub(crate) fn weights(rest: &[Vec3; 4], local: Vec3) -> [f32; 4] {
+    let b = rest_inverse(rest) * (local - rest[0]);
     [1.0 - b.x - b.y - b.z, b.x, b.y, b.z]
 }
 
@@ -201,13 +204,12 @@ mod tests {
             Vec3::new(-0.1, 0.2, -0.05),
             Vec3::new(-0.1, -0.2, 0.05),
         ];
-        let inv = rest_inverse(&rest);
         for p in [
             Vec3::new(0.3, -0.4, 0.2),
             Vec3::ZERO,
             Vec3::new(-1.0, 2.0, 0.5),
         ] {
-            let w = weights(&inv, rest[0], p);
+            let w = weights(&rest, p);
             assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
             assert!((combine(&rest, &w) - p).length() < 1e-5, "{p}");
         }

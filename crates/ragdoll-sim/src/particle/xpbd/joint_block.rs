@@ -55,13 +55,34 @@ const MAX_ROWS: usize = 10;
 /// Rows of the point, first in every block.
 const POINT_ROWS: usize = 3;
 
-/// Multipliers of a block's limit rows kept through a substep: the swing limit's (two
-/// for a pyramid's faces), then the angle limits'.
+/// Most multipliers of a block's limit rows kept through a substep: the swing limit's
+/// (one for a cone, two for a pyramid's faces), then the angle limits'.
 const LIMIT_SLOTS: usize = MAX_ROWS - POINT_ROWS;
 
-/// One side of a block: its bone (if it takes corrections) and inverse mass at the
-/// substep's start. Its world inverse inertia then is the particles' own
-/// (`XParticles::inv_inertia_prev`), read where it is needed rather than kept twice.
+/// Slots held for a swing limit's rows in the count of [`LIMIT_SLOTS`]: an angle
+/// limit past `LIMIT_SLOTS − SWING_SLOTS` takes no row.
+const SWING_SLOTS: usize = 2;
+
+/// Joint `j`'s limit slots, the multipliers its block keeps through a substep: its
+/// swing limit's rows (none, one for a cone, two for a pyramid), then one for each of
+/// its angle limits that takes a row ([`SWING_SLOTS`]).
+#[inline]
+fn limit_slots(j: &Joint) -> (usize, usize) {
+    let swing = match &j.swing {
+        None => 0,
+        Some(s) => match s.kind {
+            Swing::Cone { .. } => 1,
+            Swing::Pyramid { .. } => 2,
+        },
+    };
+    (swing, j.angle_limits.len().min(LIMIT_SLOTS - SWING_SLOTS))
+}
+
+/// One side of a block: its bone (if it takes corrections) and inverse mass. Both
+/// stay the same through a substep (a bone's sleep changes between frames), so the
+/// passes take them again from the joint's side rather than keep them; its world
+/// inverse inertia at the substep's start is the particles' own
+/// (`XParticles::inv_inertia_prev`).
 #[derive(Clone, Copy)]
 struct Body {
     bone: Option<u32>,
@@ -69,24 +90,27 @@ struct Body {
 }
 
 impl Body {
-    /// The side `s` of a joint, and its lever: from its centre to its point `end`, both
-    /// at the substep's start (zero on a side that takes no correction).
-    fn of(p: &XParticles, bones: &[Bone], s: Side, end: &Anchor) -> (Body, DVec3) {
+    /// The side `s` of a joint.
+    #[inline(always)]
+    fn of(p: &XParticles, bones: &[Bone], s: Side) -> Body {
         match s {
-            Some(i) if p.moves(i) => (
-                Body {
-                    bone: Some(i as u32),
-                    inv_mass: 1.0 / bones[i].mass as f64,
-                },
-                end.prev_point64(p) - p.centre_prev(i),
-            ),
-            _ => (
-                Body {
-                    bone: None,
-                    inv_mass: 0.0,
-                },
-                DVec3::ZERO,
-            ),
+            Some(i) if p.moves(i) => Body {
+                bone: Some(i as u32),
+                inv_mass: 1.0 / bones[i].mass as f64,
+            },
+            _ => Body {
+                bone: None,
+                inv_mass: 0.0,
+            },
+        }
+    }
+
+    /// Its lever: from its centre to its point `end`, both at the substep's start
+    /// (zero on a side that takes no correction).
+    fn lever(&self, p: &XParticles, end: &Anchor) -> DVec3 {
+        match self.bone {
+            Some(i) => end.prev_point64(p) - p.centre_prev(i as usize),
+            None => DVec3::ZERO,
         }
     }
 
@@ -119,21 +143,19 @@ const fn tri(i: usize, m: usize) -> usize {
     i * (i + 1) / 2 + m
 }
 
-/// What a joint's block keeps through a substep: its sides and its point rows depend
-/// only on the substep's start (the levers, the inverse inertias), so their angular
-/// parts, their `M⁻¹ Jᵀ` and the first [`POINT_ROWS`] rows of the Cholesky factor of
-/// `K` (which depend on nothing after them) are taken once a substep
-/// ([`begin_substep`]), with the same arithmetic the passes used, so the results are
-/// the same. What the passes can read elsewhere is not kept: a point row's linear part
-/// is its world axis `e`, its error is measured in the pass, its compliance is 0, and
-/// each side's inverse inertia is its bone's ([`Body::inv_inertia`]).
+/// What a joint's block keeps through a substep: its point rows depend only on the
+/// substep's start (the levers, the inverse inertias), so their `M⁻¹ Jᵀ` and the
+/// first [`POINT_ROWS`] rows of the Cholesky factor of `K` (which depend on nothing
+/// after them) are taken once a substep ([`begin_substep`]), with the arithmetic the
+/// passes use. What the passes form again with that same arithmetic is not kept: a
+/// point row's linear part is its world axis `e` and its angular parts `−r_a × e` and
+/// `r_b × e` come from the two levers, its error is measured in the pass, its
+/// compliance is 0, and each side's bone, inverse mass and inverse inertia are its
+/// joint's ([`Body::of`], [`Body::inv_inertia`]).
 #[derive(Clone, Copy)]
 pub(crate) struct Start {
-    a: Body,
-    b: Body,
-    /// The point rows' angular parts `−r_a × e` and `r_b × e`.
-    ang_a: [DVec3; POINT_ROWS],
-    ang_b: [DVec3; POINT_ROWS],
+    /// The levers `r_a` and `r_b` ([`Body::lever`]).
+    lever: [DVec3; 2],
     /// `I_a⁻¹ J_a` and `I_b⁻¹ J_b` of the point rows.
     ia: [DVec3; POINT_ROWS],
     ib: [DVec3; POINT_ROWS],
@@ -141,41 +163,53 @@ pub(crate) struct Start {
     /// ([`tri`]; the rest is zero), and whether each row is live.
     factor: [f64; tri(POINT_ROWS, 0)],
     live: [bool; POINT_ROWS],
-    /// Each limit slot's multiplier summed over the substep's passes so far (`≥ 0`).
-    lambda: [f64; LIMIT_SLOTS],
+    /// Where its limit slots' multipliers start in the substep's multipliers
+    /// ([`begin_substep`]'s `lambda`; as many as [`limit_slots`]).
+    first: u32,
+}
+
+/// The point rows of a block with levers `lever` (module doc): along each world axis
+/// `e`, `J_a = (−e, −r_a × e)`, `J_b = (e, r_b × e)`.
+#[inline(always)]
+fn point_rows(lever: &[DVec3; 2]) -> [Row; POINT_ROWS] {
+    std::array::from_fn(|i| {
+        let e = [DVec3::X, DVec3::Y, DVec3::Z][i];
+        Row {
+            lin: e,
+            ang_a: -lever[0].cross(e),
+            ang_b: lever[1].cross(e),
+            c: 0.0,
+            alpha: 0.0,
+            slot: 0,
+        }
+    })
 }
 
 /// Each block joint's [`Start`] into `out` (a slot per joint; the others' stay unset
 /// and unread), once `x_prev`, the bones' `prev_rot` and the particles' own start
-/// (`XParticles::fix_start`) are the substep's.
+/// (`XParticles::fix_start`) are the substep's; into `lambda`, each such joint's
+/// limit multipliers (each limit slot's `λ` summed over the substep's passes so far,
+/// `≥ 0`), at 0: as many as its limits take ([`limit_slots`]), none for the others.
 pub(crate) fn begin_substep(
     p: &XParticles,
     bones: &[Bone],
     joints: &[Joint],
     anchors: &[[Anchor; 2]],
     out: &mut Vec<Option<Start>>,
+    lambda: &mut Vec<f64>,
 ) {
     out.clear();
+    lambda.clear();
     out.extend(joints.iter().zip(anchors).map(|(j, [ea, eb])| {
         if !blocks(j) {
             return None;
         }
-        let (a, lever_a) = Body::of(p, bones, j.a, ea);
-        let (b, lever_b) = Body::of(p, bones, j.b, eb);
+        let (a, b) = (Body::of(p, bones, j.a), Body::of(p, bones, j.b));
         if a.bone.is_none() && b.bone.is_none() {
             return None;
         }
-        let point: [Row; POINT_ROWS] = std::array::from_fn(|i| {
-            let e = [DVec3::X, DVec3::Y, DVec3::Z][i];
-            Row {
-                lin: e,
-                ang_a: -lever_a.cross(e),
-                ang_b: lever_b.cross(e),
-                c: 0.0,
-                alpha: 0.0,
-                slot: 0,
-            }
-        });
+        let lever = [a.lever(p, ea), b.lever(p, eb)];
+        let point = point_rows(&lever);
         let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
         let ia = point.map(|r| inv_a * r.ang_a);
         let ib = point.map(|r| inv_b * r.ang_b);
@@ -189,16 +223,16 @@ pub(crate) fn begin_substep(
                 factor[tri(i, m)] = k[i][m];
             }
         }
+        let first = lambda.len() as u32;
+        let (swing, angles) = limit_slots(j);
+        lambda.resize(lambda.len() + swing + angles, 0.0);
         Some(Start {
-            a,
-            b,
-            ang_a: point.map(|r| r.ang_a),
-            ang_b: point.map(|r| r.ang_b),
+            lever,
             ia,
             ib,
             factor,
             live: std::array::from_fn(|i| live[i]),
-            lambda: [0.0; LIMIT_SLOTS],
+            first,
         })
     }));
 }
@@ -247,7 +281,7 @@ impl Rows {
         lambda: f64,
     ) {
         let g = grad.length();
-        if slot >= LIMIT_SLOTS || !(g > 1e-6 && g.is_finite()) {
+        if !(g > 1e-6 && g.is_finite()) {
             return;
         }
         let upper = if phi > hi {
@@ -283,7 +317,8 @@ pub(crate) fn blocks(j: &Joint) -> bool {
 
 /// Joint `j` (a [`blocks`] kind) between its anchors `ends`, `h` the substep: its
 /// point, angular parts and violated limits as one block (module doc); `start` its
-/// [`begin_substep`] (`None`: neither side takes corrections). Inlined into both of
+/// [`begin_substep`] (`None`: neither side takes corrections), `lambda` the substep's
+/// limit multipliers of every joint ([`begin_substep`]). Inlined into both of
 /// its callers, the substep's passes and the start's slack passes: the passes' hot loop
 /// is built around it.
 #[inline(always)]
@@ -292,27 +327,25 @@ pub(crate) fn solve(
     bones: &mut [Bone],
     j: &Joint,
     ends: &[Anchor; 2],
-    start: &mut Option<Start>,
+    start: &Option<Start>,
+    lambda: &mut [f64],
     h: f32,
 ) {
     let [ea, eb] = ends;
     let Some(start) = start else {
         return;
     };
+    let (swing, angles) = limit_slots(j);
+    let first = start.first as usize;
+    let lambda = &mut lambda[first..first + swing + angles];
     let mut rows = Rows {
         rows: [Row::default(); MAX_ROWS],
         n: 0,
     };
     let delta = eb.point64(p) - ea.point64(p);
-    for (i, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
-        rows.push(Row {
-            lin: e,
-            ang_a: start.ang_a[i],
-            ang_b: start.ang_b[i],
-            c: e.dot(delta),
-            alpha: 0.0,
-            slot: 0,
-        });
+    for mut row in point_rows(&start.lever) {
+        row.c = row.lin.dot(delta);
+        rows.push(row);
     }
     let (qa, qb) = (rot(bones, j.a), rot(bones, j.b));
     match j.kind {
@@ -354,24 +387,24 @@ pub(crate) fn solve(
     }
     let alpha = j.limit_compliance / (h * h);
     if let Some(s) = &j.swing {
-        swing_rows(&mut rows, s, qa, qb, j.slack, alpha, &start.lambda);
+        swing_rows(&mut rows, s, qa, qb, j.slack, alpha, lambda);
     }
-    for (i, l) in j.angle_limits.iter().enumerate() {
+    for (i, l) in j.angle_limits.iter().take(angles).enumerate() {
         // The range widened by the joint's slack (`step::close_start_slack`).
         let (phi, grad) = l.angle(bones, j.a, j.b);
         let (lo, hi) = (l.min - j.slack, l.max + j.slack);
-        let slot = 2 + i;
-        let lambda = start.lambda.get(slot).copied().unwrap_or(0.0);
-        rows.limit(slot, grad, phi, lo, hi, alpha, lambda);
+        let slot = swing + i;
+        rows.limit(slot, grad, phi, lo, hi, alpha, lambda[slot]);
     }
-    let (inv_a, inv_b) = (start.a.inv_inertia(p), start.b.inv_inertia(p));
-    let dl = solve_one_sided(&rows, start, inv_a, inv_b);
+    let (a, b) = (Body::of(p, bones, j.a), Body::of(p, bones, j.b));
+    let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
+    let w = a.inv_mass + b.inv_mass;
+    let dl = solve_one_sided(&rows, start, lambda, inv_a, inv_b, w);
     for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
         if r.slot > 0 {
-            start.lambda[r.slot as usize - 1] += *l;
+            lambda[r.slot as usize - 1] += *l;
         }
     }
-    let (a, b) = (&start.a, &start.b);
     let (mut lin, mut ang_a, mut ang_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for (r, l) in rows.rows[..rows.n].iter().zip(&dl) {
         lin += r.lin * *l;
@@ -412,7 +445,7 @@ fn swing_rows(
     qb: Quat,
     slack: f32,
     alpha: f32,
-    lambda: &[f64; LIMIT_SLOTS],
+    lambda: &[f64],
 ) {
     let shaft = qa * s.shaft_a;
     let axis = qb * s.axis_b;
@@ -455,23 +488,28 @@ fn swing_rows(
 /// exactly, and the others solved again with the move of the fixed rows
 /// (`M⁻¹ Jₖᵀ Δλₖ`) in their errors, `Cᵢ + Σₖ Jᵢ M⁻¹ Jₖᵀ Δλₖ`; at most once a row.
 #[inline(always)]
-fn solve_one_sided(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f64; MAX_ROWS] {
-    let mut dl = solve_rows(rows, start, inv_a, inv_b);
+fn solve_one_sided(
+    rows: &Rows,
+    start: &Start,
+    lambda: &[f64],
+    inv_a: DMat3,
+    inv_b: DMat3,
+    w: f64,
+) -> [f64; MAX_ROWS] {
+    let mut dl = solve_rows(rows, start, inv_a, inv_b, w);
     if rows.rows[..rows.n].iter().all(|r| r.slot == 0) {
         return dl;
     }
-    let (a, b) = (&start.a, &start.b);
-    let w = a.inv_mass + b.inv_mass;
     let mut fixed: [Option<f64>; MAX_ROWS] = [None; MAX_ROWS];
     for _ in 0..LIMIT_SLOTS {
         let pulls = (0..rows.n).find(|&k| {
             let r = &rows.rows[k];
-            r.slot > 0 && fixed[k].is_none() && start.lambda[r.slot as usize - 1] + dl[k] < 0.0
+            r.slot > 0 && fixed[k].is_none() && lambda[r.slot as usize - 1] + dl[k] < 0.0
         });
         let Some(k) = pulls else {
             break;
         };
-        fixed[k] = Some(-start.lambda[rows.rows[k].slot as usize - 1]);
+        fixed[k] = Some(-lambda[rows.rows[k].slot as usize - 1]);
         // The rows not fixed, their errors moved by the fixed rows' pushes.
         let mut free = Rows {
             rows: [Row::default(); MAX_ROWS],
@@ -494,7 +532,7 @@ fn solve_one_sided(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f
             index[free.n] = i;
             free.push(r);
         }
-        let sub = solve_rows(&free, start, inv_a, inv_b);
+        let sub = solve_rows(&free, start, inv_a, inv_b, w);
         for (m, &i) in index[..free.n].iter().enumerate() {
             dl[i] = sub[m];
         }
@@ -555,10 +593,10 @@ fn fill_and_factor(
 /// `Δλ` of `(J M⁻¹ Jᵀ + α̃) Δλ = −C` by Cholesky's factorisation (the matrix is
 /// symmetric positive semi-definite); a row whose pivot vanishes against its diagonal
 /// depends on the rows before it and takes no `Δλ`. The point rows come factored
-/// from `start`; `inv_a`, `inv_b` are its sides' inverse inertias.
+/// from `start`; `inv_a`, `inv_b` are its sides' inverse inertias, `w` their summed
+/// inverse masses.
 #[inline(always)]
-fn solve_rows(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f64; MAX_ROWS] {
-    let (a, b) = (&start.a, &start.b);
+fn solve_rows(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3, w: f64) -> [f64; MAX_ROWS] {
     let n = rows.n;
     let r = &rows.rows[..n];
     // `I⁻¹ Jᵀ` of one side: the point rows' from `start`, the others' formed here.
@@ -575,7 +613,6 @@ fn solve_rows(rows: &Rows, start: &Start, inv_a: DMat3, inv_b: DMat3) -> [f64; M
     };
     let ia = side(&start.ia, inv_a, |row| row.ang_a);
     let ib = side(&start.ib, inv_b, |row| row.ang_b);
-    let w = a.inv_mass + b.inv_mass;
     let mut k = [[0.0f64; MAX_ROWS]; MAX_ROWS];
     let mut live = [false; MAX_ROWS];
     for i in 0..POINT_ROWS {

@@ -182,9 +182,8 @@ pub(super) fn move_linear(
     omega: Vec3,
 ) {
     let f = PER_BONE * i;
-    for k in f..f + PER_BONE {
-        let arm = p.arm_prev(k).as_vec3();
-        p.x[k] += (shift + omega.cross(arm)).as_dvec3();
+    for (k, arm) in (f..f + PER_BONE).zip(p.arms_prev(i)) {
+        p.x[k] += (shift + omega.cross(arm.as_vec3())).as_dvec3();
     }
     let b = &mut bones[i];
     b.rot = (Quat::from_scaled_axis(omega) * b.rot).normalize();

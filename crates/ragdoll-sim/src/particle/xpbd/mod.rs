@@ -30,7 +30,7 @@ pub(crate) mod step;
 
 use super::bone::Bone;
 use super::joints::Joint;
-use glam::{Mat3, Vec3};
+use glam::Vec3;
 use joints::Anchor;
 use particles::XParticles;
 
@@ -39,12 +39,13 @@ use particles::XParticles;
 pub(crate) struct XpbdState {
     /// Every particle; bone `i` owns `4i .. 4i + 4`.
     pub particles: XParticles,
-    /// Per bone, `D⁻¹` of its rest tetrahedron (`frame::weights`).
-    pub rest_inv: Vec<Mat3>,
     /// Per joint, its point on each side.
     pub anchors: Vec<[Anchor; 2]>,
     /// Per joint, what its block keeps through the current substep.
     pub joint_start: Vec<Option<joint_block::Start>>,
+    /// The block joints' limit multipliers through the current substep, as many as
+    /// each joint's limits take (`joint_block::begin_substep`).
+    pub limit_lambda: Vec<f64>,
     /// The contacts of the current detection.
     pub contacts: Vec<contacts::Contact>,
     /// What detections reuse.
@@ -57,13 +58,12 @@ impl XpbdState {
     /// Adds bone `i`'s particles, at rest positions in its frame moving with its initial
     /// velocities.
     pub fn add_bone(&mut self, i: usize, b: &Bone) {
-        debug_assert_eq!(self.rest_inv.len(), i);
+        debug_assert_eq!(self.rest.len(), i);
         let x = std::array::from_fn(|k| Vec3::from(b.world(b.rest[k])));
         let (v, om) = (glam::Vec3::from(b.lin_vel), glam::Vec3::from(b.ang_vel));
         let c = Vec3::from(b.center());
         let vel = x.map(|xk: Vec3| v + om.cross(xk - c));
         self.particles.push_bone(x, vel, b.mass * 0.25, !b.fixed);
-        self.rest_inv.push(frame::rest_inverse(&b.rest));
         self.rest.push(sleeping::Rest {
             anchor: c,
             ..Default::default()
@@ -80,17 +80,13 @@ impl XpbdState {
             .iter()
             .map(|j| {
                 let side = |s: Option<usize>, local: Vec3| match s {
-                    Some(i) => Anchor::Bone(
-                        i as u32,
-                        frame::weights(&st.rest_inv[i], bones[i].rest[0], local),
-                    ),
+                    Some(i) => Anchor::Bone(i as u32, frame::weights(&bones[i].rest, local)),
                     None => Anchor::World(local),
                 };
                 [side(j.a, j.anchor_a), side(j.b, j.anchor_b)]
             })
             .collect();
         st.particles.shrink_to_fit();
-        st.rest_inv.shrink_to_fit();
         st.rest.shrink_to_fit();
         st
     }

@@ -39,15 +39,13 @@ pub(crate) struct XParticles {
 
 /// Each moving bone at the substep's start, where its particles are rigid: what the
 /// passes move it about (`joints::move_linear`, `shape_match::project`, the joint and
-/// contact blocks), the same all through the substep and so taken once. Each value is
-/// computed exactly as the passes computed it before it was kept, so keeping it
-/// changes no result.
+/// contact blocks), the same all through the substep and so taken once. The particles'
+/// arms about the centre, `x_prev_k − c`, are one subtraction from `x_prev` and the
+/// centre, the same arithmetic wherever they are formed, and are not kept.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Start {
     /// Per bone, the centre of its particles, `¼ Σ x_prev_k`.
     pub centre: Vec<DVec3>,
-    /// Per particle, its arm about its bone's centre, `x_prev_k − c`.
-    pub arm: Vec<DVec3>,
     /// Per bone, its world inverse inertia `R I⁻¹ Rᵀ` at `prev_rot`
     /// (`frame::inv_inertia_prev`).
     pub inv_inertia: Vec<DMat3>,
@@ -108,10 +106,13 @@ impl XParticles {
         self.start.centre[i]
     }
 
-    /// Particle `k`'s arm about its bone's centre at the start of the substep.
-    #[inline]
-    pub fn arm_prev(&self, k: usize) -> DVec3 {
-        self.start.arm[k]
+    /// Bone `i`'s particles about their centre at the start of the substep,
+    /// `x_prev_k − c`.
+    #[inline(always)]
+    pub fn arms_prev(&self, i: usize) -> [DVec3; 4] {
+        let c = self.start.centre[i];
+        let x = &self.x_prev[PER_BONE * i..PER_BONE * i + PER_BONE];
+        [x[0] - c, x[1] - c, x[2] - c, x[3] - c]
     }
 
     /// Bone `i`'s world inverse inertia at the start of the substep.
@@ -127,7 +128,6 @@ impl XParticles {
         let n = bones.len();
         let s = &mut self.start;
         s.centre.resize(n, DVec3::ZERO);
-        s.arm.resize(PER_BONE * n, DVec3::ZERO);
         s.inv_inertia.resize(n, DMat3::ZERO);
         for (i, b) in bones.iter().enumerate() {
             let f = PER_BONE * i;
@@ -135,11 +135,7 @@ impl XParticles {
                 continue;
             }
             let x = &self.x_prev[f..f + PER_BONE];
-            let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
-            s.centre[i] = c;
-            for (arm, xk) in s.arm[f..f + PER_BONE].iter_mut().zip(x) {
-                *arm = *xk - c;
-            }
+            s.centre[i] = (x[0] + x[1] + x[2] + x[3]) * 0.25;
             s.inv_inertia[i] = super::frame::inv_inertia_prev(b);
         }
     }

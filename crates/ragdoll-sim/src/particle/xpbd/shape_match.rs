@@ -35,7 +35,7 @@ pub(crate) fn project(p: &mut XParticles, bones: &mut [Bone]) {
         let f = PER_BONE * i;
         let x = p.bone64(i);
         let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
-        let arms: [DVec3; 4] = std::array::from_fn(|k| p.arm_prev(f + k));
+        let arms = p.arms_prev(i);
         let off = x.map(|xk| xk - c);
         // The frame turned with every correction (`joints::move_linear`): a guess
         // within the second order of the answer.

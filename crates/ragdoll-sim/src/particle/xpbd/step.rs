@@ -147,13 +147,21 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
             b.prev_rot = b.rot;
         }
         p.fix_start(&w.bones);
-        joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
-        for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&mut st.joint_start) {
+        joint_block::begin_substep(
+            p,
+            &w.bones,
+            &w.joints,
+            &st.anchors,
+            &mut st.joint_start,
+            &mut st.limit_lambda,
+        );
+        for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
             if !in_figure(&w.bones, j.a.or(j.b)) {
                 continue;
             }
             if joint_block::blocks(j) {
-                joint_block::solve(&mut st.particles, &mut w.bones, j, ends, start, h);
+                let (p, lambda) = (&mut st.particles, &mut st.limit_lambda);
+                joint_block::solve(p, &mut w.bones, j, ends, start, lambda, h);
             } else {
                 solve_angular(&mut st.particles, &mut w.bones, j, h);
                 solve_point(&mut st.particles, &mut w.bones, j, ends, h);
@@ -197,7 +205,7 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
     };
     let b = &w.bones[i];
     let local = b.shape_in_bone.transform_point(g.local_point);
-    let a = Anchor::Bone(i as u32, frame::weights(&st.rest_inv[i], b.rest[0], local));
+    let a = Anchor::Bone(i as u32, frame::weights(&b.rest, local));
     let omega = std::f32::consts::TAU * 5.0;
     let compliance = 1.0 / (b.mass.max(1e-3) * omega * omega);
     let d = (g.target.as_dvec3() - a.point64(&st.particles)).as_vec3();
@@ -244,7 +252,6 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 &mut tree,
                 &st.particles,
                 &w.bones,
-                &st.rest_inv,
                 &w.filter,
                 &w.settings,
                 span,
@@ -255,7 +262,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         contacts::begin_substep(
             &mut st.contacts,
             &st.particles,
-            (&w.bones, &st.rest_inv),
+            &w.bones,
             w.settings.max_push_out_speed,
             h,
         );
@@ -273,19 +280,28 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             }
         }
         p.fix_start(&w.bones);
-        joint_block::begin_substep(p, &w.bones, &w.joints, &st.anchors, &mut st.joint_start);
-        contact_block::begin_substep(&mut st.contacts, p, &w.bones);
+        joint_block::begin_substep(
+            p,
+            &w.bones,
+            &w.joints,
+            &st.anchors,
+            &mut st.joint_start,
+            &mut st.limit_lambda,
+        );
+        contact_block::begin_substep(&st.contacts, &mut st.scratch.work, p, &w.bones);
         read_frames(w, st);
         for pass in 0..w.settings.xpbd_passes {
             contacts::solve(
                 &mut st.contacts,
+                &st.scratch.work,
                 &mut st.particles,
                 &mut w.bones,
                 pass % 2 == 1,
             );
-            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&mut st.joint_start) {
+            for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
                 if joint_block::blocks(j) {
-                    joint_block::solve(&mut st.particles, &mut w.bones, j, ends, start, h);
+                    let (p, lambda) = (&mut st.particles, &mut st.limit_lambda);
+                    joint_block::solve(p, &mut w.bones, j, ends, start, lambda, h);
                 } else {
                     solve_angular(&mut st.particles, &mut w.bones, j, h);
                     solve_point(&mut st.particles, &mut w.bones, j, ends, h);
