@@ -15,24 +15,18 @@
 //! free bone moves as that limit does, keeping its momentum and angular momentum
 //! ([`Bone::advance`]).
 
+use super::bone_kinds::{BoneKind, BoneKinds};
 use crate::scene::{BodyCollider, Pose};
 use glam::{Mat3, Quat, Vec3, Vec3A};
 
 /// The six edges of a tetrahedron, as pairs of corner indices.
 pub(crate) const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
-/// One bone's cold and hot data.
+/// One bone's own state: its motion (read and written every substep), its mass
+/// properties (read by every correction), its sleep state, and the indices of what it
+/// shares with bones of its kind ([`BoneKinds`]): 192 bytes.
 #[derive(Clone)]
 pub(crate) struct Bone {
-    /// Index of the scene body.
-    pub body: usize,
-    /// Particle positions in the bone frame at rest. Its particles' indices and its
-    /// sticks' rest lengths are not kept here: the paper solver keeps its own
-    /// ([`Particles::of_bone`](super::particles::Particles::of_bone) and
-    /// [`paper::PaperState`](super::paper::PaperState)), XPBD's are `4i..4i + 4`, and the
-    /// rigid-frames solver's four corners are evaluated from `rest`, whose distances
-    /// are its sticks' lengths ([`Bone::rest_stick_lengths`]).
-    pub rest: [Vec3; 4],
     /// Bone frame: origin (the centre of mass in improved mode) at the start of the
     /// substep; the frame's origin is `com + dcom`.
     pub com: Vec3A,
@@ -52,20 +46,22 @@ pub(crate) struct Bone {
     /// adds up as a random walk (the spider at 1/1000 s and 200 substeps gained a third
     /// of its energy scale); near the identity the turn keeps its relative precision.
     pub dturn: Quat,
-    /// The shape frame expressed in the bone frame.
-    pub shape_in_bone: Pose,
-    /// Collision shape, in the shape frame.
-    pub shape: BodyCollider,
-    /// Centre of mass in the shape frame.
-    pub shape_com: Vec3,
-    /// Total mass (kg).
-    pub mass: f32,
+    /// Linear velocity of the frame origin (m/s), from the particles.
+    pub lin_vel: Vec3A,
+    /// Angular velocity (rad/s, world), from the particles.
+    pub ang_vel: Vec3A,
     /// Inverse inertia in the bone frame (diagonal: the frame is principal).
     pub inv_inertia_local: Vec3A,
-    /// Fixed bones never move.
-    pub fixed: bool,
-    /// Asleep bones are frozen until something wakes their island.
-    pub asleep: bool,
+    /// Total mass (kg).
+    pub mass: f32,
+    /// Index of the scene body.
+    pub body: u32,
+    /// Connected component of the joint graph ("figure").
+    pub figure: u32,
+    /// Its shape and rest corners: [`BoneKinds::of`].
+    pub kind: u32,
+    /// Its contact and air materials: [`BoneKinds::material`].
+    pub material: u32,
     /// Seconds this bone has been below the sleep speeds.
     pub sleep_time: f32,
     /// Where the bone's frame origin was when it last moved more than the no-move
@@ -78,18 +74,10 @@ pub(crate) struct Bone {
     /// Seconds the bone has stayed within the no-move bounds of `still_at` and
     /// `still_turn`.
     pub still_time: f32,
-    /// Linear velocity of the frame origin (m/s), from the particles.
-    pub lin_vel: Vec3A,
-    /// Angular velocity (rad/s, world), from the particles.
-    pub ang_vel: Vec3A,
-    /// Contact friction μ and restitution of the body.
-    pub friction: f32,
-    /// Restitution.
-    pub restitution: f32,
-    /// Air friction per second (linear, angular).
-    pub air: (f32, f32),
-    /// Connected component of the joint graph ("figure").
-    pub figure: u32,
+    /// Fixed bones never move.
+    pub fixed: bool,
+    /// Asleep bones are frozen until something wakes their island.
+    pub asleep: bool,
     /// Collides with bones of its own figure.
     pub self_collision: bool,
 }
@@ -151,18 +139,18 @@ impl Bone {
         self.dcom + (self.rot * local - self.prev_rot * local)
     }
 
-    /// World pose of the shape frame.
-    pub fn shape_pose(&self) -> Pose {
+    /// World pose of the shape frame (the bone's kind is `kind`).
+    pub fn shape_pose(&self, kind: &BoneKind) -> Pose {
         Pose {
             position: Vec3::from(self.center()),
             rotation: self.rot,
         }
-        .mul_pose(&self.shape_in_bone)
+        .mul_pose(&kind.shape_in_bone)
     }
 
     /// The shape pose in parry's type.
-    pub fn parry_pose(&self) -> parry3d::math::Pose {
-        let p = self.shape_pose();
+    pub fn parry_pose(&self, kind: &BoneKind) -> parry3d::math::Pose {
+        let p = self.shape_pose(kind);
         parry3d::math::Pose::from_parts(p.position, p.rotation)
     }
 
@@ -173,22 +161,24 @@ impl Bone {
 
     /// Improved mode: particle `k`, rigidly placed in the frame. Between substeps this is
     /// where the solver's particle is; the improved world stores no particle arrays.
-    pub fn corner(&self, k: usize) -> Vec3 {
-        Vec3::from(self.world(self.rest[k]))
+    pub fn corner(&self, kinds: &BoneKinds, k: usize) -> Vec3 {
+        Vec3::from(self.world(kinds.of(self).rest[k]))
     }
 
     /// Improved mode: the velocity of particle `k` as the next substep starts from it,
     /// the frame's rigid motion `v + ω × (R rest_k)`.
-    pub fn corner_velocity(&self, k: usize) -> Vec3 {
-        Vec3::from(self.lin_vel + self.ang_vel.cross(self.rot * Vec3A::from(self.rest[k])))
+    pub fn corner_velocity(&self, kinds: &BoneKinds, k: usize) -> Vec3 {
+        let rest = kinds.of(self).rest[k];
+        Vec3::from(self.lin_vel + self.ang_vel.cross(self.rot * Vec3A::from(rest)))
     }
 
     /// The rest lengths of the six sticks (`EDGES`) between the rest particles: the
     /// rigid-frames and XPBD solvers' sticks, made from these same points (the paper
     /// solver measures its sticks from the world positions it placed, `paper::add_bone`,
     /// and keeps them in its own stick list).
-    pub fn rest_stick_lengths(&self) -> [f32; 6] {
-        EDGES.map(|(a, b)| self.rest[a].distance(self.rest[b]))
+    pub fn rest_stick_lengths(&self, kinds: &BoneKinds) -> [f32; 6] {
+        let rest = &kinds.of(self).rest;
+        EDGES.map(|(a, b)| rest[a].distance(rest[b]))
     }
 
     /// Largest relative stick-length error of the bone whose particles are `corners`,
@@ -354,15 +344,15 @@ pub(crate) type Side = Option<usize>;
 /// segment nearest `local`, moved out by the radius along `dir`. `None` for a shape
 /// that is not round all over (a box, cylinder, cone or hull keeps its material
 /// points: they do not roll).
-pub(crate) fn rolled_point(b: &Bone, local: Vec3, dir: Vec3A) -> Option<Vec3> {
+pub(crate) fn rolled_point(b: &Bone, kind: &BoneKind, local: Vec3, dir: Vec3A) -> Option<Vec3> {
     let BodyCollider::Capsule {
         half_height,
         radius,
-    } = b.shape
+    } = kind.shape
     else {
         return None;
     };
-    let s = b.shape_in_bone;
+    let s = kind.shape_in_bone;
     let along = s
         .inverse_transform_point(local)
         .y

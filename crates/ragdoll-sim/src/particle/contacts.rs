@@ -8,6 +8,7 @@
 //! bones.
 
 use super::bone::{Bone, Side};
+use super::bone_kinds::BoneKinds;
 use crate::broadphase::{Reused, box_height_above_plane};
 use crate::scene::Ground;
 use glam::{Vec3, Vec3A};
@@ -313,9 +314,10 @@ impl Filter {
 }
 
 /// Candidate pairs, sorted: bones whose AABBs loosened by `margin[i]` overlap
-/// ([`crate::broadphase`]), not both static, and allowed to collide by `filter`.
+/// ([`crate::broadphase`]), not both static, and allowed to collide by `filter`; the
+/// bones' shapes are their kinds' in `kinds`.
 pub(crate) fn broad_phase(
-    bones: &[Bone],
+    bones: (&[Bone], &BoneKinds),
     margin: &[f32],
     filter: &Filter,
     out: &mut Vec<(usize, usize)>,
@@ -328,7 +330,7 @@ pub(crate) fn broad_phase(
 /// ([`reaches_ground`]).
 pub(crate) fn broad_phase_on(
     tree: &mut Reused,
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     margin: &[f32],
     filter: &Filter,
     out: &mut Vec<(usize, usize)>,
@@ -341,11 +343,12 @@ pub(crate) fn broad_phase_on(
         .with_min_len(BONES_PER_TASK)
         .zip(margin)
         .map(|(b, m)| {
-            let aabb = b
+            let kind = kinds.of(b);
+            let aabb = kind
                 .shape
                 .get()
                 .shape()
-                .compute_aabb(&b.parry_pose())
+                .compute_aabb(&b.parry_pose(kind))
                 .loosened(*m);
             (aabb, FilterKey::of(b))
         })
@@ -370,22 +373,23 @@ pub(super) const BONES_PER_TASK: usize = 512;
 /// Contacts between two bones with `prediction` (m) of speculative distance. Calls
 /// `emit(point_on_a_world, point_on_b_world, normal_a_to_b, distance)`.
 pub(crate) fn shape_pair(
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     i: usize,
     j: usize,
     prediction: f32,
     manifolds: &mut Vec<ContactManifold<(), ()>>,
     mut emit: impl FnMut(Vec3, Vec3, Vec3, f32),
 ) {
-    let (pi, pj) = (bones[i].parry_pose(), bones[j].parry_pose());
+    let (ki, kj) = (kinds.of(&bones[i]), kinds.of(&bones[j]));
+    let (pi, pj) = (bones[i].parry_pose(ki), bones[j].parry_pose(kj));
     let pos12 = pi.inv_mul(&pj);
     manifolds.clear();
     let mut ws = None;
     if DefaultQueryDispatcher
         .contact_manifolds(
             &pos12,
-            bones[i].shape.get().shape(),
-            bones[j].shape.get().shape(),
+            ki.shape.get().shape(),
+            kj.shape.get().shape(),
             prediction,
             manifolds,
             &mut ws,
@@ -425,7 +429,7 @@ pub(crate) fn ground_plane(ground: &Ground) -> (Vec3, Vec3) {
 
 /// Contacts of a bone with the ground plane. Same `emit` convention, `a` the bone.
 pub(crate) fn ground_pair(
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     i: usize,
     ground: &Ground,
     prediction: f32,
@@ -434,7 +438,8 @@ pub(crate) fn ground_pair(
 ) {
     let plane = HalfSpace::new(ground.normal());
     let pg = parry3d::math::Pose::from_translation(Vec3::new(0.0, ground.height, 0.0));
-    let pb = bones[i].parry_pose();
+    let kind = kinds.of(&bones[i]);
+    let pb = bones[i].parry_pose(kind);
     let pos12 = pg.inv_mul(&pb);
     manifolds.clear();
     let mut ws = None;
@@ -442,7 +447,7 @@ pub(crate) fn ground_pair(
         .contact_manifolds(
             &pos12,
             &plane,
-            bones[i].shape.get().shape(),
+            kind.shape.get().shape(),
             prediction,
             manifolds,
             &mut ws,
@@ -493,11 +498,12 @@ mod tests {
                 let plane_point = Vec3::new(next() * 4.0 - 2.0, ground.height, 0.0);
                 b.com = Vec3A::from(plane_point + ground.normal() * above);
                 let margin = next() * 0.05;
-                let aabb = b.shape.get().shape().compute_aabb(&b.parry_pose());
+                let kind = w.kinds.of(b);
+                let aabb = kind.shape.get().shape().compute_aabb(&b.parry_pose(kind));
                 let reaches = reaches_ground(ground_plane(&ground), &aabb.loosened(margin));
                 let mut found = false;
                 ground_pair(
-                    &w.bones,
+                    (&w.bones, &w.kinds),
                     i,
                     &ground,
                     margin,

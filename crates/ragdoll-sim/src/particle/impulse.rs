@@ -117,8 +117,11 @@ impl ParticleWorld {
     pub(crate) fn bone_of(&self, body: BodyId) -> Option<usize> {
         // Bone `i` is body `i` except after a projectile that could not be built.
         match self.bones.get(body.index()) {
-            Some(b) if b.body == body.index() => Some(body.index()),
-            _ => self.bones.iter().position(|b| b.body == body.index()),
+            Some(b) if b.body as usize == body.index() => Some(body.index()),
+            _ => self
+                .bones
+                .iter()
+                .position(|b| b.body as usize == body.index()),
         }
     }
 
@@ -207,7 +210,11 @@ mod tests {
             ParticleSolver::RigidFrames => {
                 for b in &w.bones {
                     for k in 0..4 {
-                        add(b.mass * 0.25, b.corner(k), b.corner_velocity(k));
+                        add(
+                            b.mass * 0.25,
+                            b.corner(&w.kinds, k),
+                            b.corner_velocity(&w.kinds, k),
+                        );
                     }
                 }
             }

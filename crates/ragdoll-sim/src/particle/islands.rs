@@ -14,6 +14,7 @@
 
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
+use super::bone_kinds::BoneKinds;
 use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
 use super::joint_lanes::{Entry, Lockstep};
 use super::joints::JointSet;
@@ -352,6 +353,9 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[&Batch]) {
 /// velocities: 144 B a bone, and the traffic of writing them every substep).
 pub(super) struct Part<'a> {
     pub bones: &'a mut [Bone],
+    /// What the bones share by kind (a capsule's rolled point, the grab's point, the
+    /// air friction): the world's table, which batches do not copy.
+    pub kinds: &'a BoneKinds,
     /// Contact manifolds as detected, and their points (`Manifold::range`).
     pub manifolds: &'a [Manifold],
     pub points: &'a mut [ContactPoint],
@@ -417,6 +421,7 @@ pub(super) fn run_substeps(
             };
             let mut part = Part {
                 bones: &mut batch.bones,
+                kinds: &world.kinds,
                 manifolds: &batch.manifolds,
                 points: &mut batch.points,
                 joints: &joints,

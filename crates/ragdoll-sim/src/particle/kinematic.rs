@@ -155,9 +155,10 @@ impl ParticleWorld {
             return;
         };
         let b = &self.bones[i];
-        let pose = b.shape_pose();
-        let com = pose.transform_point(b.shape_com);
-        let target_com = target.transform_point(b.shape_com);
+        let kind = self.kinds.of(b);
+        let pose = b.shape_pose(kind);
+        let com = pose.transform_point(kind.shape_com);
+        let target_com = target.transform_point(kind.shape_com);
         k.velocity = velocity_towards(com, pose.rotation, target_com, target.rotation, dt);
         self.restore_kinematic_velocity(i);
     }
@@ -171,8 +172,9 @@ impl ParticleWorld {
                 continue;
             };
             let b = &self.bones[i];
-            let pose = b.shape_pose();
-            let next = advanced(pose, b.shape_com, k.velocity, dt);
+            let kind = self.kinds.of(b);
+            let pose = b.shape_pose(kind);
+            let next = advanced(pose, kind.shape_com, k.velocity, dt);
             self.wake_swept(i, next);
             // The paper's particles of the bone move as if they were free (`place_bone`
             // leaves held particles alone).
@@ -220,7 +222,8 @@ impl ParticleWorld {
         let b = &mut self.bones[i];
         b.lin_vel = Vec3A::from(v.linear);
         b.ang_vel = Vec3A::from(v.angular);
-        let com = b.shape_pose().transform_point(b.shape_com);
+        let kind = self.kinds.of(b);
+        let com = b.shape_pose(kind).transform_point(kind.shape_com);
         let rigid = |x: Vec3| v.linear + v.angular.cross(x - com);
         if let Some(st) = self.xpbd.as_mut() {
             for p in PER_BONE * i..PER_BONE * (i + 1) {
@@ -241,8 +244,9 @@ impl ParticleWorld {
     /// Wakes every sleeping bone (with its figure) whose bounding box meets the box
     /// bone `i` sweeps from where it is to `next` (its shape frame's pose).
     fn wake_swept(&mut self, i: usize, next: Pose) {
-        let shape = self.bones[i].shape.get();
-        let now = shape.shape().compute_aabb(&self.bones[i].parry_pose());
+        let kind = self.kinds.of(&self.bones[i]);
+        let shape = kind.shape.get();
+        let now = shape.shape().compute_aabb(&self.bones[i].parry_pose(kind));
         let then = shape.shape().compute_aabb(&parry3d::math::Pose::from_parts(
             next.position,
             next.rotation,
@@ -252,10 +256,11 @@ impl ParticleWorld {
             .filter(|&j| j != i && self.bones[j].asleep && !self.bones[j].fixed)
             .filter(|&j| {
                 let b = &self.bones[j];
-                b.shape
+                let kind = self.kinds.of(b);
+                kind.shape
                     .get()
                     .shape()
-                    .compute_aabb(&b.parry_pose())
+                    .compute_aabb(&b.parry_pose(kind))
                     .intersects(&swept)
             })
             .collect();

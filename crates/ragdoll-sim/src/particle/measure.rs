@@ -27,17 +27,18 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
     for b in bones.iter_mut() {
         b.asleep = false;
     }
-    broad_phase(&bones, &zero, &w.filter, &mut pairs);
+    let bones = (&bones[..], &w.kinds);
+    broad_phase(bones, &zero, &w.filter, &mut pairs);
     let mut manifolds = Vec::new();
     for &(i, j) in &pairs {
-        shape_pair(&bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
+        shape_pair(bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
             pen = pen.max(-d)
         });
     }
     if let Some(ground) = w.settings.ground {
-        for (i, b) in bones.iter().enumerate() {
+        for (i, b) in bones.0.iter().enumerate() {
             if !b.fixed {
-                ground_pair(&bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| {
+                ground_pair(bones, i, &ground, 0.0, &mut manifolds, |_, _, _, d| {
                     pen = pen.max(-d)
                 });
             }
@@ -91,7 +92,11 @@ fn energy_parts(w: &ParticleWorld) -> (f64, f64) {
         ParticleSolver::RigidFrames => {
             for b in w.bones.iter().filter(|b| !b.fixed) {
                 for k in 0..4 {
-                    add(b.mass * 0.25, b.corner_velocity(k), b.corner(k));
+                    add(
+                        b.mass * 0.25,
+                        b.corner_velocity(&w.kinds, k),
+                        b.corner(&w.kinds, k),
+                    );
                 }
             }
         }
@@ -113,8 +118,9 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
     out.clear();
     let dt = w.settings.timestep;
     for (i, b) in w.bones.iter().enumerate() {
-        let pose = b.shape_pose();
-        let com = pose.transform_point(b.shape_com);
+        let kind = w.kinds.of(b);
+        let pose = b.shape_pose(kind);
+        let com = pose.transform_point(kind.shape_com);
         let (lin, ang) = match w.solver {
             ParticleSolver::RigidFrames | ParticleSolver::Xpbd => {
                 (Vec3::from(b.lin_vel), Vec3::from(b.ang_vel))
@@ -128,8 +134,8 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
                     position: p0,
                     rotation: r,
                 }
-                .mul_pose(&b.shape_in_bone);
-                let prev_com = prev.transform_point(b.shape_com);
+                .mul_pose(&kind.shape_in_bone);
+                let prev_com = prev.transform_point(kind.shape_com);
                 let (axis, angle) = (pose.rotation * prev.rotation.inverse()).to_axis_angle();
                 let angle = if angle > std::f32::consts::PI {
                     angle - std::f32::consts::TAU

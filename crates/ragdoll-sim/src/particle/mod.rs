@@ -14,6 +14,7 @@
 //! cores), `measure` (the metrics).
 
 mod bone;
+mod bone_kinds;
 mod bone_lanes;
 mod contacts;
 mod friction;
@@ -39,8 +40,8 @@ pub(crate) use xpbd::step::PASSES as XPBD_PASSES;
 
 use crate::method::{BodyPoseSet, BodyState, Grab, Method, MethodKind, RayHit, Sample};
 use crate::scene::{
-    BodyCollider, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, Shape, collider,
-    mass_props, validate,
+    BodyCollider, BodyDesc, BodyId, Pose, SceneDesc, SceneError, Settings, collider, mass_props,
+    validate,
 };
 use crate::snapshot::{
     BodyInstance, BodyRole, ContactInstance, JointInstance, LimitShape, ParticleInstance,
@@ -48,6 +49,7 @@ use crate::snapshot::{
 };
 use crate::timings::{PhaseClock, PhaseTimes};
 use bone::{Bone, EDGES};
+use bone_kinds::{BoneKind, BoneKinds, Material};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
 use joints::{Joint, Link, RestFrames};
@@ -88,10 +90,10 @@ impl ParticleSolver {
 pub struct ParticleWorld {
     /// The live settings (the scene itself is not kept: a world is built from it).
     settings: Settings,
-    /// Each body's shape as described, for drawing (cold; parry's copy is in the bone).
-    shapes: Vec<Shape>,
     /// Bodies of the scene; later ones are projectiles (`add_body`).
     scene_bodies: usize,
+    /// Bodies of the scene and projectiles: the next projectile's id.
+    bodies: usize,
     solver: ParticleSolver,
     /// The paper's particles. The improved solver keeps none: its particles are the
     /// corners of the bone frames (`Bone::corner`).
@@ -100,6 +102,8 @@ pub struct ParticleWorld {
     /// current frame, for the energy metric's `(x(t) − x(t−dt))/dt`.
     frame_starts: Vec<(Vec3, Quat)>,
     bones: Vec<Bone>,
+    /// What bones of a kind share: shapes, rest corners, materials.
+    kinds: BoneKinds,
     joints: Vec<Joint>,
     /// Each joint's sides, packed ([`Link`]).
     links: Vec<Link>,
@@ -146,12 +150,13 @@ impl ParticleWorld {
         validate(scene)?;
         let mut w = ParticleWorld {
             settings: scene.settings.clone(),
-            shapes: scene.bodies.iter().map(|b| b.shape.clone()).collect(),
             scene_bodies: scene.bodies.len(),
+            bodies: scene.bodies.len(),
             solver,
             particles: Particles::default(),
             frame_starts: Vec::new(),
             bones: Vec::new(),
+            kinds: BoneKinds::building(),
             joints: Vec::new(),
             links: Vec::new(),
             filter: Filter::default(),
@@ -213,13 +218,14 @@ impl ParticleWorld {
             }
         }
         if solver == ParticleSolver::Xpbd {
-            w.xpbd = Some(xpbd::XpbdState::new(&mut w.bones, &w.joints));
+            w.xpbd = Some(xpbd::XpbdState::new(&mut w.bones, &w.kinds, &w.joints));
         }
         excluded.extend(w.rest_overlaps());
         w.filter = Filter::new(w.bones.len(), &excluded);
         // Built by pushing, these arrays have up to twice the room they use; they keep
         // their size from here on (a projectile is the only thing ever added).
         w.bones.shrink_to_fit();
+        w.kinds.seal();
         w.joints.shrink_to_fit();
         // A joint's one or two angle limits would otherwise keep room for four (a
         // `Vec`'s first growth), 256 bytes.
@@ -231,20 +237,39 @@ impl ParticleWorld {
         Ok(w)
     }
 
-    /// A bone with everything but its particles (used by both placements).
-    fn make_bone(&self, body: usize, desc: &BodyDesc, mass: f32) -> Bone {
+    /// A bone with everything but its particles (used by both placements): its frame
+    /// at the body's pose, its kind (rest corners `rest`, shape frame `shape_in_bone`
+    /// in the bone frame) and materials those of the table ([`BoneKinds`]).
+    fn make_bone(
+        &mut self,
+        body: usize,
+        desc: &BodyDesc,
+        mass: f32,
+        rest: [Vec3; 4],
+        shape_in_bone: Pose,
+    ) -> Bone {
+        let kind = self.kinds.kind(BoneKind {
+            rest,
+            shape_in_bone,
+            shape: BodyCollider::new(desc)
+                .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
+            shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
+            drawn: desc.shape.clone(),
+        });
+        let material = self.kinds.material_index(Material {
+            friction: desc.friction.contact,
+            restitution: desc.restitution,
+            air: (desc.friction.linear, desc.friction.angular),
+        });
         Bone {
-            body,
-            rest: [Vec3::ZERO; 4],
+            body: body as u32,
+            kind,
+            material,
             com: desc.pose.position.into(),
             dcom: Vec3A::ZERO,
             rot: desc.pose.rotation,
             prev_rot: desc.pose.rotation,
             dturn: Quat::IDENTITY,
-            shape_in_bone: Pose::IDENTITY,
-            shape: BodyCollider::new(desc)
-                .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
-            shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             mass,
             inv_inertia_local: Vec3A::ZERO,
             fixed: desc.is_fixed(),
@@ -255,9 +280,6 @@ impl ParticleWorld {
             still_time: 0.0,
             lin_vel: desc.linear_velocity.into(),
             ang_vel: desc.angular_velocity.into(),
-            friction: desc.friction.contact,
-            restitution: desc.restitution,
-            air: (desc.friction.linear, desc.friction.angular),
             figure: body as u32,
             self_collision: desc.self_collision,
         }
@@ -267,16 +289,15 @@ impl ParticleWorld {
     fn particulated_bone(&mut self, body: usize, desc: &BodyDesc) -> Result<Bone, SceneError> {
         let mp = mass_props(desc)?;
         let p = placement::particulate(&mp);
-        let mut bone = self.make_bone(body, desc, mp.mass);
+        let shape_in_bone = Pose {
+            position: -(p.bone_in_shape.rotation.inverse() * p.bone_in_shape.position),
+            rotation: p.bone_in_shape.rotation.inverse(),
+        };
+        let mut bone = self.make_bone(body, desc, mp.mass, p.rest, shape_in_bone);
         let frame = desc.pose.mul_pose(&p.bone_in_shape);
         bone.com = frame.position.into();
         bone.rot = frame.rotation;
         bone.prev_rot = bone.rot;
-        bone.shape_in_bone = Pose {
-            position: -(p.bone_in_shape.rotation.inverse() * p.bone_in_shape.position),
-            rotation: p.bone_in_shape.rotation.inverse(),
-        };
-        bone.rest = p.rest;
         bone.inv_inertia_local = p
             .principal_inertia
             .map(|i| if i > 0.0 { 1.0 / i } else { 0.0 })
@@ -326,13 +347,13 @@ impl ParticleWorld {
     pub(crate) fn corners(&self, i: usize) -> [Vec3; 4] {
         let b = &self.bones[i];
         match self.solver {
-            ParticleSolver::RigidFrames => std::array::from_fn(|k| b.corner(k)),
+            ParticleSolver::RigidFrames => std::array::from_fn(|k| b.corner(&self.kinds, k)),
             ParticleSolver::Paper => {
                 self.particles.of_bone[i].map(|p| self.particles.x[p as usize])
             }
             ParticleSolver::Xpbd => match &self.xpbd {
                 Some(st) => st.particles.bone(i),
-                None => std::array::from_fn(|k| b.corner(k)),
+                None => std::array::from_fn(|k| b.corner(&self.kinds, k)),
             },
         }
     }
@@ -342,7 +363,7 @@ impl ParticleWorld {
     pub(crate) fn stick_rest(&self, i: usize) -> [f32; 6] {
         match &self.paper {
             Some(st) => st.bone_sticks(i),
-            None => self.bones[i].rest_stick_lengths(),
+            None => self.bones[i].rest_stick_lengths(&self.kinds),
         }
     }
 
@@ -380,14 +401,15 @@ impl ParticleWorld {
     fn rest_overlaps(&self) -> Vec<(usize, usize)> {
         let margin = vec![0.0; self.bones.len()];
         let mut pairs = Vec::new();
-        broad_all(&self.bones, &margin, &mut pairs);
+        broad_all(&self.bones, &self.kinds, &margin, &mut pairs);
         let mut manifolds = Vec::new();
         pairs.retain(|&(i, j)| {
             if self.bones[i].figure != self.bones[j].figure {
                 return false;
             }
             let mut overlap = false;
-            contacts::shape_pair(&self.bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
+            let bones = (&self.bones[..], &self.kinds);
+            contacts::shape_pair(bones, i, j, 0.0, &mut manifolds, |_, _, _, d| {
                 overlap |= d < -1e-3
             });
             overlap
@@ -415,8 +437,8 @@ impl ParticleWorld {
 }
 
 /// Broad phase ignoring the filter (used to find rest overlaps).
-fn broad_all(bones: &[Bone], margin: &[f32], out: &mut Vec<(usize, usize)>) {
-    contacts::broad_phase(bones, margin, &Filter::default(), out);
+fn broad_all(bones: &[Bone], kinds: &BoneKinds, margin: &[f32], out: &mut Vec<(usize, usize)>) {
+    contacts::broad_phase((bones, kinds), margin, &Filter::default(), out);
 }
 
 /// The improved world of a shipped scene, `assets/scenes/{file}`, with `count` figures
@@ -459,11 +481,14 @@ pub(crate) fn uniform(mut seed: u32) -> impl FnMut() -> f32 {
 }
 
 /// The mouse grab in improved mode: a soft XPBD point constraint to the target.
-pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
-    let Some(i) = bones.iter().position(|b| b.body == g.body.index()) else {
+pub(crate) fn grab_improved(bones: &mut [Bone], kinds: &BoneKinds, g: Grab, h: f32) {
+    let Some(i) = bones.iter().position(|b| b.body as usize == g.body.index()) else {
         return;
     };
-    let local = bones[i].shape_in_bone.transform_point(g.local_point);
+    let local = kinds
+        .of(&bones[i])
+        .shape_in_bone
+        .transform_point(g.local_point);
     let p = bones[i].world(local);
     let target = Vec3A::from(g.target);
     // A 5 Hz spring on the bone's own mass, like Box2D's mouse joint: compliance
@@ -485,10 +510,18 @@ pub(crate) fn grab_improved(bones: &mut [Bone], g: Grab, h: f32) {
 
 /// The mouse grab in paper mode: pull the bone's particles towards the target.
 pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
-    let Some(i) = w.bones.iter().position(|b| b.body == g.body.index()) else {
+    let Some(i) = w
+        .bones
+        .iter()
+        .position(|b| b.body as usize == g.body.index())
+    else {
         return;
     };
-    let local = w.bones[i].shape_in_bone.transform_point(g.local_point);
+    let local = w
+        .kinds
+        .of(&w.bones[i])
+        .shape_in_bone
+        .transform_point(g.local_point);
     let p = Vec3::from(w.bones[i].world(local));
     let d = (g.target - p) * 0.05;
     for &k in &w.particles.of_bone[i] {
@@ -578,9 +611,9 @@ impl Method for ParticleWorld {
         for (bone, b) in self.bones.iter().enumerate() {
             let role = if b.fixed {
                 BodyRole::Fixed
-            } else if self.grab.is_some_and(|g| g.body.index() == b.body) {
+            } else if self.grab.is_some_and(|g| g.body.index() == b.body as usize) {
                 BodyRole::Grabbed
-            } else if b.body >= self.scene_bodies {
+            } else if b.body as usize >= self.scene_bodies {
                 BodyRole::Projectile
             } else if b.asleep {
                 BodyRole::Asleep
@@ -588,9 +621,9 @@ impl Method for ParticleWorld {
                 BodyRole::Dynamic
             };
             out.bodies.push(BodyInstance {
-                body: BodyId(b.body as u32),
-                shape: self.shapes[b.body].clone(),
-                pose: b.shape_pose(),
+                body: BodyId(b.body),
+                shape: self.kinds.of(b).drawn.clone(),
+                pose: b.shape_pose(self.kinds.of(b)),
                 role,
             });
             let corners = self.corners(bone);
@@ -738,13 +771,18 @@ impl Method for ParticleWorld {
         let ray = Ray::new(origin, dir);
         let mut best: Option<RayHit> = None;
         for b in &self.bones {
-            let pose = b.parry_pose();
-            if let Some(t) = b.shape.get().shape().cast_ray(&pose, &ray, f32::MAX, true)
+            let kind = self.kinds.of(b);
+            let pose = b.parry_pose(kind);
+            if let Some(t) = kind
+                .shape
+                .get()
+                .shape()
+                .cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
-                let local = b.shape_pose().inverse_transform_point(origin + dir * t);
+                let local = b.shape_pose(kind).inverse_transform_point(origin + dir * t);
                 best = Some(RayHit {
-                    body: BodyId(b.body as u32),
+                    body: BodyId(b.body),
                     distance: t,
                     local_point: local,
                 });
@@ -756,7 +794,7 @@ impl Method for ParticleWorld {
     fn set_grab(&mut self, grab: Option<Grab>) {
         if let Some(g) = grab {
             for b in self.bones.iter_mut() {
-                if b.body == g.body.index() {
+                if b.body as usize == g.body.index() {
                     b.wake();
                 }
             }
@@ -770,10 +808,10 @@ impl Method for ParticleWorld {
 
     fn drop_by_owner(self: Box<Self>, dropped: &mut dyn FnMut(&'static str)) {
         let ParticleWorld {
-            shapes,
             particles,
             frame_starts,
             bones,
+            kinds,
             joints,
             links,
             filter,
@@ -786,7 +824,7 @@ impl Method for ParticleWorld {
             motors,
             ..
         } = *self;
-        drop(bones);
+        drop((bones, kinds));
         dropped("bones");
         drop((joints, links, filter, motors, kinematic));
         dropped("joints, links, filter");
@@ -794,8 +832,8 @@ impl Method for ParticleWorld {
         dropped("contact points");
         drop((pairs, manifolds));
         dropped("contact pairs");
-        drop((particles, frame_starts, shapes));
-        dropped("particles, frame starts, shapes");
+        drop((particles, frame_starts));
+        dropped("particles, frame starts");
         drop(paper);
         dropped("paper: sticks, limits");
         if let Some(st) = xpbd {
@@ -835,17 +873,18 @@ impl Method for ParticleWorld {
     }
 
     fn add_body(&mut self, desc: &BodyDesc) -> BodyId {
-        let id = self.shapes.len();
-        self.shapes.push(desc.shape.clone());
+        let id = self.bodies;
+        self.bodies += 1;
         if let Ok(mut bone) = self.particulated_bone(id, desc) {
             bone.figure = id as u32;
             if let Some(st) = self.xpbd.as_mut() {
-                st.add_bone(self.bones.len(), &bone);
+                st.add_bone(self.bones.len(), &bone, &self.kinds);
             }
             if self.solver == ParticleSolver::Paper {
-                // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it.
+                // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it
+                // (the bone's kind is its own: a projectile's is never shared).
                 let x = &self.particles.x;
-                let shape_pose = bone.shape_pose();
+                let shape_pose = bone.shape_pose(self.kinds.of(&bone));
                 let ids = self.particles.of_bone[self.bones.len()];
                 bone.paper_frame(ids, x);
                 let frame = Pose {
@@ -853,9 +892,10 @@ impl Method for ParticleWorld {
                     rotation: bone.rot,
                 };
                 // Its sticks are as long as the placement's rest particles are apart.
-                let stick_rest = bone.rest_stick_lengths();
-                bone.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
-                bone.shape_in_bone = Pose {
+                let stick_rest = bone.rest_stick_lengths(&self.kinds);
+                let kind = self.kinds.of_mut(&bone);
+                kind.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
+                kind.shape_in_bone = Pose {
                     position: frame.inverse_transform_point(shape_pose.position),
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
                 };

@@ -307,12 +307,11 @@ fn add_bone(
         position: -(rot.inverse() * pos[0]),
         rotation: rot.inverse(),
     };
-    let mut bone = w.make_bone(i, &scene.bodies[i], mass);
+    let rest = pos.map(|p| frame.inverse_transform_point(p));
+    let mut bone = w.make_bone(i, body, mass, rest, inv.mul_pose(&body.pose));
     w.particles.of_bone.push(particles);
-    bone.rest = pos.map(|p| frame.inverse_transform_point(p));
     bone.com = pos[0].into();
     bone.rot = rot;
-    bone.shape_in_bone = inv.mul_pose(&body.pose);
     st.push_bone_sticks(particles, &EDGES.map(|(a, b)| pos[a].distance(pos[b])));
     let x = &w.particles.x;
     for &s in satellites {
@@ -616,11 +615,12 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
     update_frames(w);
     let zero = vec![0.0; w.bones.len()];
     let mut pairs = std::mem::take(&mut w.pairs);
-    broad_phase(&w.bones, &zero, &w.filter, &mut pairs);
+    broad_phase((&w.bones, &w.kinds), &zero, &w.filter, &mut pairs);
     let mut manifolds = std::mem::take(&mut w.manifolds);
     for &(i, j) in &pairs {
         let mut deep = Deepest::default();
-        shape_pair(&w.bones, i, j, 0.0, &mut manifolds, |pa, pb, n, d| {
+        let bones = (&w.bones[..], &w.kinds);
+        shape_pair(bones, i, j, 0.0, &mut manifolds, |pa, pb, n, d| {
             deep.add(pa, pb, n, d)
         });
         if deep.count > 0 {
@@ -644,7 +644,8 @@ fn project_collisions(w: &mut ParticleWorld, iterations: u32) {
                 continue;
             }
             let mut deep = Deepest::default();
-            ground_pair(&w.bones, i, &ground, 0.0, &mut manifolds, |pa, pb, n, d| {
+            let bones = (&w.bones[..], &w.kinds);
+            ground_pair(bones, i, &ground, 0.0, &mut manifolds, |pa, pb, n, d| {
                 deep.add(pa, pb, n, d)
             });
             if deep.count > 0 {

@@ -26,6 +26,7 @@
 //! (push-out from a penetration) is cancelled by the velocity pass.
 
 use super::bone::{Aim, Bone, advance_moving};
+use super::bone_kinds::BoneKinds;
 use super::contacts::{
     BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, give_back_room,
     ground_pair, ground_plane, point_runs, reaches_ground, shape_pair,
@@ -64,7 +65,9 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
         .par_iter()
         .with_min_len(BONES_PER_TASK)
         .map(|b| {
-            let radius = b
+            let radius = w
+                .kinds
+                .of(b)
                 .shape
                 .get()
                 .shape()
@@ -78,8 +81,8 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     let mut pairs = std::mem::take(&mut w.pairs);
     let mut contacts = std::mem::take(&mut w.contacts);
     contacts.clear();
-    let bones = &w.bones;
-    let boxes = broad_phase_on(tree, bones, &margins, &w.filter, &mut pairs);
+    let (bones, kinds) = (&w.bones[..], &w.kinds);
+    let boxes = broad_phase_on(tree, (bones, kinds), &margins, &w.filter, &mut pairs);
     narrow_phase(
         &pairs,
         &mut w.manifolds,
@@ -87,14 +90,15 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
         |&(i, j), scratch, set| {
             let approach = (bones[i].lin_vel - bones[j].lin_vel).length() + spins[i] + spins[j];
             let prediction = approach * dt + 2.0 * reach;
-            let mu = (bones[i].friction * bones[j].friction).sqrt();
-            let e = bones[i].restitution.max(bones[j].restitution);
+            let (mi, mj) = (kinds.material(&bones[i]), kinds.material(&bones[j]));
+            let mu = (mi.friction * mj.friction).sqrt();
+            let e = mi.restitution.max(mj.restitution);
             let roll = rolling_arm(
-                bones[i].shape.rolling_radius(),
-                bones[j].shape.rolling_radius(),
+                kinds.of(&bones[i]).shape.rolling_radius(),
+                kinds.of(&bones[j]).shape.rolling_radius(),
             );
             let first = set.manifolds.len();
-            shape_pair(bones, i, j, prediction, scratch, |pa, pb, n, _| {
+            shape_pair((bones, kinds), i, j, prediction, scratch, |pa, pb, n, _| {
                 let point = ContactPoint::new(
                     bones[i].rot.inverse() * (pa - Vec3::from(bones[i].center())),
                     bones[j].rot.inverse() * (pb - Vec3::from(bones[j].center())),
@@ -105,7 +109,7 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
     );
     // The ground needs no broad phase: the bones whose boxes reach it, after the pairs.
     if let Some(ground) = &w.settings.ground {
-        ground_contacts(bones, ground, &margins, &boxes, &mut contacts);
+        ground_contacts((bones, kinds), ground, &margins, &boxes, &mut contacts);
     }
     contacts.give_back_room();
     give_back_room(&mut pairs);
@@ -116,7 +120,7 @@ fn detect(w: &mut ParticleWorld, tree: &mut Reused, dt: f32) {
 /// Each moving bone's contacts with the ground, `margins[i]` ahead, into `set`: the
 /// bones whose loosened boxes `boxes` reach it (`reaches_ground`).
 fn ground_contacts(
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     ground: &Ground,
     margins: &[f32],
     boxes: &[Aabb],
@@ -132,14 +136,22 @@ fn ground_contacts(
         .collect();
     narrow_phase(&near, &mut Vec::new(), set, |&i, scratch, set| {
         let b = &bones[i];
-        let mu = (b.friction * ground.friction).sqrt();
-        let e = b.restitution.max(ground.restitution);
-        let roll = rolling_arm(b.shape.rolling_radius(), 0.0);
+        let material = kinds.material(b);
+        let mu = (material.friction * ground.friction).sqrt();
+        let e = material.restitution.max(ground.restitution);
+        let roll = rolling_arm(kinds.of(b).shape.rolling_radius(), 0.0);
         let first = set.manifolds.len();
-        ground_pair(bones, i, ground, margins[i], scratch, |pa, pb, n, _| {
-            let point = ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
-            set.push(first, (i, None), n, (mu, e, roll), point);
-        });
+        ground_pair(
+            (bones, kinds),
+            i,
+            ground,
+            margins[i],
+            scratch,
+            |pa, pb, n, _| {
+                let point = ContactPoint::new(b.rot.inverse() * (pa - Vec3::from(b.center())), pb);
+                set.push(first, (i, None), n, (mu, e, roll), point);
+            },
+        );
     });
 }
 
@@ -505,7 +517,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                     // start here (`ContactPoint::touched_at`).
                     c.touched_at = None;
                 }
-                roll_contact(p.bones, m, c);
+                roll_contact(p.bones, p.kinds, m, c);
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
                 c.lambda_v = 0.0;
@@ -528,7 +540,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             p.lockstep
                 .solve(p.joints, p.bones, h, Aim::of_pass(pass, PASSES));
             if let Some(g) = p.grab {
-                super::grab_improved(p.bones, g, h);
+                super::grab_improved(p.bones, p.kinds, g, h);
             }
         }
         // 4. velocities from the particles' displacements; the frame origin moves on
@@ -566,8 +578,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
             if b.is_static() {
                 continue;
             }
-            b.lin_vel *= (1.0 - b.air.0 * h).max(0.0);
-            b.ang_vel *= (1.0 - b.air.1 * h).max(0.0);
+            let air = p.kinds.material(b).air;
+            b.lin_vel *= (1.0 - air.0 * h).max(0.0);
+            b.ang_vel *= (1.0 - air.1 * h).max(0.0);
         }
     }
 }
@@ -582,11 +595,11 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 /// slip, so the touch offset moves with it (`friction::ANCHOR_PULL`). Ground contacts
 /// only: between two bones the frame's normal is no one side's, and rolling both
 /// points threw the capsule human at 19 m/s (1/20 s frames of 1000 substeps).
-fn roll_contact(bones: &[Bone], m: &Manifold, c: &mut ContactPoint) {
+fn roll_contact(bones: &[Bone], kinds: &BoneKinds, m: &Manifold, c: &mut ContactPoint) {
     let start = |b: &Bone, local: Vec3| b.rot * Vec3A::from(local);
     let mut jump = Vec3A::ZERO;
     if m.b.is_none()
-        && let Some(ra) = super::bone::rolled_point(&bones[m.a], c.ra, m.n)
+        && let Some(ra) = super::bone::rolled_point(&bones[m.a], kinds.of(&bones[m.a]), c.ra, m.n)
     {
         jump += start(&bones[m.a], ra) - start(&bones[m.a], c.ra);
         c.ra = ra;
@@ -702,6 +715,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                 let lockstep = whole.get_or_insert_with(|| Lockstep::new(&joints, &w.bones));
                 let mut part = Part {
                     bones: &mut w.bones,
+                    kinds: &w.kinds,
                     manifolds: &w.contacts.manifolds,
                     points: &mut w.contacts.points,
                     joints: &joints,
@@ -718,9 +732,11 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     // stepping thread this would be a serial part of a large pile's frame.
     kept.into_par_iter().for_each(drop);
     let mut newly = Vec::new();
-    let held = w
-        .grab
-        .and_then(|g| w.bones.iter().position(|b| b.body == g.body.index()));
+    let held = w.grab.and_then(|g| {
+        w.bones
+            .iter()
+            .position(|b| b.body as usize == g.body.index())
+    });
     sleeping::update(
         &mut w.bones,
         held,

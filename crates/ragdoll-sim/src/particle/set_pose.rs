@@ -64,7 +64,8 @@ impl ParticleWorld {
         velocity: BodyVelocity,
         new_velocity: bool,
     ) {
-        let s = &self.bones[i].shape_in_bone;
+        let kind = self.kinds.of(&self.bones[i]);
+        let s = &kind.shape_in_bone;
         let bone_in_shape = Pose {
             position: -(s.rotation.inverse() * s.position),
             rotation: s.rotation.inverse(),
@@ -74,7 +75,7 @@ impl ParticleWorld {
             position: Vec3::from(self.bones[i].center()),
             rotation: self.bones[i].rot,
         };
-        let com = pose.transform_point(self.bones[i].shape_com);
+        let com = pose.transform_point(kind.shape_com);
         let rigid = |x: Vec3| velocity.linear + velocity.angular.cross(x - com);
         let (g, dt) = (self.settings.gravity, self.settings.timestep);
         let b = &mut self.bones[i];
@@ -86,7 +87,7 @@ impl ParticleWorld {
         if let Some(st) = self.xpbd.as_mut() {
             let f = PER_BONE * i;
             for k in 0..PER_BONE {
-                let x = frame.transform_point(b.rest[k]);
+                let x = frame.transform_point(kind.rest[k]);
                 st.particles.x[f + k] = x.as_dvec3();
                 st.particles.x_prev[f + k] = x.as_dvec3();
                 st.particles.v[f + k] = rigid(x);
@@ -97,7 +98,7 @@ impl ParticleWorld {
         }
         if let Some(paper) = self.paper.as_ref() {
             let own = self.particles.of_bone[i];
-            let rest = b.rest;
+            let rest = kind.rest;
             let past = |x: Vec3, v: Vec3| x - v * dt + g * (0.5 * dt * dt);
             // Joint particles tied to the bone by sticks, not among its four: moved
             // with it, once each.

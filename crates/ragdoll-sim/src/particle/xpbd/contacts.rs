@@ -22,6 +22,7 @@
 //! the kinetic rate `μ g cos θ` on a slope.
 
 use super::super::bone::{Bone, rolled_point};
+use super::super::bone_kinds::BoneKinds;
 use super::super::contacts::{
     Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, reserve_kept, shape_pair,
 };
@@ -147,10 +148,10 @@ pub(crate) struct Scratch {
 }
 
 /// A point given in world coordinates, attached to bone `i`'s particles.
-fn attach(bones: &[Bone], i: usize, world: Vec3) -> Anchor {
+fn attach(bones: &[Bone], kinds: &BoneKinds, i: usize, world: Vec3) -> Anchor {
     let b = &bones[i];
     let local = b.rot.inverse() * (world - Vec3::from(b.center()));
-    Anchor::Bone(i as u32, weights(&b.rest, local))
+    Anchor::Bone(i as u32, weights(&kinds.of(b).rest, local))
 }
 
 /// Finds the contacts of the next `span` seconds into `out` (module doc). `tree` is
@@ -160,7 +161,7 @@ fn attach(bones: &[Bone], i: usize, world: Vec3) -> Anchor {
 pub(crate) fn detect(
     tree: &mut Reused,
     p: &XParticles,
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     filter: &Filter,
     settings: &Settings,
     span: f32,
@@ -184,30 +185,38 @@ pub(crate) fn detect(
         let spin = (0..4)
             .map(|k| (p.v[f + k] - c).length())
             .fold(0.0, f32::max);
-        let inner = b.rest.iter().map(|r| r.length()).fold(1e-6, f32::max);
-        let outer = b
+        let kind = kinds.of(b);
+        let inner = kind.rest.iter().map(|r| r.length()).fold(1e-6, f32::max);
+        let outer = kind
             .shape
             .get()
             .shape()
             .compute_local_aabb()
             .half_extents()
             .length()
-            + b.shape_in_bone.position.length();
+            + kind.shape_in_bone.position.length();
         let speed = c.length() + spin * (outer / inner).max(1.0);
         scratch.speeds.push(speed);
         scratch.margins.push(speed * span + reach);
     }
-    let boxes = broad_phase_on(tree, bones, &scratch.margins, filter, &mut scratch.pairs);
+    let boxes = broad_phase_on(
+        tree,
+        (bones, kinds),
+        &scratch.margins,
+        filter,
+        &mut scratch.pairs,
+    );
     for &(i, j) in &scratch.pairs {
         let prediction = (scratch.speeds[i] + scratch.speeds[j]) * span + 2.0 * reach;
-        let mu = (bones[i].friction * bones[j].friction).sqrt();
-        let restitution = bones[i].restitution.max(bones[j].restitution);
+        let (mi, mj) = (kinds.material(&bones[i]), kinds.material(&bones[j]));
+        let mu = (mi.friction * mj.friction).sqrt();
+        let restitution = mi.restitution.max(mj.restitution);
         let roll = rolling_arm(
-            bones[i].shape.rolling_radius(),
-            bones[j].shape.rolling_radius(),
+            kinds.of(&bones[i]).shape.rolling_radius(),
+            kinds.of(&bones[j]).shape.rolling_radius(),
         );
         shape_pair(
-            bones,
+            (bones, kinds),
             i,
             j,
             prediction,
@@ -215,8 +224,8 @@ pub(crate) fn detect(
             |pa, pb, n, _| {
                 reserve_kept(out, 1);
                 out.push(Contact {
-                    a: attach(bones, i, pa),
-                    b: attach(bones, j, pb),
+                    a: attach(bones, kinds, i, pa),
+                    b: attach(bones, kinds, j, pb),
                     n,
                     mu,
                     restitution,
@@ -236,11 +245,12 @@ pub(crate) fn detect(
             if bones[i].is_static() || !reaches_ground(plane, &boxes[i]) {
                 continue;
             }
-            let mu = (bones[i].friction * ground.friction).sqrt();
-            let restitution = bones[i].restitution.max(ground.restitution);
-            let roll = rolling_arm(bones[i].shape.rolling_radius(), 0.0);
+            let material = kinds.material(&bones[i]);
+            let mu = (material.friction * ground.friction).sqrt();
+            let restitution = material.restitution.max(ground.restitution);
+            let roll = rolling_arm(kinds.of(&bones[i]).shape.rolling_radius(), 0.0);
             ground_pair(
-                bones,
+                (bones, kinds),
                 i,
                 ground,
                 scratch.margins[i],
@@ -248,7 +258,7 @@ pub(crate) fn detect(
                 |pa, pb, n, _| {
                     reserve_kept(out, 1);
                     out.push(Contact {
-                        a: attach(bones, i, pa),
+                        a: attach(bones, kinds, i, pa),
                         b: Anchor::World(pb),
                         n,
                         mu,
@@ -285,11 +295,11 @@ fn normal_velocity(c: &Contact, p: &XParticles) -> f32 {
 pub(crate) fn begin_substep(
     contacts: &mut [Contact],
     p: &XParticles,
-    bones: &[Bone],
+    (bones, kinds): (&[Bone], &BoneKinds),
     push_speed: f32,
     h: f32,
 ) {
-    roll_ground_points(contacts, bones);
+    roll_ground_points(contacts, bones, kinds);
     for c in contacts.iter_mut() {
         c.vn_before = normal_velocity(c, p);
         c.lambda = 0.0;
@@ -310,15 +320,16 @@ pub(crate) fn begin_substep(
 /// in 9 s. The rigid-frames solver rolls its ground points the same way
 /// (`rigid_frames::roll_contact`). Ground contacts only: between two bones the normal
 /// is no one side's.
-fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone]) {
+fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], kinds: &BoneKinds) {
     for c in contacts.iter_mut() {
         let (Anchor::Bone(i, w), Anchor::World(_)) = (c.a, c.b) else {
             continue;
         };
         let b = &bones[i as usize];
-        let local = combine(&b.rest, &w);
-        if let Some(rolled) = rolled_point(b, local, Vec3A::from(c.n)) {
-            c.a = Anchor::Bone(i, weights(&b.rest, rolled));
+        let kind = kinds.of(b);
+        let local = combine(&kind.rest, &w);
+        if let Some(rolled) = rolled_point(b, kind, local, Vec3A::from(c.n)) {
+            c.a = Anchor::Bone(i, weights(&kind.rest, rolled));
         }
     }
 }

@@ -66,12 +66,12 @@ pub(crate) fn inv_inertia_prev(bone: &Bone) -> DMat3 {
     r * inv * r.transpose()
 }
 
-/// Reads `bone`'s frame from its particles `x` (module doc), its old orientation the
-/// starting guess.
-pub(crate) fn read(bone: &mut Bone, x: &[DVec3; 4]) {
+/// Reads `bone`'s frame from its particles `x` (module doc), its rest corners `rest`,
+/// its old orientation the starting guess.
+pub(crate) fn read(bone: &mut Bone, rest: &[Vec3; 4], x: &[DVec3; 4]) {
     let c = (x[0] + x[1] + x[2] + x[3]) * 0.25;
     let p = x.map(|xk| (xk - c).as_vec3());
-    bone.rot = match_rotation(&p, &bone.rest, bone.rot);
+    bone.rot = match_rotation(&p, rest, bone.rot);
     bone.com = Vec3A::from(c.as_vec3());
     bone.dcom = Vec3A::ZERO;
 }

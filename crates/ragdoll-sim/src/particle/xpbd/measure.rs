@@ -29,7 +29,8 @@ pub(crate) fn body_states(w: &ParticleWorld, st: &XpbdState, out: &mut Vec<BodyS
     out.clear();
     let p = &st.particles;
     for (i, b) in w.bones.iter().enumerate() {
-        let pose = b.shape_pose();
+        let kind = w.kinds.of(b);
+        let pose = b.shape_pose(kind);
         let f = PER_BONE * i;
         let c = p.centre(i);
         let x = p.bone64(i).map(|xk| (xk - c).as_vec3());
@@ -41,7 +42,7 @@ pub(crate) fn body_states(w: &ParticleWorld, st: &XpbdState, out: &mut Vec<BodyS
         let inv_i = r * Mat3::from_diagonal(Vec3::from(b.inv_inertia_local)) * r.transpose();
         let om = inv_i * l;
         out.push(BodyState {
-            com: pose.transform_point(b.shape_com),
+            com: pose.transform_point(kind.shape_com),
             orientation: pose.rotation,
             linear_velocity: if v.is_finite() { v } else { Vec3::ZERO },
             angular_velocity: if om.is_finite() { om } else { Vec3::ZERO },

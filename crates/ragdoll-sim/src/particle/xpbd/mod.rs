@@ -29,6 +29,7 @@ pub(crate) mod sleeping;
 pub(crate) mod step;
 
 use super::bone::Bone;
+use super::bone_kinds::BoneKinds;
 use super::joints::Joint;
 use glam::Vec3;
 use joints::Anchor;
@@ -57,9 +58,10 @@ pub(crate) struct XpbdState {
 impl XpbdState {
     /// Adds bone `i`'s particles, at rest positions in its frame moving with its initial
     /// velocities.
-    pub fn add_bone(&mut self, i: usize, b: &Bone) {
+    pub fn add_bone(&mut self, i: usize, b: &Bone, kinds: &BoneKinds) {
         debug_assert_eq!(self.rest.len(), i);
-        let x = std::array::from_fn(|k| Vec3::from(b.world(b.rest[k])));
+        let rest = &kinds.of(b).rest;
+        let x = std::array::from_fn(|k| Vec3::from(b.world(rest[k])));
         let (v, om) = (glam::Vec3::from(b.lin_vel), glam::Vec3::from(b.ang_vel));
         let c = Vec3::from(b.center());
         let vel = x.map(|xk: Vec3| v + om.cross(xk - c));
@@ -71,16 +73,18 @@ impl XpbdState {
     }
 
     /// The state for `bones` (particulated, at their rest frames) and `joints`.
-    pub fn new(bones: &mut [Bone], joints: &[Joint]) -> XpbdState {
+    pub fn new(bones: &mut [Bone], kinds: &BoneKinds, joints: &[Joint]) -> XpbdState {
         let mut st = XpbdState::default();
         for (i, b) in bones.iter_mut().enumerate() {
-            st.add_bone(i, b);
+            st.add_bone(i, b, kinds);
         }
         st.anchors = joints
             .iter()
             .map(|j| {
                 let side = |s: Option<usize>, local: Vec3| match s {
-                    Some(i) => Anchor::Bone(i as u32, frame::weights(&bones[i].rest, local)),
+                    Some(i) => {
+                        Anchor::Bone(i as u32, frame::weights(&kinds.of(&bones[i]).rest, local))
+                    }
                     None => Anchor::World(local),
                 };
                 [side(j.a, j.anchor_a), side(j.b, j.anchor_b)]

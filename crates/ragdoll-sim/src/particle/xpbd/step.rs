@@ -192,7 +192,7 @@ pub(crate) fn substep_count(s: &Settings) -> u32 {
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
     for (i, b) in w.bones.iter_mut().enumerate() {
         if st.particles.moves(i) {
-            frame::read(b, &st.particles.bone64(i));
+            frame::read(b, &w.kinds.of(b).rest, &st.particles.bone64(i));
         }
     }
 }
@@ -200,12 +200,17 @@ fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
 /// The grab: a soft point between the grabbed point and the target, a 5 Hz spring on
 /// the bone's own mass (`k = m ω²`, compliance `1/k`), as the other particle solvers.
 fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
-    let Some(i) = w.bones.iter().position(|b| b.body == g.body.index()) else {
+    let Some(i) = w
+        .bones
+        .iter()
+        .position(|b| b.body as usize == g.body.index())
+    else {
         return;
     };
     let b = &w.bones[i];
-    let local = b.shape_in_bone.transform_point(g.local_point);
-    let a = Anchor::Bone(i as u32, frame::weights(&b.rest, local));
+    let kind = w.kinds.of(b);
+    let local = kind.shape_in_bone.transform_point(g.local_point);
+    let a = Anchor::Bone(i as u32, frame::weights(&kind.rest, local));
     let omega = std::f32::consts::TAU * 5.0;
     let compliance = 1.0 / (b.mass.max(1e-3) * omega * omega);
     let d = (g.target.as_dvec3() - a.point64(&st.particles)).as_vec3();
@@ -221,9 +226,11 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
 /// One frame (module doc).
 pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
     let dt = w.settings.timestep;
-    let held = w
-        .grab
-        .and_then(|g| w.bones.iter().position(|b| b.body == g.body.index()));
+    let held = w.grab.and_then(|g| {
+        w.bones
+            .iter()
+            .position(|b| b.body as usize == g.body.index())
+    });
     if held.is_none() && w.bones.iter().all(|b| b.is_static()) {
         // Nothing moves: the timers only grow, every island stays asleep.
         return;
@@ -251,7 +258,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
             contacts::detect(
                 &mut tree,
                 &st.particles,
-                &w.bones,
+                (&w.bones, &w.kinds),
                 &w.filter,
                 &w.settings,
                 span,
@@ -262,7 +269,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         contacts::begin_substep(
             &mut st.contacts,
             &st.particles,
-            &w.bones,
+            (&w.bones, &w.kinds),
             w.settings.max_push_out_speed,
             h,
         );
@@ -356,7 +363,7 @@ fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
             p.v[k] = ((p.x[k] - p.x_prev[k]) * inv_h).as_vec3();
         }
         shape_match::project_velocities(p, i);
-        let (lin, ang) = b.air;
+        let (lin, ang) = w.kinds.material(b).air;
         if lin > 0.0 || ang > 0.0 {
             let c = (p.v[f] + p.v[f + 1] + p.v[f + 2] + p.v[f + 3]) * 0.25;
             let (sl, sa) = ((1.0 - lin * h).max(0.0), (1.0 - ang * h).max(0.0));
