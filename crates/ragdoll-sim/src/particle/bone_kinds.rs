@@ -180,3 +180,28 @@ fn kind_bits(k: &BoneKind) -> Vec<u32> {
     }
     bits
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::scene_world;
+    use std::collections::HashSet;
+
+    /// Two humans of the pile keep one human's kinds and materials: the second's bones
+    /// name the first's, limb by limb, and the tables hold no more than the first
+    /// human's distinct ones.
+    #[test]
+    fn humans_of_a_pile_share_kinds_and_materials() {
+        let w = scene_world("pile.af", Some(2));
+        assert_eq!(w.bones.len(), 32);
+        let (first, second) = w.bones.split_at(16);
+        for (i, (a, b)) in first.iter().zip(second).enumerate() {
+            assert_eq!(a.kind, b.kind, "bone {i}: a kind of its own");
+            assert_eq!(a.material, b.material, "bone {i}: a material of its own");
+        }
+        let kinds: HashSet<u32> = first.iter().map(|b| b.kind).collect();
+        let materials: HashSet<u32> = first.iter().map(|b| b.material).collect();
+        assert_eq!(w.kinds.kinds.len(), kinds.len());
+        assert_eq!(w.kinds.materials.len(), materials.len());
+        assert!(w.kinds.index.is_none(), "the index outlives the build");
+    }
+}

@@ -22,13 +22,14 @@ use rayon::prelude::*;
 ///
 /// Split from the points (Box2D's manifold/point split) because a box face brings
 /// four points with one normal and one pair of materials: kept once per manifold the
-/// set is less than half the bytes, and the passes over the points stream less.
+/// set is less than half the bytes, and the passes over the points stream less. Its
+/// sides are packed in 4 bytes each ([`Manifold::a`], [`Manifold::b`]): 48 bytes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Manifold {
     /// The first bone.
-    pub a: usize,
-    /// The second bone, or the ground.
-    pub b: Side,
+    a: u32,
+    /// The second bone, or the ground ([`GROUND`]).
+    b: u32,
     /// Unit normal from `a` towards `b` (world), fixed for the frame; in SIMD lanes, as
     /// the solver uses it.
     pub n: Vec3A,
@@ -45,7 +46,34 @@ pub(crate) struct Manifold {
     pub end: u32,
 }
 
+/// A [`Manifold`]'s ground side.
+const GROUND: u32 = u32::MAX;
+
 impl Manifold {
+    /// The first bone.
+    #[inline]
+    pub fn a(&self) -> usize {
+        self.a as usize
+    }
+
+    /// The second bone, or the ground (`None`).
+    #[inline]
+    pub fn b(&self) -> Side {
+        (self.b != GROUND).then_some(self.b as usize)
+    }
+
+    /// The manifold between sides `a` and `b` (bones below `u32::MAX`) whose points
+    /// are `start..end`: its copy in a batch, bones and points renumbered.
+    pub fn renumbered(self, (a, b): (usize, Side), start: u32, end: u32) -> Manifold {
+        Manifold {
+            a: a as u32,
+            b: b.map_or(GROUND, |j| j as u32),
+            start,
+            end,
+            ..self
+        }
+    }
+
     /// Its points' range in the set.
     pub fn range(&self) -> std::ops::Range<usize> {
         self.start as usize..self.end as usize
@@ -164,8 +192,8 @@ impl ContactSet {
         match self.manifolds.last_mut() {
             Some(m) if open && m.n == n => m.end = end + 1,
             _ => self.manifolds.push(Manifold {
-                a,
-                b,
+                a: a as u32,
+                b: b.map_or(GROUND, |j| j as u32),
                 n,
                 mu,
                 e,
@@ -584,7 +612,7 @@ mod tests {
         set.push(first, (2, None), side, (0.3, 0.1, 0.0), point(3.0));
         let ranges: Vec<_> = set.manifolds.iter().map(|m| m.range()).collect();
         assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
-        assert_eq!((set.manifolds[2].a, set.manifolds[2].b), (2, None));
+        assert_eq!((set.manifolds[2].a(), set.manifolds[2].b()), (2, None));
         assert_eq!(set.manifolds[2].mu, 0.3);
     }
 
@@ -618,7 +646,7 @@ mod tests {
             let m: Vec<_> = s
                 .manifolds
                 .iter()
-                .map(|m| (m.a, m.b, m.n, m.range()))
+                .map(|m| (m.a(), m.b(), m.n, m.range()))
                 .collect();
             let p: Vec<_> = s.points.iter().map(|c| c.ra).collect();
             (m, p)

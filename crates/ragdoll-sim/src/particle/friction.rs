@@ -80,8 +80,8 @@ fn normal_target(
     c: &mut ContactPoint,
     push_out: f32,
 ) -> (Vec3A, Vec3A, f32) {
-    let pa = bones[m.a].world(c.ra);
-    let pb = side_world(bones, m.b, c.rb);
+    let pa = bones[m.a()].world(c.ra);
+    let pb = side_world(bones, m.b(), c.rb);
     let depth = (pa - pb).dot(m.n);
     if depth <= 0.0 {
         c.left = 0.0;
@@ -90,7 +90,8 @@ fn normal_target(
     if c.touched_at.is_none() {
         c.touched_at = Some(Vec3::from(start_offset(bones, m, c, pa, pb)));
     }
-    let approach = (bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb)).dot(m.n);
+    let approach =
+        (bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb)).dot(m.n);
     let old = (depth - approach).min(c.left_before).max(0.0);
     let frame_left = c.frame_overlap - push_out * c.frame_substeps as f32;
     let left = (old - push_out).max(frame_left).max(0.0);
@@ -117,7 +118,7 @@ pub(crate) fn solve_normal(
     if !moves {
         return Some((pa, pb));
     }
-    let corr = Correction::along(bones, (Some(m.a), pa), (m.b, pb), -m.n);
+    let corr = Correction::along(bones, (Some(m.a()), pa), (m.b(), pb), -m.n);
     if corr.w > 0.0 {
         let lambda = (correction / corr.w).max(lowest);
         corr.apply(bones, lambda);
@@ -248,8 +249,8 @@ struct Block {
 impl Block {
     fn new(bones: &[Bone], m: &Manifold, pa: &[Vec3A], pb: &[Vec3A]) -> Block {
         let k = pa.len();
-        let a = BlockSide::new(bones, Some(m.a), pa, -m.n);
-        let b = BlockSide::new(bones, m.b, pb, m.n);
+        let a = BlockSide::new(bones, Some(m.a()), pa, -m.n);
+        let b = BlockSide::new(bones, m.b(), pb, m.n);
         let mut matrix = [[0.0; BLOCK]; BLOCK];
         for side in a.iter().chain(&b) {
             side.add_to(k, &mut matrix);
@@ -407,7 +408,7 @@ pub(crate) fn solve_normals(
 /// less their motion since (`pa`, `pb` the points now; any time in the substep gives
 /// the same).
 fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3A, pb: Vec3A) -> Vec3A {
-    let sub = bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb);
+    let sub = bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb);
     let d = pa - pb - sub;
     d - m.n * d.dot(m.n)
 }
@@ -465,19 +466,19 @@ pub(crate) fn solve_friction(
     if allowed <= 0.0 {
         return None;
     }
-    let a = Some(m.a);
-    let (pa, pb) = at.unwrap_or_else(|| (bones[m.a].world(c.ra), side_world(bones, m.b, c.rb)));
+    let a = Some(m.a());
+    let (pa, pb) = at.unwrap_or_else(|| (bones[m.a()].world(c.ra), side_world(bones, m.b(), c.rb)));
     let tangential = |d: Vec3A| d - m.n * d.dot(m.n);
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
-    let sub = tangential(bones[m.a].displacement(c.ra) - side_displacement(bones, m.b, c.rb));
+    let sub = tangential(bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb));
     // A point not pressed itself (its manifold is) has not drifted.
     let drift = c
         .touched_at
         .map_or(Vec3A::ZERO, |t| tangential(pa - pb) - sub - Vec3A::from(t));
     // Corrections move pa − pb against the slip `d`, along `−d` itself (not normalised:
     // `Correction::along_scaled`, whose `w` is `|d|²` times the unit direction's).
-    let against = |d: Vec3A, d2: f32| Correction::along_scaled(bones, (a, pa), (m.b, pb), -d, d2);
+    let against = |d: Vec3A, d2: f32| Correction::along_scaled(bones, (a, pa), (m.b(), pb), -d, d2);
     // Static friction takes back the slip and a share of the drift when the cone allows
     // both; kinetic friction (or a static one that cannot afford the drift) acts on the
     // substep's slip alone, so it only ever opposes the motion it sees.
@@ -576,9 +577,10 @@ pub(crate) fn solve_velocities(
     let (mut excess, mut lower) = ([0.0; BLOCK], [0.0; BLOCK]);
     for (slot, &i) in active[..k].iter().enumerate() {
         let c = &points[i];
-        pa[slot] = bones[m.a].world(c.ra);
-        pb[slot] = side_world(bones, m.b, c.rb);
-        let v = point_velocity(bones, Some(m.a), pa[slot]) - point_velocity(bones, m.b, pb[slot]);
+        pa[slot] = bones[m.a()].world(c.ra);
+        pb[slot] = side_world(bones, m.b(), c.rb);
+        let v =
+            point_velocity(bones, Some(m.a()), pa[slot]) - point_velocity(bones, m.b(), pb[slot]);
         excess[slot] = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
         lower[slot] = -c.lambda_n / h - c.lambda_v;
     }
@@ -610,12 +612,12 @@ fn solve_velocity(
     if c.lambda_n <= 0.0 {
         return;
     }
-    let a = Some(m.a);
-    let pa = bones[m.a].world(c.ra);
-    let pb = side_world(bones, m.b, c.rb);
-    let v = point_velocity(bones, a, pa) - point_velocity(bones, m.b, pb);
+    let a = Some(m.a());
+    let pa = bones[m.a()].world(c.ra);
+    let pb = side_world(bones, m.b(), c.rb);
+    let v = point_velocity(bones, a, pa) - point_velocity(bones, m.b(), pb);
     let excess = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
-    let corr = Correction::along(bones, (a, pa), (m.b, pb), m.n);
+    let corr = Correction::along(bones, (a, pa), (m.b(), pb), m.n);
     if corr.w > 0.0 {
         // The push `λ_v` (along `−n`) that meets the target, within the bound.
         let push = (excess / corr.w).max(-c.lambda_n / h - c.lambda_v);
@@ -636,15 +638,15 @@ fn solve_twist(
     h: f32,
     turn: &mut Option<Correction>,
 ) {
-    let a = Some(m.a);
+    let a = Some(m.a());
     let twist = |bones: &[Bone], s: Side| match s {
         Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
         _ => 0.0,
     };
-    let spin = twist(bones, a) - twist(bones, m.b);
+    let spin = twist(bones, a) - twist(bones, m.b());
     if spin != 0.0 {
         // Both levers `I⁻¹ n` formed once, for the inverse mass and the impulse.
-        let turn = *turn.get_or_insert_with(|| Correction::turning(bones, a, m.b, m.n));
+        let turn = *turn.get_or_insert_with(|| Correction::turning(bones, a, m.b(), m.n));
         if turn.w > 0.0 {
             let cap = m.mu * PATCH_RADIUS * c.lambda_n / h;
             let l = spin.signum() * (spin.abs() / turn.w).min(cap);

@@ -77,7 +77,7 @@ impl Plan {
         let moving = |s: Side| s.filter(|&i| !is_static[i]);
         let mut sets = UnionFind::new(n);
         let links = w.links.iter().map(|l| l.sides());
-        let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a), m.b));
+        let touching = w.contacts.manifolds.iter().map(|m| (Some(m.a()), m.b()));
         for (a, b) in links.chain(touching) {
             if let (Some(a), Some(b)) = (moving(a), moving(b)) {
                 sets.union(a, b);
@@ -103,7 +103,7 @@ impl Plan {
             .contacts
             .manifolds
             .iter()
-            .map(|m| pair_root(Some(m.a), m.b))
+            .map(|m| pair_root(Some(m.a()), m.b()))
             .collect();
         let joint_root: Vec<u32> = w
             .links
@@ -225,7 +225,7 @@ impl Batch {
         let is_static = |i: usize| w.bones[i].is_static();
         let contact_sides = m.manifolds.iter().flat_map(|&k| {
             let c = &w.contacts.manifolds[k as usize];
-            [Some(c.a), c.b]
+            [Some(c.a()), c.b()]
         });
         let joint_sides = m.joints.iter().flat_map(|&k| {
             let (a, b) = w.links[k as usize].sides();
@@ -275,13 +275,9 @@ impl Batch {
             let c = w.contacts.manifolds[k as usize];
             let start = self.points.len() as u32;
             self.points.extend_from_slice(&w.contacts.points[c.range()]);
-            self.manifolds.push(Manifold {
-                a: local_of(c.a),
-                b: renumber(c.b),
-                start,
-                end: self.points.len() as u32,
-                ..c
-            });
+            let sides = (local_of(c.a()), renumber(c.b()));
+            self.manifolds
+                .push(c.renumbered(sides, start, self.points.len() as u32));
         }
         let joints = m.joints.iter().map(|&k| {
             let (a, b) = w.links[k as usize].sides();

@@ -360,8 +360,8 @@ mod tests {
             })
             .expect("the human has hinges");
         let (a, b) = (
-            w.joints[k].a.expect("a bone"),
-            w.joints[k].b.expect("a bone"),
+            w.joints[k].a().expect("a bone"),
+            w.joints[k].b().expect("a bone"),
         );
         let mut next = uniform(0x0dd_ba11);
         let mut over = 0;

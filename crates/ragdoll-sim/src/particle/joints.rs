@@ -59,10 +59,8 @@ pub(crate) enum JointType {
 /// A joint between body1 (`a`) and body2 (`b`, `None` for the world).
 #[derive(Clone, Debug)]
 pub(crate) struct Joint {
-    /// Body1's bone.
-    pub a: Side,
-    /// Body2's bone, or the world.
-    pub b: Side,
+    /// Body1's bone and body2's bone or the world, packed ([`Joint::a`], [`Joint::b`]).
+    sides: Link,
     /// Anchor in body1's frame.
     pub anchor_a: Vec3,
     /// Anchor in body2's frame (world coordinates for the world).
@@ -87,10 +85,12 @@ pub(crate) struct Joint {
     pub slack: f32,
 }
 
-/// A joint's two sides, packed: what the island search and sleeping ask of every
-/// joint each detection, in 8 bytes where a [`Joint`] is 192 (reading them from the
-/// joints was a third of a 1000-human pile's serial island plan and sleeping update).
-#[derive(Clone, Copy)]
+/// A joint's two sides, packed in 8 bytes (two `Option<usize>` take 32): a [`Joint`]
+/// keeps its own so, and the world keeps a copy of every joint's in an array of their
+/// own, what the island search and sleeping ask of every joint each detection
+/// (reading them from the joints was a third of a 1000-human pile's serial island plan
+/// and sleeping update).
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Link([u32; 2]);
 
 /// A [`Link`]'s world side.
@@ -99,7 +99,7 @@ const WORLD: u32 = u32::MAX;
 impl Link {
     /// The sides of `j`.
     pub fn of(j: &Joint) -> Link {
-        Link::new(j.a, j.b)
+        j.sides
     }
 
     /// Sides `a` and `b` (a bone's index below `u32::MAX`, or the world).
@@ -189,13 +189,24 @@ fn angle_limit(f: &RestFrames, a: Side, b: Side, axis: Vec3, min: f32, max: f32)
 }
 
 impl Joint {
+    /// Body1's bone.
+    #[inline]
+    pub fn a(&self) -> Side {
+        self.sides.sides().0
+    }
+
+    /// Body2's bone, or the world.
+    #[inline]
+    pub fn b(&self) -> Side {
+        self.sides.sides().1
+    }
+
     /// Builds a joint from its description; anchors and axes are world space at rest.
     pub fn new(f: &RestFrames, a: Side, b: Side, kind: &JointKind) -> Joint {
         let rest_rel = f.rot(b).inverse() * f.rot(a);
         let anchor = kind.anchor().unwrap_or_else(|| f.origin(a));
         let mut j = Joint {
-            a,
-            b,
+            sides: Link::new(a, b),
             anchor_a: f.local_point(a, anchor),
             anchor_b: f.local_point(b, anchor),
             rest_rel,
@@ -297,7 +308,7 @@ impl Joint {
             self.kind,
             JointType::Ball | JointType::Hinge { .. } | JointType::Universal { .. }
         );
-        if turns && friction > 0.0 && self.a.is_some() {
+        if turns && friction > 0.0 && self.a().is_some() {
             self.friction_torque = friction * mass_a * g * self.anchor_a.length().max(0.05);
         }
         self
@@ -356,8 +367,8 @@ impl Joint {
     /// The anchor as seen from body1 and from body2 (world).
     pub fn anchors(&self, bones: &[Bone]) -> (Vec3, Vec3) {
         (
-            Vec3::from(side_world(bones, self.a, self.anchor_a)),
-            Vec3::from(side_world(bones, self.b, self.anchor_b)),
+            Vec3::from(side_world(bones, self.a(), self.anchor_a)),
+            Vec3::from(side_world(bones, self.b(), self.anchor_b)),
         )
     }
 
@@ -376,9 +387,9 @@ impl Joint {
     pub fn limit_violation(&self, bones: &[Bone]) -> f32 {
         let mut v = self
             .swing
-            .map_or(0.0, |s| s.violation(bones, self.a, self.b));
+            .map_or(0.0, |s| s.violation(bones, self.a(), self.b()));
         for l in &self.angle_limits {
-            v = v.max(l.violation(bones, self.a, self.b));
+            v = v.max(l.violation(bones, self.a(), self.b()));
         }
         v
     }
@@ -519,7 +530,7 @@ impl<'a> JointSet<'a> {
     /// bones being stepped.
     pub fn entries(&self) -> Vec<super::joint_lanes::Entry<'a>> {
         match *self {
-            JointSet::All(joints) => joints.iter().map(|j| (j, j.a, j.b)).collect(),
+            JointSet::All(joints) => joints.iter().map(|j| (j, j.a(), j.b())).collect(),
             JointSet::Batch(joints, local) => local
                 .iter()
                 .map(|&(k, a, b)| (&joints[k as usize], a, b))

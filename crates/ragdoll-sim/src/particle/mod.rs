@@ -134,7 +134,7 @@ impl ParticleWorld {
         let mut figures: Vec<u32> = Vec::new();
         for j in &mut self.joints {
             if j.close_slack(push_out, dt)
-                && let Some(i) = j.a.or(j.b)
+                && let Some(i) = j.a().or(j.b())
             {
                 figures.push(self.bones[i].figure);
             }
@@ -671,8 +671,8 @@ impl Method for ParticleWorld {
         }
         for m in &self.contacts.manifolds {
             for c in &self.contacts.points[m.range()] {
-                let pa = self.bones[m.a].world(c.ra);
-                let pb = bone::side_world(&self.bones, m.b, c.rb);
+                let pa = self.bones[m.a()].world(c.ra);
+                let pb = bone::side_world(&self.bones, m.b(), c.rb);
                 out.contacts.push(ContactInstance {
                     point: Vec3::from(pa),
                     normal: Vec3::from(m.n),
@@ -688,18 +688,18 @@ impl Method for ParticleWorld {
             let limit = match j.swing {
                 Some(s) => match s.kind {
                     limits::Swing::Cone { half_angle, .. } => LimitShape::Cone {
-                        axis: bone::side_rot(&self.bones, j.b) * s.axis_b,
+                        axis: bone::side_rot(&self.bones, j.b()) * s.axis_b,
                         half_angle,
                     },
                     limits::Swing::Pyramid { h1, h2, .. } => LimitShape::Cone {
-                        axis: bone::side_rot(&self.bones, j.b) * s.axis_b,
+                        axis: bone::side_rot(&self.bones, j.b()) * s.axis_b,
                         half_angle: h1.max(h2),
                     },
                 },
                 None => match (j.kind, j.angle_limits.first()) {
                     (joints::JointType::Hinge { .. }, Some(l)) => LimitShape::Arc {
-                        axis: bone::side_rot(&self.bones, j.a) * l.axis_a,
-                        reference: bone::side_rot(&self.bones, j.b) * l.ref_b,
+                        axis: bone::side_rot(&self.bones, j.a()) * l.axis_a,
+                        reference: bone::side_rot(&self.bones, j.b()) * l.ref_b,
                         min: l.min,
                         max: l.max,
                     },

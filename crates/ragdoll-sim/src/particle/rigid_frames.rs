@@ -246,11 +246,11 @@ fn overlaps_at_frame_start(w: &mut ParticleWorld, sub: u32) {
     let (manifolds, points) = (&w.contacts.manifolds, &mut w.contacts.points);
     for m in manifolds {
         for c in &mut points[m.range()] {
-            let pb = match m.b {
+            let pb = match m.b() {
                 Some(j) => at_start(j, c.rb),
                 None => Vec3A::from(c.rb),
             };
-            c.frame_overlap = (at_start(m.a, c.ra) - pb).dot(m.n);
+            c.frame_overlap = (at_start(m.a(), c.ra) - pb).dot(m.n);
             c.frame_substeps = sub;
         }
     }
@@ -271,7 +271,7 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
         .par_iter()
         .with_min_len(BONES_PER_TASK)
         .filter_map(|m| {
-            let (a, b) = (&bones[m.a], &bones[m.b?]);
+            let (a, b) = (&bones[m.a()], &bones[m.b()?]);
             if a.fixed || b.fixed || a.asleep == b.asleep {
                 return None;
             }
@@ -351,8 +351,8 @@ const SIDE_BY_SIDE: usize = 4;
 /// Whether two manifolds touch different bones (they may share the ground).
 fn share_no_bone(m: &Manifold, n: &Manifold) -> bool {
     let bone = |s: Option<usize>, t: Option<usize>| s.is_some() && s == t;
-    let (ma, na) = (Some(m.a), Some(n.a));
-    !(ma == na || bone(ma, n.b) || bone(m.b, na) || bone(m.b, n.b))
+    let (ma, na) = (Some(m.a()), Some(n.a()));
+    !(ma == na || bone(ma, n.b()) || bone(m.b(), na) || bone(m.b(), n.b()))
 }
 
 /// One manifold's points in a contact pass, and the friction its cone has spent.
@@ -524,9 +524,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 c.left_before = c.left;
                 c.frame_substeps += 1;
                 c.vn_before = if m.e > 0.0 {
-                    let pa = p.bones[m.a].world(c.ra);
-                    let pb = super::bone::side_world(p.bones, m.b, c.rb);
-                    (point_velocity(p.bones, Some(m.a), pa) - point_velocity(p.bones, m.b, pb))
+                    let pa = p.bones[m.a()].world(c.ra);
+                    let pb = super::bone::side_world(p.bones, m.b(), c.rb);
+                    (point_velocity(p.bones, Some(m.a()), pa) - point_velocity(p.bones, m.b(), pb))
                         .dot(m.n)
                 } else {
                     0.0
@@ -598,10 +598,11 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
 fn roll_contact(bones: &[Bone], kinds: &BoneKinds, m: &Manifold, c: &mut ContactPoint) {
     let start = |b: &Bone, local: Vec3| b.rot * Vec3A::from(local);
     let mut jump = Vec3A::ZERO;
-    if m.b.is_none()
-        && let Some(ra) = super::bone::rolled_point(&bones[m.a], kinds.of(&bones[m.a]), c.ra, m.n)
+    if m.b().is_none()
+        && let Some(ra) =
+            super::bone::rolled_point(&bones[m.a()], kinds.of(&bones[m.a()]), c.ra, m.n)
     {
-        jump += start(&bones[m.a], ra) - start(&bones[m.a], c.ra);
+        jump += start(&bones[m.a()], ra) - start(&bones[m.a()], c.ra);
         c.ra = ra;
     }
     if let Some(t) = &mut c.touched_at {
@@ -639,8 +640,8 @@ fn close_start_slack(w: &mut ParticleWorld, h: f32) {
     for _ in 0..SLACK_PASSES {
         let mut gap = 0.0f32;
         for j in &w.joints {
-            if in_figure(&w.bones, j.a.or(j.b)) {
-                j.solve_between(&mut w.bones, j.a, j.b, h, Aim::End);
+            if in_figure(&w.bones, j.a().or(j.b())) {
+                j.solve_between(&mut w.bones, j.a(), j.b(), h, Aim::End);
                 gap = gap.max(j.gap(&w.bones));
             }
         }

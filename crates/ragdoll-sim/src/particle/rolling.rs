@@ -75,7 +75,7 @@ pub(crate) fn solve(bones: &mut [Bone], manifolds: &[Manifold], points: &[Contac
         if normal <= 0.0 {
             continue;
         }
-        let (a, b) = (Some(m.a), m.b);
+        let (a, b) = (Some(m.a()), m.b());
         let (inv_a, inv_b) = (inv_inertia(bones, a), inv_inertia(bones, b));
         let spin = spin_of(bones, b) - spin_of(bones, a);
         if let Some(l) = impulse(spin, inv_a, inv_b, m.roll * normal) {

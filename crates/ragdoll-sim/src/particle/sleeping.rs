@@ -90,11 +90,11 @@ pub(crate) fn update(
         }
     }
     for c in manifolds {
-        if let Some(b) = c.b
-            && dynamic(c.a)
+        if let Some(b) = c.b()
+            && dynamic(c.a())
             && dynamic(b)
         {
-            sets.union(c.a, b);
+            sets.union(c.a(), b);
         }
     }
     let mut min_time = vec![f32::INFINITY; n];

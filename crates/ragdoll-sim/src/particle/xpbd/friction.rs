@@ -76,7 +76,7 @@ pub(crate) fn solve(p: &mut XParticles, joints: &[Joint], h: f32) {
         if j.friction_torque <= 0.0 {
             continue;
         }
-        let (sa, sb) = (spin(p, j.a), spin(p, j.b));
+        let (sa, sb) = (spin(p, j.a()), spin(p, j.b()));
         let inv = |s: &Option<Spin>| s.as_ref().map_or(Mat3::ZERO, |s| s.inv_inertia);
         let om = |s: &Option<Spin>| s.as_ref().map_or(Vec3::ZERO, |s| s.omega);
         let k = inv(&sa) + inv(&sb);
@@ -90,10 +90,10 @@ pub(crate) fn solve(p: &mut XParticles, joints: &[Joint], h: f32) {
         if impulse.length_squared() > cap * cap {
             impulse = impulse.normalize() * cap;
         }
-        if let (Some(i), Some(s)) = (j.a, &sa) {
+        if let (Some(i), Some(s)) = (j.a(), &sa) {
             turn(p, i, s, s.inv_inertia * impulse);
         }
-        if let (Some(i), Some(s)) = (j.b, &sb) {
+        if let (Some(i), Some(s)) = (j.b(), &sb) {
             turn(p, i, s, -(s.inv_inertia * impulse));
         }
     }

@@ -204,7 +204,7 @@ pub(crate) fn begin_substep(
         if !blocks(j) {
             return None;
         }
-        let (a, b) = (Body::of(p, bones, j.a), Body::of(p, bones, j.b));
+        let (a, b) = (Body::of(p, bones, j.a()), Body::of(p, bones, j.b()));
         if a.bone.is_none() && b.bone.is_none() {
             return None;
         }
@@ -347,7 +347,7 @@ pub(crate) fn solve(
         row.c = row.lin.dot(delta);
         rows.push(row);
     }
-    let (qa, qb) = (rot(bones, j.a), rot(bones, j.b));
+    let (qa, qb) = (rot(bones, j.a()), rot(bones, j.b()));
     match j.kind {
         JointType::Hinge { axis_a, axis_b } => {
             // Turn body1's axis onto body2's, by `asin(s)` about `c / s`,
@@ -391,12 +391,12 @@ pub(crate) fn solve(
     }
     for (i, l) in j.angle_limits.iter().take(angles).enumerate() {
         // The range widened by the joint's slack (`step::close_start_slack`).
-        let (phi, grad) = l.angle(bones, j.a, j.b);
+        let (phi, grad) = l.angle(bones, j.a(), j.b());
         let (lo, hi) = (l.min - j.slack, l.max + j.slack);
         let slot = swing + i;
         rows.limit(slot, grad, phi, lo, hi, alpha, lambda[slot]);
     }
-    let (a, b) = (Body::of(p, bones, j.a), Body::of(p, bones, j.b));
+    let (a, b) = (Body::of(p, bones, j.a()), Body::of(p, bones, j.b()));
     let (inv_a, inv_b) = (a.inv_inertia(p), b.inv_inertia(p));
     let w = a.inv_mass + b.inv_mass;
     let dl = solve_one_sided(&rows, start, lambda, inv_a, inv_b, w);

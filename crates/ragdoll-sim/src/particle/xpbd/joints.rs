@@ -269,7 +269,7 @@ pub(super) fn rot(bones: &[Bone], s: Side) -> Quat {
 /// The angular parts of joint `j`, then its limits, on the frames in `bones` (read
 /// from the particles this substep and turned with them since).
 pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h: f32) {
-    let (a, b) = (j.a, j.b);
+    let (a, b) = (j.a(), j.b());
     match j.kind {
         JointType::Hinge { axis_a, axis_b } => {
             // Turn body1's axis onto body2's: by `asin(s)` about `c / s`, `c = t_a × t_b`.
@@ -414,7 +414,7 @@ pub(crate) fn solve_point(
             }
         }
         JointType::Slider { axis_b } => {
-            let axis = rot(bones, j.b) * axis_b;
+            let axis = rot(bones, j.b()) * axis_b;
             pull_rigid(p, bones, a, b, d - axis * axis.dot(d), 0.0);
         }
         _ => {

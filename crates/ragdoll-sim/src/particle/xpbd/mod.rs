@@ -87,7 +87,7 @@ impl XpbdState {
                     }
                     None => Anchor::World(local),
                 };
-                [side(j.a, j.anchor_a), side(j.b, j.anchor_b)]
+                [side(j.a(), j.anchor_a), side(j.b(), j.anchor_b)]
             })
             .collect();
         st.particles.shrink_to_fit();

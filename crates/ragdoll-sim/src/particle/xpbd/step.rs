@@ -156,7 +156,7 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
             &mut st.limit_lambda,
         );
         for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
-            if !in_figure(&w.bones, j.a.or(j.b)) {
+            if !in_figure(&w.bones, j.a().or(j.b())) {
                 continue;
             }
             if joint_block::blocks(j) {
@@ -173,7 +173,7 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
             .joints
             .iter()
             .zip(&st.anchors)
-            .filter(|(j, _)| in_figure(&w.bones, j.a.or(j.b)))
+            .filter(|(j, _)| in_figure(&w.bones, j.a().or(j.b())))
             .map(|(_, [a, b])| a.point64(&st.particles).distance(b.point64(&st.particles)))
             .fold(0.0, f64::max);
         if gap <= SLACK_GAP {
