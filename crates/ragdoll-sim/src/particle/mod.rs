@@ -8,7 +8,8 @@
 //!   manifolds with Coulomb friction and restitution; sleeping.
 //!
 //! Files, one concept each: `particles` (the paper's storage, Verlet), `bone` (tetrahedron, frame,
-//! rigid corrections), `placement` (particulation), `joints`, `limits`, `contacts`
+//! rigid corrections), `bone_kinds` (what bones of a kind share: shape, rest corners,
+//! materials), `placement` (particulation), `joints`, `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
 //! `rigid_frames` and `paper` (the two solver loops), `islands` (the rigid-frames loop on all
 //! cores), `measure` (the metrics).
