@@ -35,11 +35,13 @@ pub struct JointSet {
     pub slider: Vec<SliderJoint>,
     /// Springs.
     pub spring: Vec<SpringJoint>,
-    /// The rows the solve of these arrays prepares for their joints, by type and in
-    /// their order ([`JointSolve::Rows`]): sized to the joints by [`JointSet::prepare`],
-    /// read only within a solve. The world's arrays fill theirs only when solved in
-    /// place; solved in batches ([`super::parallel`]), each batch's gathered arrays
-    /// hold the rows of its own joints, and the world's stay empty.
+    /// The rows the solve of these arrays prepares for their joints, by type
+    /// ([`JointSolve::Rows`]): one entry per joint the solve moves (touching an awake
+    /// body), in the joints' order, sized by [`JointSet::prepare`] and read only within
+    /// a solve; a type solved in lanes has one per joint (the lanes address them by
+    /// joint). The world's arrays fill theirs only when solved in place; solved in
+    /// batches ([`super::parallel`]), each batch's gathered arrays hold the rows of its
+    /// own joints, and the world's stay empty.
     pub(crate) rows: JointRows,
     /// The ball joints and hinges in SIMD lanes ([`super::joint_wide`]), planned by the
     /// first solve of the whole set that would use them ([`JointSet::prepare`]); `None`
@@ -61,8 +63,11 @@ pub struct JointSet {
     pub live_points: usize,
 }
 
-/// The rows a solve prepares for each joint ([`JointSolve::Rows`]), one array per joint
-/// type, each entry the rows of the joint at the same index.
+/// The rows a solve prepares for its joints ([`JointSolve::Rows`]), one array per joint
+/// type. A type solved one by one has an entry for each joint that touches an awake
+/// body, in joint order: the solve walks those joints and their rows side by side, and
+/// a world whose bodies mostly sleep holds rows for the few that move. A type solved in
+/// lanes ([`JointSet::lanes`]) has an entry for each joint, at the joint's index.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct JointRows {
     pub ball: Vec<BallRows>,
@@ -71,7 +76,15 @@ pub(crate) struct JointRows {
     pub fixed: Vec<PointRows<f32>>,
     pub slider: Vec<()>,
     pub spring: Vec<()>,
+    /// Per ball joint, hinge and universal joint (in that order of the arrays), the
+    /// index of its rows in its type's array, [`NO_ROWS`] for a joint without: the
+    /// joint trees read a joint's point rows by joint ([`super::joint_tree`]). Filled
+    /// only while a solve has trees.
+    pub slots: [Vec<u32>; 3],
 }
+
+/// A joint without rows in this solve ([`JointRows::slots`]).
+pub(crate) const NO_ROWS: u32 = u32::MAX;
 
 /// The rows a projection pass over the joints moves ([`JointSet::project`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,8 +107,9 @@ macro_rules! for_each_joint_mut {
     }};
 }
 
-/// Runs `$body` with `$list` bound to each type's array and `$rows` to its rows, ball
-/// joints and hinges only when `$balls` / `$hinges` (solved in lanes) are false.
+/// Runs `$body` with `$list` bound to each type's array and `$rows` to its rows (an
+/// entry per joint touching an awake body, see [`JointRows`]), ball joints and hinges
+/// only when `$balls` / `$hinges` (solved in lanes) are false.
 macro_rules! for_each_type {
     ($set:expr, $balls:expr, $hinges:expr, ($list:ident, $rows:ident) => $body:expr) => {{
         if !$balls {
@@ -299,7 +313,6 @@ impl JointSet {
     /// take the joints' impulses, see [`JointSet::end_substeps`]), with the rows sized
     /// to the joints.
     pub fn prepare(&mut self, s: &BodyStates, awake: &[bool]) {
-        self.fit_rows();
         if self.live_points > 0
             && !self.trees_own_most()
             && let Some(anchor) = self.lanes_to_plan.take()
@@ -307,14 +320,17 @@ impl JointSet {
             self.lanes = JointLanes::plan(&self.ball, &self.hinge, s.len(), anchor);
         }
         let (balls, hinges) = self.in_lanes();
+        self.fit_rows(awake, balls, hinges);
         if let Some(lanes) = self.lanes.as_mut().filter(|_| balls || hinges) {
             let rows = (&mut self.rows.ball[..], &mut self.rows.hinge[..]);
             lanes.prepare(&mut self.ball, &mut self.hinge, rows, s, awake);
         }
         for_each_type!(self, balls, hinges, (list, rows) => {
-            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+            let mut k = 0;
+            for j in list.iter_mut() {
                 if touches_awake(j.frame(), awake) {
-                    j.prepare(r, s)
+                    j.prepare(&mut rows[k], s);
+                    k += 1;
                 }
             }
         });
@@ -323,8 +339,10 @@ impl JointSet {
     /// Gives back the rows of an in-place solve: a world at rest, or one now solved in
     /// batches (whose own arrays hold the rows), keeps none.
     pub fn release_rows(&mut self) {
-        if self.rows.ball.capacity() + self.rows.hinge.capacity() > 0
-            || self.rows.universal.capacity() + self.rows.fixed.capacity() > 0
+        let r = &self.rows;
+        if r.ball.capacity() + r.hinge.capacity() > 0
+            || r.universal.capacity() + r.fixed.capacity() > 0
+            || r.slots.iter().any(|v| v.capacity() > 0)
         {
             self.rows = JointRows::default();
         }
@@ -341,18 +359,30 @@ impl JointSet {
         dropped("joints");
     }
 
-    /// Sizes each type's rows to its joints. Entries are overwritten by the preparation
-    /// of their joint before any read, so kept or fresh they give the same solve; the
-    /// arrays keep their capacity from step to step (a batch's, from batch to batch).
-    fn fit_rows(&mut self) {
+    /// Sizes each type's rows to the joints this solve moves (those touching an awake
+    /// body; every joint of a type in lanes, `balls` / `hinges`) and, when the solve has
+    /// trees, numbers the rows of the joints they read ([`JointRows::slots`]). Entries
+    /// are overwritten by the preparation of their joint before any read, so kept or
+    /// fresh they give the same solve. The arrays keep their capacity from step to step
+    /// (a batch's, from batch to batch), so a step allocates nothing once they have
+    /// grown; an array holding more than twice the room it needs gives the rest back (a
+    /// pile falling asleep), which reallocates only as often as the moving joints halve.
+    fn fit_rows(&mut self, awake: &[bool], balls: bool, hinges: bool) {
         let r = &mut self.rows;
-        r.ball.resize(self.ball.len(), BallRows::default());
-        r.hinge.resize(self.hinge.len(), HingeRows::default());
-        r.universal
-            .resize(self.universal.len(), UniversalRows::default());
-        r.fixed.resize(self.fixed.len(), PointRows::default());
-        r.slider.resize(self.slider.len(), ());
-        r.spring.resize(self.spring.len(), ());
+        fit(&mut r.ball, rows_needed(&self.ball, balls, awake));
+        fit(&mut r.hinge, rows_needed(&self.hinge, hinges, awake));
+        fit(&mut r.universal, rows_needed(&self.universal, false, awake));
+        fit(&mut r.fixed, rows_needed(&self.fixed, false, awake));
+        fit(&mut r.slider, rows_needed(&self.slider, false, awake));
+        fit(&mut r.spring, rows_needed(&self.spring, false, awake));
+        let [ball, hinge, universal] = &mut r.slots;
+        if self.direct {
+            number_rows(ball, &self.ball, balls, awake);
+            number_rows(hinge, &self.hinge, hinges, awake);
+            number_rows(universal, &self.universal, false, awake);
+        } else {
+            (ball.clear(), hinge.clear(), universal.clear());
+        }
     }
 
     /// [`JointSolve::prepare_after_relax`] of joints touching an awake body.
@@ -363,9 +393,11 @@ impl JointSet {
             lanes.prepare_after_relax(&mut self.ball, &mut self.hinge, rows, s);
         }
         for_each_type!(self, balls, hinges, (list, rows) => {
-            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+            let mut k = 0;
+            for j in list.iter_mut() {
                 if touches_awake(j.frame(), awake) {
-                    j.prepare_after_relax(r, s)
+                    j.prepare_after_relax(&mut rows[k], s);
+                    k += 1;
                 }
             }
         });
@@ -380,9 +412,11 @@ impl JointSet {
             lanes.prepare_moved(rows, s);
         }
         for_each_type!(self, balls, hinges, (list, rows) => {
-            for (j, r) in list.iter_mut().zip(rows.iter_mut()) {
+            let mut k = 0;
+            for j in list.iter_mut() {
                 if touches_awake(j.frame(), awake) {
-                    j.prepare_moved(r, s)
+                    j.prepare_moved(&mut rows[k], s);
+                    k += 1;
                 }
             }
         });
@@ -614,22 +648,23 @@ impl JointSet {
     }
 }
 
-/// Warm start of `joints` touching an awake body, one by one.
+/// Warm start of `joints` touching an awake body, one by one, each with its rows.
 fn warm_start_each<J: JointSolve>(
     joints: &[J],
     rows: &[J::Rows],
     s: &mut BodyStates,
     awake: &[bool],
 ) {
-    debug_assert_eq!(joints.len(), rows.len(), "rows fitted by JointSet::prepare");
-    for (j, r) in joints.iter().zip(rows) {
+    let mut k = 0;
+    for j in joints {
         if touches_awake(j.frame(), awake) {
-            j.warm_start(r, s);
+            j.warm_start(&rows[k], s);
+            k += 1;
         }
     }
 }
 
-/// One iteration over `joints` touching an awake body, one by one.
+/// One iteration over `joints` touching an awake body, one by one, each with its rows.
 fn solve_each<J: JointSolve>(
     joints: &mut [J],
     rows: &[J::Rows],
@@ -638,11 +673,47 @@ fn solve_each<J: JointSolve>(
     ctx: &StepContext,
     use_bias: bool,
 ) {
-    debug_assert_eq!(joints.len(), rows.len(), "rows fitted by JointSet::prepare");
-    for (j, r) in joints.iter_mut().zip(rows) {
+    let mut k = 0;
+    for j in joints {
         if touches_awake(j.frame(), awake) {
-            j.solve(r, s, ctx, use_bias);
+            j.solve(&rows[k], s, ctx, use_bias);
+            k += 1;
         }
+    }
+}
+
+/// How many of `joints` have rows ([`JointRows`]): all of them (`all`: solved in
+/// lanes), otherwise those touching an awake body.
+fn rows_needed<J: JointSolve>(joints: &[J], all: bool, awake: &[bool]) -> usize {
+    if all {
+        joints.len()
+    } else {
+        let moved = joints.iter().filter(|j| touches_awake(j.frame(), awake));
+        moved.count()
+    }
+}
+
+/// Numbers the rows of `joints` in `slots` ([`JointRows::slots`]): each joint with
+/// rows (see [`rows_needed`]) the next index, in joint order, the others [`NO_ROWS`].
+fn number_rows<J: JointSolve>(slots: &mut Vec<u32>, joints: &[J], all: bool, awake: &[bool]) {
+    slots.clear();
+    let mut next = 0u32;
+    slots.extend(joints.iter().map(|j| {
+        if all || touches_awake(j.frame(), awake) {
+            next += 1;
+            next - 1
+        } else {
+            NO_ROWS
+        }
+    }));
+}
+
+/// Sizes `rows` to `len` entries, giving back the room beyond `len` when it is more
+/// than as much again (see [`JointSet::fit_rows`]).
+fn fit<R: Copy + Default>(rows: &mut Vec<R>, len: usize) {
+    rows.resize(len, R::default());
+    if rows.capacity() > 2 * len {
+        rows.shrink_to(len);
     }
 }
 

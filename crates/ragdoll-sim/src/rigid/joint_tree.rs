@@ -745,12 +745,18 @@ fn point_of(joints: &JointSet, j: JointRef) -> &PointPart {
     }
 }
 
-/// The point rows the solve prepared for joint `j`.
+/// The point rows the solve prepared for joint `j` (a tree's joints touch moving
+/// bodies, so the solve holds rows for them, numbered in [`JointRows::slots`]).
+///
+/// [`JointRows::slots`]: super::joint_set::JointRows::slots
+#[inline(always)]
 fn rows_of(joints: &JointSet, j: JointRef) -> &PointRows<f32> {
+    let [ball, hinge, universal] = &joints.rows.slots;
+    let slot = |slots: &[u32], i: usize| slots[i] as usize;
     match j {
-        JointRef::Ball(i) => &joints.rows.ball[i].point,
-        JointRef::Hinge(i) => &joints.rows.hinge[i].point,
-        JointRef::Universal(i) => &joints.rows.universal[i].point,
+        JointRef::Ball(i) => &joints.rows.ball[slot(ball, i)].point,
+        JointRef::Hinge(i) => &joints.rows.hinge[slot(hinge, i)].point,
+        JointRef::Universal(i) => &joints.rows.universal[slot(universal, i)].point,
     }
 }
 
