@@ -375,13 +375,13 @@ impl JointSet {
         fit(&mut r.fixed, rows_needed(&self.fixed, false, awake));
         fit(&mut r.slider, rows_needed(&self.slider, false, awake));
         fit(&mut r.spring, rows_needed(&self.spring, false, awake));
-        let [ball, hinge, universal] = &mut r.slots;
         if self.direct {
+            let [ball, hinge, universal] = &mut r.slots;
             number_rows(ball, &self.ball, balls, awake);
             number_rows(hinge, &self.hinge, hinges, awake);
             number_rows(universal, &self.universal, false, awake);
         } else {
-            (ball.clear(), hinge.clear(), universal.clear());
+            r.slots.iter_mut().for_each(Vec::clear);
         }
     }
 
