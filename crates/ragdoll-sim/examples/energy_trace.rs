@@ -16,7 +16,7 @@ use ragdoll_sim::Method;
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::MetricsRecorder;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::scene::{Pose, SceneDesc};
 use std::path::PathBuf;
@@ -29,16 +29,7 @@ fn figure(shift: f32) -> Result<SceneDesc, String> {
     let c = base
         .character("Monster_Lab_Human")
         .map_err(|e| e.to_string())?;
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base_dir),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    let mut sc = load_figure(&c.af_file, &opts, &source)
+    let mut sc = load_character(&c, &base_dir, &AfOptions::default())
         .map_err(|e| e.to_string())?
         .desc;
     sc.transform(&Pose::from_position(Vec3::new(shift, 0.0, 0.0)));

@@ -27,7 +27,7 @@ use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::Pose;
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, load, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::{Method, SceneDesc};
 use std::path::PathBuf;
@@ -60,16 +60,7 @@ fn lab_human() -> Result<SceneDesc, String> {
     let c = base
         .character("Monster_Lab_Human")
         .map_err(|e| e.to_string())?;
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base_dir),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    load_figure(&c.af_file, &opts, &source)
+    load_character(&c, &base_dir, &AfOptions::default())
         .map(|s| s.desc)
         .map_err(|e| e.to_string())
 }

@@ -12,7 +12,7 @@ use ragdoll_sim::metrics::MetricsRecorder;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::scene::Pose;
 use ragdoll_sim::scene::SceneDesc;
-use ragdoll_sim::scene::af::{AfOptions, FigureSource, load_figure};
+use ragdoll_sim::scene::af::{AfOptions, load_character};
 use ragdoll_sim::scene::decl::Doom3Base;
 
 mod common;
@@ -24,16 +24,7 @@ fn figure() -> SceneDesc {
     let c = base
         .character("Monster_Lab_Human")
         .unwrap_or_else(|e| panic!("{e}"));
-    let source = FigureSource {
-        figure: Some(c.figure.clone()),
-        pose_anim: c.af_pose.clone(),
-        base: Some(base_dir()),
-    };
-    let opts = AfOptions {
-        mesh: c.mesh.clone(),
-        ..Default::default()
-    };
-    load_figure(&c.af_file, &opts, &source)
+    load_character(&c, &base_dir(), &AfOptions::default())
         .unwrap_or_else(|e| panic!("{e}"))
         .desc
 }
