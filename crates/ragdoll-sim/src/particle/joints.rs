@@ -87,9 +87,8 @@ pub(crate) struct Joint {
 
 /// A joint's two sides, packed in 8 bytes (two `Option<usize>` take 32): a [`Joint`]
 /// keeps its own so, and the world keeps a copy of every joint's in an array of their
-/// own, what the island search and sleeping ask of every joint each detection
-/// (reading them from the joints was a third of a 1000-human pile's serial island plan
-/// and sleeping update).
+/// own, what the island search and sleeping ask of every joint each detection: they
+/// walk 8 B a joint instead of a 176-byte `Joint`, in the serial part of the step.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Link([u32; 2]);
 
