@@ -16,22 +16,14 @@ use ragdoll_sim::Method;
 use ragdoll_sim::glam::Vec3;
 use ragdoll_sim::metrics::MetricsRecorder;
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
-use ragdoll_sim::scene::af::{AfOptions, load_character};
-use ragdoll_sim::scene::decl::Doom3Base;
 use ragdoll_sim::scene::{Pose, SceneDesc};
-use std::path::PathBuf;
 use std::process::ExitCode;
+
+mod common;
 
 /// The humanoid, shifted by `shift` along x.
 fn figure(shift: f32) -> Result<SceneDesc, String> {
-    let base_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3");
-    let base = Doom3Base::open(&base_dir).map_err(|e| e.to_string())?;
-    let c = base
-        .character("Monster_Lab_Human")
-        .map_err(|e| e.to_string())?;
-    let mut sc = load_character(&c, &base_dir, &AfOptions::default())
-        .map_err(|e| e.to_string())?
-        .desc;
+    let mut sc = common::lab_human()?;
     sc.transform(&Pose::from_position(Vec3::new(shift, 0.0, 0.0)));
     Ok(sc)
 }
@@ -39,18 +31,12 @@ fn figure(shift: f32) -> Result<SceneDesc, String> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let schedule_at = args.iter().position(|a| a == "--schedule");
-    let schedule = match schedule_at.map(|i| args.get(i + 1)) {
-        None => None,
-        Some(v) => match v
-            .and_then(|v| v.split_once('x'))
-            .map(|(s, p)| (s.parse(), p.parse()))
-        {
-            Some((Ok(s), Ok(p))) => Some((s, p)),
-            _ => {
-                eprintln!("error: --schedule takes substeps x passes, such as 60x1");
-                return ExitCode::FAILURE;
-            }
-        },
+    let schedule = match common::xpbd_schedule(&args) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
     };
     let plain: Vec<&String> = args
         .iter()
@@ -72,10 +58,7 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if let Some((substeps, passes)) = schedule {
-        sc.settings.xpbd_substeps = Some(substeps);
-        sc.settings.xpbd_passes = passes;
-    }
+    common::set_xpbd_schedule(&mut sc, schedule);
     let (mut w, mut rec) = match (
         ParticleWorld::new(&sc, ParticleSolver::Xpbd),
         MetricsRecorder::new(&sc),

@@ -27,11 +27,12 @@ use ragdoll_sim::metrics::{EnergyRise, MethodStats, MetricsRecorder};
 use ragdoll_sim::particle::{ParticleSolver, ParticleWorld};
 use ragdoll_sim::rigid::MultibodyWorld;
 use ragdoll_sim::scene::Pose;
-use ragdoll_sim::scene::af::{AfOptions, load, load_character};
-use ragdoll_sim::scene::decl::Doom3Base;
+use ragdoll_sim::scene::af::{AfOptions, load};
 use ragdoll_sim::{Method, SceneDesc};
 use std::path::PathBuf;
 use std::process::ExitCode;
+
+mod common;
 
 /// Frames simulated per start (10 s at 1/60 s).
 const FRAMES: usize = 600;
@@ -39,7 +40,7 @@ const FRAMES: usize = 600;
 /// The scene `name` from `assets/scenes`, with `variant` applied, or the mod humanoid.
 fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
     if name == "lab-human" {
-        return lab_human();
+        return common::lab_human();
     }
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../assets/scenes")
@@ -49,18 +50,6 @@ fn scene(name: &str, variant: u32) -> Result<SceneDesc, String> {
         ..Default::default()
     };
     load(&path, &opts)
-        .map(|s| s.desc)
-        .map_err(|e| e.to_string())
-}
-
-/// The humanoid of our Doom 3-style mod, built from its entity's `af_pose` frame.
-fn lab_human() -> Result<SceneDesc, String> {
-    let base_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/doom3");
-    let base = Doom3Base::open(&base_dir).map_err(|e| e.to_string())?;
-    let c = base
-        .character("Monster_Lab_Human")
-        .map_err(|e| e.to_string())?;
-    load_character(&c, &base_dir, &AfOptions::default())
         .map(|s| s.desc)
         .map_err(|e| e.to_string())
 }
@@ -123,22 +112,12 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let schedule = match args
-        .iter()
-        .position(|a| a == "--schedule")
-        .map(|i| args.get(i + 1))
-    {
-        None => None,
-        Some(v) => match v
-            .and_then(|v| v.split_once('x'))
-            .map(|(s, p)| (s.parse(), p.parse()))
-        {
-            Some((Ok(s), Ok(p))) => Some((s, p)),
-            _ => {
-                eprintln!("error: --schedule takes substeps x passes, such as 60x1");
-                return ExitCode::FAILURE;
-            }
-        },
+    let schedule = match common::xpbd_schedule(&args) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
     };
     let mut plain = args
         .iter()
@@ -159,10 +138,7 @@ fn main() -> ExitCode {
     };
     let base = match scene(name, variant) {
         Ok(mut s) => {
-            if let Some((substeps, passes)) = schedule {
-                s.settings.xpbd_substeps = Some(substeps);
-                s.settings.xpbd_passes = passes;
-            }
+            common::set_xpbd_schedule(&mut s, schedule);
             s
         }
         Err(e) => {
