@@ -410,7 +410,8 @@ pub(super) fn run_substeps(
                 None => (Batch::default(), None),
             };
             let same_joints = batch.gather(m, &plan.local, world);
-            let joints = JointSet::Batch(&world.joints, &batch.joints).entries();
+            let joints =
+                JointSet::Batch(&world.joints, &world.joint_kinds, &batch.joints).entries();
             let lockstep = match pass {
                 Some(pass) if same_joints => pass,
                 _ => Lockstep::new(&joints, &batch.bones),

@@ -20,13 +20,14 @@
 
 use super::bone::{Aim, Bone, Side};
 use super::bone_lanes::{SideLanes, angular, mask, per_lane, point};
+use super::joint_kinds::JointKind;
 use super::joints::{HINGE_SERIES_BELOW, Joint, JointType, hinge_turn_ratio};
 use super::limits::{ConeLanes, RangeLanes, Swing};
 use crate::lanes::{LANES, Real, V3};
 use wide::f32x4;
 
-/// A joint of a run: the joint and its two sides in the bones being stepped.
-pub(crate) type Entry<'a> = (&'a Joint, Side, Side);
+/// A joint of a run: the joint, its kind and its two sides in the bones being stepped.
+pub(crate) type Entry<'a> = (&'a Joint, &'a JointKind, Side, Side);
 
 /// What decides whether joint `k` of two figures can share an instruction: the rows it
 /// solves.
@@ -40,8 +41,8 @@ enum Shape {
 }
 
 impl Shape {
-    fn of(j: &Joint) -> Shape {
-        let hinge = match j.kind {
+    fn of(j: &JointKind) -> Shape {
+        let hinge = match j.joint_type {
             JointType::Ball => false,
             JointType::Hinge { .. } => true,
             _ => return Shape::Scalar,
@@ -86,8 +87,8 @@ impl Lockstep {
     /// different figures, into lanes. Solving the steps in order is solving the entries
     /// in order: a group only interleaves figures, which share no bone.
     pub fn new(entries: &[Entry], bones: &[Bone]) -> Lockstep {
-        let figure = |&(_, a, b): &Entry| a.or(b).map_or(u32::MAX, |i| bones[i].figure);
-        let shapes: Vec<Shape> = entries.iter().map(|e| Shape::of(e.0)).collect();
+        let figure = |&(_, _, a, b): &Entry| a.or(b).map_or(u32::MAX, |i| bones[i].figure);
+        let shapes: Vec<Shape> = entries.iter().map(|e| Shape::of(e.1)).collect();
         // Runs of one figure: `start..end` of the entries.
         let mut runs: Vec<(usize, usize)> = Vec::new();
         for (i, e) in entries.iter().enumerate() {
@@ -144,15 +145,15 @@ impl Lockstep {
         for step in &self.steps {
             match step {
                 Step::Scalar(i) => {
-                    let (j, a, b) = entries[*i as usize];
-                    j.solve_between(bones, a, b, h, aim);
+                    let (j, k, a, b) = entries[*i as usize];
+                    j.solve_between(k, bones, a, b, h, aim);
                 }
                 Step::Lanes(lanes, c) => {
                     let c = &self.constants[*c as usize];
                     let sides = |f: fn(&Entry) -> Side| {
                         lanes.map(|i| i.and_then(|i| f(&entries[i as usize])))
                     };
-                    let (a, b) = (sides(|e| e.1), sides(|e| e.2));
+                    let (a, b) = (sides(|e| e.2), sides(|e| e.3));
                     let mut sa = SideLanes::<f32x4>::gather(bones, &a);
                     let mut sb = SideLanes::<f32x4>::gather(bones, &b);
                     c.solve(&mut sa, &mut sb, h, aim);
@@ -181,27 +182,23 @@ impl<R: Real> Constants<R> {
     /// The constants of up to `R::WIDTH` joints of one [`Shape`] (`lanes[k]` for lane
     /// `k`; an empty lane holds a copy of the first joint, masked off).
     fn new(lanes: &[Option<Entry>]) -> Constants<R> {
-        let first = lanes
-            .iter()
-            .flatten()
-            .next()
-            .expect("a group has a joint")
-            .0;
-        let joint = |k: usize| lanes[k].map_or(first, |e| e.0);
-        let hinge = matches!(first.kind, JointType::Hinge { .. }).then(|| {
-            let axis = |k: usize| match joint(k).kind {
+        let first = *lanes.iter().flatten().next().expect("a group has a joint");
+        let joint = |k: usize| lanes[k].unwrap_or(first).0;
+        let kind = |k: usize| lanes[k].unwrap_or(first).1;
+        let hinge = matches!(first.1.joint_type, JointType::Hinge { .. }).then(|| {
+            let axis = |k: usize| match kind(k).joint_type {
                 JointType::Hinge { axis_a, axis_b } => (axis_a, axis_b),
                 _ => unreachable!("a group's joints share their shape"),
             };
             (V3::from_fn(|k| axis(k).0), V3::from_fn(|k| axis(k).1))
         });
-        let cone = first.swing.is_some().then(|| {
-            let swing = |k: usize| joint(k).swing.expect("a group's joints share their shape");
+        let cone = first.1.swing.is_some().then(|| {
+            let swing = |k: usize| kind(k).swing.expect("a group's joints share their shape");
             ConeLanes::from_fn(|k| (swing(k), joint(k).slack))
                 .expect("a group's joints share their shape")
         });
-        let range = (!first.angle_limits.is_empty())
-            .then(|| RangeLanes::from_fn(|k| (joint(k).angle_limits[0], joint(k).slack)));
+        let range = (!first.1.angle_limits.is_empty())
+            .then(|| RangeLanes::from_fn(|k| (kind(k).angle_limits[0], joint(k).slack)));
         Constants {
             active: mask::<R>(|k| lanes[k].is_some()),
             anchor_a: V3::from_fn(|k| joint(k).anchor_a),
@@ -209,7 +206,7 @@ impl<R: Real> Constants<R> {
             hinge,
             cone,
             range,
-            limit_compliance: R::from_fn(|k| joint(k).limit_compliance),
+            limit_compliance: R::from_fn(|k| kind(k).limit_compliance),
         }
     }
 
@@ -295,7 +292,7 @@ mod tests {
         let h = 1.0 / 1200.0;
         for seed in [0x2545_f491, 0x9e37_79b9, 0x1234_5678] {
             let w = knocked_pile(4, seed);
-            let set = JointSet::All(&w.joints);
+            let set = JointSet::All(&w.joints, &w.joint_kinds);
             let entries = set.entries();
             let lockstep = Lockstep::new(&entries, &w.bones);
             let lanes = lockstep
@@ -308,8 +305,8 @@ mod tests {
                 let mut ours = w.bones.clone();
                 lockstep.solve(&entries, &mut ours, h, aim);
                 let mut theirs = w.bones.clone();
-                for &(j, a, b) in &entries {
-                    j.solve_between(&mut theirs, a, b, h, aim);
+                for &(j, k, a, b) in &entries {
+                    j.solve_between(k, &mut theirs, a, b, h, aim);
                 }
                 let moved = motion(&w.bones);
                 assert!(motion(&ours) == motion(&theirs), "{aim:?}: lanes differ");
@@ -330,7 +327,7 @@ mod tests {
     fn a_figure_gets_the_same_bits_in_any_group() {
         let h = 1.0 / 1200.0;
         let w = knocked_pile(5, 0x0bad_cafe);
-        let set = JointSet::All(&w.joints);
+        let set = JointSet::All(&w.joints, &w.joint_kinds);
         let entries = set.entries();
         let mut together = w.bones.clone();
         Lockstep::new(&entries, &w.bones).solve(&entries, &mut together, h, Aim::Start);
@@ -354,7 +351,7 @@ mod tests {
             .joints
             .iter()
             .enumerate()
-            .find_map(|(k, j)| match j.kind {
+            .find_map(|(k, j)| match w.joint_kinds.of(j).joint_type {
                 JointType::Hinge { axis_a, axis_b } => Some((k, axis_a, axis_b)),
                 _ => None,
             })
@@ -378,9 +375,10 @@ mod tests {
             let ta = w.bones[a].rot * glam::Vec3A::from(axis_a);
             let c = ta.cross(w.bones[b].rot * glam::Vec3A::from(axis_b));
             over += usize::from(c.length_squared() > 1.0);
-            let entries = [(&w.joints[k], Some(a), Some(b))];
+            let (joint, kind) = (&w.joints[k], w.joint_kinds.of(&w.joints[k]));
+            let entries = [(joint, kind, Some(a), Some(b))];
             let mut scalar = w.bones.clone();
-            w.joints[k].solve_between(&mut scalar, Some(a), Some(b), h, Aim::Start);
+            joint.solve_between(kind, &mut scalar, Some(a), Some(b), h, Aim::Start);
             let mut lanes = w.bones.clone();
             Lockstep::new(&entries, &w.bones).solve(&entries, &mut lanes, h, Aim::Start);
             for i in [a, b] {

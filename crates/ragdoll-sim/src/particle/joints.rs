@@ -5,14 +5,19 @@
 //! couples a point given in each bone's frame — an affine combination of the bone's four
 //! particles, since the frame is — and corrects it with the point's generalised inverse
 //! mass (XPBD, Müller et al. 2020), so the particulation of every bone survives.
+//!
+//! A [`Joint`] keeps what is its own — its sides, its anchors, its slack — and names
+//! its constant description, shared by the joints built alike, in the world's
+//! [`JointKinds`].
 
 use super::bone::{Aim, Bone, Side, positional, side_rot, side_world};
 use super::bone_lanes::{angular_pair, on_pair, point};
+use super::joint_kinds::{JointKind, JointKinds};
 use super::joint_lanes::hinge_axes;
 use crate::lanes::V3;
 
 use super::limits::{AngleLimit, Swing, SwingLimit, perpendicular};
-use crate::scene::{JointKind, SwingLimit as SwingDesc};
+use crate::scene::{ConstraintDesc, JointKind as JointDesc, SwingLimit as SwingDesc};
 use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 /// Type-specific data, in the bones' frames.
@@ -56,29 +61,18 @@ pub(crate) enum JointType {
     },
 }
 
-/// A joint between body1 (`a`) and body2 (`b`, `None` for the world).
+/// A joint between body1 (`a`) and body2 (`b`, `None` for the world): what is its
+/// own, 40 bytes; the rest is its kind's ([`JointKinds::of`]).
 #[derive(Clone, Debug)]
 pub(crate) struct Joint {
     /// Body1's bone and body2's bone or the world, packed ([`Joint::a`], [`Joint::b`]).
     sides: Link,
+    /// Its kind in the world's [`JointKinds`].
+    pub kind: u32,
     /// Anchor in body1's frame.
     pub anchor_a: Vec3,
     /// Anchor in body2's frame (world coordinates for the world).
     pub anchor_b: Vec3,
-    /// Orientation of body1 relative to body2 at rest, `q_b⁻¹ q_a`.
-    pub rest_rel: Quat,
-    /// Type-specific data.
-    pub kind: JointType,
-    /// Hinge range, universal axis range, or twist limit.
-    pub angle_limits: Vec<AngleLimit>,
-    /// Swing limit.
-    pub swing: Option<SwingLimit>,
-    /// Compliance of the limits (m/N-like; 0 = hard), from the PyODE soft limit.
-    pub limit_compliance: f32,
-    /// Whether this joint is drawn and measured by its anchor.
-    pub has_anchor: bool,
-    /// Largest joint friction torque (N·m, 0 for none): [`Joint::with_friction`].
-    pub friction_torque: f32,
     /// How far the limits are widened (rad): the excess of a pose that started outside
     /// them, closed at a bounded speed by [`Joint::close_slack`]. Zero for every joint
     /// that started inside its limits.
@@ -88,7 +82,7 @@ pub(crate) struct Joint {
 /// A joint's two sides, packed in 8 bytes (two `Option<usize>` take 32): a [`Joint`]
 /// keeps its own so, and the world keeps a copy of every joint's in an array of their
 /// own, what the island search and sleeping ask of every joint each detection: they
-/// walk 8 B a joint instead of a 176-byte `Joint`, in the serial part of the step.
+/// walk 8 B a joint instead of a 40-byte `Joint`, in the serial part of the step.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Link([u32; 2]);
 
@@ -200,34 +194,43 @@ impl Joint {
         self.sides.sides().1
     }
 
-    /// Builds a joint from its description; anchors and axes are world space at rest.
-    pub fn new(f: &RestFrames, a: Side, b: Side, kind: &JointKind) -> Joint {
-        let rest_rel = f.rot(b).inverse() * f.rot(a);
-        let anchor = kind.anchor().unwrap_or_else(|| f.origin(a));
-        let mut j = Joint {
-            sides: Link::new(a, b),
-            anchor_a: f.local_point(a, anchor),
-            anchor_b: f.local_point(b, anchor),
-            rest_rel,
-            kind: JointType::Ball,
-            angle_limits: Vec::new(),
+    /// Builds the joint of constraint `c` between sides `a` and `b` (its anchors and axes
+    /// world space at rest), its kind kept in `kinds`. `mass_a` is body1's mass and `g`
+    /// gravity's magnitude, for the joint friction: the file's friction `c.friction`
+    /// (Doom 3: a number in [0, 1] without units) read as the multibody method reads it
+    /// (`rigid::FrictionMotor`) so that both methods agree, the largest friction torque
+    /// that fraction of the torque gravity puts on body1 held horizontally at its arm,
+    /// the anchor's distance from its centre of mass (at least 5 cm), `f · m₁ g r`. Only
+    /// joints that turn take it (ball, hinge, universal).
+    pub fn new(
+        f: &RestFrames,
+        (a, b): (Side, Side),
+        c: &ConstraintDesc,
+        (mass_a, g): (f32, f32),
+        kinds: &mut JointKinds,
+    ) -> Joint {
+        let anchor = c.kind.anchor().unwrap_or_else(|| f.origin(a));
+        let (mut anchor_a, mut anchor_b) = (f.local_point(a, anchor), f.local_point(b, anchor));
+        let mut k = JointKind {
+            rest_rel: f.rot(b).inverse() * f.rot(a),
+            joint_type: JointType::Ball,
+            angle_limits: Box::default(),
             swing: None,
             limit_compliance: 0.0,
-            has_anchor: kind.anchor().is_some() || matches!(kind, JointKind::Fixed),
+            has_anchor: c.kind.anchor().is_some() || matches!(c.kind, JointDesc::Fixed),
             friction_torque: 0.0,
-            slack: 0.0,
         };
-        match kind {
-            JointKind::BallAndSocket {
+        let mut angle_limits = Vec::new();
+        match &c.kind {
+            JointDesc::BallAndSocket {
                 swing,
                 twist,
                 limit_style,
                 ..
             } => {
-                j.swing = swing.as_ref().map(|s| swing_limit(f, a, b, s));
+                k.swing = swing.as_ref().map(|s| swing_limit(f, a, b, s));
                 if let Some(t) = twist {
-                    j.angle_limits
-                        .push(angle_limit(f, a, b, t.axis, t.min, t.max));
+                    angle_limits.push(angle_limit(f, a, b, t.axis, t.min, t.max));
                 }
                 // The PyODE tutorial softens its limits because explicit restoring
                 // torques cannot be stiff and stable at once; a position-level limit can,
@@ -235,44 +238,41 @@ impl Joint {
                 // limit itself). `limit_compliance` stays for springy limits.
                 let _ = limit_style;
             }
-            JointKind::Universal {
+            JointDesc::Universal {
                 shaft1,
                 shaft2,
                 swing,
                 axis_ranges,
                 ..
             } => {
-                j.kind = JointType::Universal {
+                k.joint_type = JointType::Universal {
                     shaft_a: f.local_dir(a, *shaft1),
                     shaft_b: f.local_dir(b, *shaft2),
                 };
-                j.swing = swing.as_ref().map(|s| swing_limit(f, a, b, s));
+                k.swing = swing.as_ref().map(|s| swing_limit(f, a, b, s));
                 if let Some([r1, r2]) = axis_ranges {
                     // PyODE's stops: rotation about shaft 2 (body2's axis) and about
                     // shaft 1; measured as angles about those axes from rest.
-                    j.angle_limits
-                        .push(angle_limit(f, a, b, *shaft2, r1.min, r1.max));
-                    j.angle_limits
-                        .push(angle_limit(f, a, b, *shaft1, r2.min, r2.max));
+                    angle_limits.push(angle_limit(f, a, b, *shaft2, r1.min, r1.max));
+                    angle_limits.push(angle_limit(f, a, b, *shaft1, r2.min, r2.max));
                 }
             }
-            JointKind::Hinge { axis, limit, .. } => {
-                j.kind = JointType::Hinge {
+            JointDesc::Hinge { axis, limit, .. } => {
+                k.joint_type = JointType::Hinge {
                     axis_a: f.local_dir(a, *axis),
                     axis_b: f.local_dir(b, *axis),
                 };
                 if let Some(l) = limit {
-                    j.angle_limits
-                        .push(angle_limit(f, a, b, *axis, l.min, l.max));
+                    angle_limits.push(angle_limit(f, a, b, *axis, l.min, l.max));
                 }
             }
-            JointKind::Slider { axis } => {
-                j.kind = JointType::Slider {
+            JointDesc::Slider { axis } => {
+                k.joint_type = JointType::Slider {
                     axis_b: f.local_dir(b, *axis),
                 };
             }
-            JointKind::Fixed => j.kind = JointType::Fixed,
-            JointKind::Spring {
+            JointDesc::Fixed => k.joint_type = JointType::Fixed,
+            JointDesc::Spring {
                 anchor1,
                 anchor2,
                 stretch,
@@ -282,9 +282,9 @@ impl Joint {
                 max_length,
                 ..
             } => {
-                j.anchor_a = f.local_point(a, *anchor1);
-                j.anchor_b = f.local_point(b, *anchor2);
-                j.kind = JointType::Spring {
+                anchor_a = f.local_point(a, *anchor1);
+                anchor_b = f.local_point(b, *anchor2);
+                k.joint_type = JointType::Spring {
                     stretch: *stretch,
                     compress: *compress,
                     rest: *rest_length,
@@ -293,24 +293,21 @@ impl Joint {
                 };
             }
         }
-        j
-    }
-
-    /// The joint with the file's joint friction `friction` (Doom 3: a number in [0, 1]
-    /// without units), read as the multibody method reads it (`rigid::FrictionMotor`) so
-    /// that both methods agree: the largest friction torque is that fraction of the
-    /// torque gravity `g` puts on body1 (mass `mass_a`) held horizontally at its arm, the
-    /// anchor's distance from its centre of mass (at least 5 cm), `f · m₁ g r`. Only
-    /// joints that turn take it (ball, hinge, universal).
-    pub fn with_friction(mut self, friction: f32, mass_a: f32, g: f32) -> Joint {
+        k.angle_limits = angle_limits.into_boxed_slice();
         let turns = matches!(
-            self.kind,
+            k.joint_type,
             JointType::Ball | JointType::Hinge { .. } | JointType::Universal { .. }
         );
-        if turns && friction > 0.0 && self.a().is_some() {
-            self.friction_torque = friction * mass_a * g * self.anchor_a.length().max(0.05);
+        if turns && c.friction > 0.0 && a.is_some() {
+            k.friction_torque = c.friction * mass_a * g * anchor_a.length().max(0.05);
         }
-        self
+        Joint {
+            sides: Link::new(a, b),
+            kind: kinds.kind(k),
+            anchor_a,
+            anchor_b,
+            slack: 0.0,
+        }
     }
 
     /// Joint friction in the velocity pass of a substep `h`: an angular impulse
@@ -318,7 +315,8 @@ impl Joint {
     /// with `K = I_a⁻¹ + I_b⁻¹` (world), capped at the friction torque times `h` — the
     /// joint holds under a small load and slips under a large one, taking energy
     /// `|Δλ · ω_rel|` at most. (As the multibody's capped motor: `rigid::FrictionMotor`.)
-    pub fn solve_friction(&self, bones: &mut [Bone], a: Side, b: Side, h: f32) {
+    /// `kind` is the joint's kind.
+    pub fn solve_friction(kind: &JointKind, bones: &mut [Bone], a: Side, b: Side, h: f32) {
         let moving = |s: Side| s.filter(|&i| !bones[i].is_static());
         let (a, b) = (moving(a), moving(b));
         let inv_inertia = |s: Option<usize>| {
@@ -336,7 +334,7 @@ impl Joint {
             return;
         }
         let mut impulse = -(k.inverse() * (spin(a) - spin(b)));
-        let cap = self.friction_torque * h;
+        let cap = kind.friction_torque * h;
         if impulse.length_squared() > cap * cap {
             impulse = impulse.normalize() * cap;
         }
@@ -352,7 +350,7 @@ impl Joint {
     /// centre turns about the anchor at no more than `push_out_speed`
     /// (`Settings::max_push_out_speed`, the speed an old overlap of the contacts is
     /// pushed out at), an angular speed of `push_out_speed / r` for the anchor's
-    /// distance `r` from it (at least 5 cm, as [`Joint::with_friction`]). Returns
+    /// distance `r` from it (at least 5 cm, as the friction of [`Joint::new`]). Returns
     /// whether the joint had slack.
     pub fn close_slack(&mut self, push_out_speed: f32, dt: f32) -> bool {
         if self.slack <= 0.0 {
@@ -371,9 +369,9 @@ impl Joint {
         )
     }
 
-    /// Joint gap (m): distance between the anchor seen from each bone.
-    pub fn gap(&self, bones: &[Bone]) -> f32 {
-        match self.kind {
+    /// Joint gap (m): distance between the anchor seen from each bone (`k` its kind).
+    pub fn gap(&self, k: &JointKind, bones: &[Bone]) -> f32 {
+        match k.joint_type {
             JointType::Spring { .. } | JointType::Slider { .. } => 0.0,
             _ => {
                 let (pa, pb) = self.anchors(bones);
@@ -382,22 +380,23 @@ impl Joint {
         }
     }
 
-    /// Largest limit excess (rad).
-    pub fn limit_violation(&self, bones: &[Bone]) -> f32 {
-        let mut v = self
+    /// Largest limit excess (rad) of the limits of its kind `k`.
+    pub fn limit_violation(&self, k: &JointKind, bones: &[Bone]) -> f32 {
+        let mut v = k
             .swing
             .map_or(0.0, |s| s.violation(bones, self.a(), self.b()));
-        for l in &self.angle_limits {
+        for l in &k.angle_limits {
             v = v.max(l.violation(bones, self.a(), self.b()));
         }
         v
     }
 
     /// The relative-orientation error of body1 (side `a`) against its rest orientation
-    /// relative to body2 (side `b`), as a rotation vector to apply to body1.
-    fn orientation_error(&self, bones: &[Bone], a: Side, b: Side) -> Vec3 {
+    /// relative to body2 (side `b`) of its kind `k`, as a rotation vector to apply to
+    /// body1.
+    fn orientation_error(k: &JointKind, bones: &[Bone], a: Side, b: Side) -> Vec3 {
         let qa = side_rot(bones, a);
-        let target = side_rot(bones, b) * self.rest_rel;
+        let target = side_rot(bones, b) * k.rest_rel;
         let mut e = target * qa.inverse();
         if e.w < 0.0 {
             e = -e;
@@ -405,15 +404,23 @@ impl Joint {
         Vec3::new(e.x, e.y, e.z) * 2.0
     }
 
-    /// One XPBD pass over the joint between body1 at `a` and body2 at `b` of `bones`:
-    /// axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of
+    /// One XPBD pass over the joint (of kind `k`) between body1 at `a` and body2 at `b`
+    /// of `bones`: axes, anchor (aimed as `aim` says), then limits; `h` is the substep. A batch of
     /// islands stepped on its own thread holds its bones under its own indices. The
     /// rows the lanes also solve (hinge axes, anchor, cone, range) are their code run
     /// with one joint to a lane (`joint_lanes`), so a ball or hinge gets the same bits
     /// here as in a group of four.
-    pub fn solve_between(&self, bones: &mut [Bone], a: Side, b: Side, h: f32, aim: Aim) {
+    pub fn solve_between(
+        &self,
+        k: &JointKind,
+        bones: &mut [Bone],
+        a: Side,
+        b: Side,
+        h: f32,
+        aim: Aim,
+    ) {
         let inv_h2 = 1.0 / (h * h);
-        match self.kind {
+        match k.joint_type {
             JointType::Hinge { axis_a, axis_b } => {
                 let (axis_a, axis_b) = (V3::from_fn(|_| axis_a), V3::from_fn(|_| axis_b));
                 on_pair(bones, a, b, |sa, sb| {
@@ -433,12 +440,12 @@ impl Joint {
                 }
             }
             JointType::Fixed | JointType::Slider { .. } => {
-                let e = self.orientation_error(bones, a, b);
+                let e = Joint::orientation_error(k, bones, a, b);
                 angular_pair(bones, a, b, e, 0.0);
             }
             JointType::Ball | JointType::Spring { .. } => {}
         }
-        match self.kind {
+        match k.joint_type {
             JointType::Spring {
                 stretch,
                 compress,
@@ -459,8 +466,8 @@ impl Joint {
                     } else if min > 0.0 && len < min {
                         Some((min, 0.0))
                     } else {
-                        let k = if len > rest { stretch } else { compress };
-                        (k > 0.0).then(|| (rest, inv_h2 / k))
+                        let stiffness = if len > rest { stretch } else { compress };
+                        (stiffness > 0.0).then(|| (rest, inv_h2 / stiffness))
                     };
                     if let Some((l0, alpha)) = target {
                         positional(bones, a, b, pa, pb, n * (len - l0), alpha);
@@ -485,12 +492,12 @@ impl Joint {
                 });
             }
         }
-        let alpha = self.limit_compliance * inv_h2;
+        let alpha = k.limit_compliance * inv_h2;
         let anchors = (self.anchor_a, self.anchor_b);
-        if let Some(s) = &self.swing {
+        if let Some(s) = &k.swing {
             s.solve(bones, (a, b), anchors, alpha, self.slack);
         }
-        for l in &self.angle_limits {
+        for l in &k.angle_limits {
             l.solve(bones, (a, b), anchors, alpha, self.slack);
         }
     }
@@ -514,25 +521,32 @@ pub(super) fn hinge_turn_ratio(s2: f32) -> f32 {
     }
 }
 
-/// The joints one run of substeps solves, always in the world's order.
+/// The joints one run of substeps solves, always in the world's order, with the
+/// world's joint kinds.
 #[derive(Clone, Copy)]
 pub(crate) enum JointSet<'a> {
     /// All of the world's joints, on the world's bones.
-    All(&'a [Joint]),
+    All(&'a [Joint], &'a JointKinds),
     /// Some of the world's joints on a batch's bones: each joint's index in the world and
     /// its two sides renumbered into the batch.
-    Batch(&'a [Joint], &'a [(u32, Side, Side)]),
+    Batch(&'a [Joint], &'a JointKinds, &'a [(u32, Side, Side)]),
 }
 
 impl<'a> JointSet<'a> {
-    /// The set's joints in solving order (the world's), each with its two sides in the
-    /// bones being stepped.
+    /// The set's joints in solving order (the world's), each with its kind and its two
+    /// sides in the bones being stepped.
     pub fn entries(&self) -> Vec<super::joint_lanes::Entry<'a>> {
         match *self {
-            JointSet::All(joints) => joints.iter().map(|j| (j, j.a(), j.b())).collect(),
-            JointSet::Batch(joints, local) => local
+            JointSet::All(joints, kinds) => joints
                 .iter()
-                .map(|&(k, a, b)| (&joints[k as usize], a, b))
+                .map(|j| (j, kinds.of(j), j.a(), j.b()))
+                .collect(),
+            JointSet::Batch(joints, kinds, local) => local
+                .iter()
+                .map(|&(k, a, b)| {
+                    let j = &joints[k as usize];
+                    (j, kinds.of(j), a, b)
+                })
                 .collect(),
         }
     }

@@ -443,12 +443,15 @@ mod tests {
         let joint = w
             .joints
             .iter()
-            .find(|j| j.swing.is_some() && !j.angle_limits.is_empty())
+            .find(|j| {
+                let k = w.joint_kinds.of(j);
+                k.swing.is_some() && !k.angle_limits.is_empty()
+            })
             .expect("a ball joint with a twist limit")
             .clone();
         let (a, b) = (joint.a(), joint.b());
         let (ia, ib) = (a.expect("body1"), b.expect("body2"));
-        let limit = joint.angle_limits[0];
+        let limit = w.joint_kinds.of(&joint).angle_limits[0];
         let qa0 = w.bones[ia].rot;
         let twist_axis = qa0 * limit.axis_a;
         let swing_axis = twist_axis.any_orthonormal_vector();
@@ -498,12 +501,13 @@ mod tests {
         let picked: Vec<usize> = (0..w.joints.len())
             .filter(|&k| {
                 let j = &w.joints[k];
+                let kind = w.joint_kinds.of(j);
                 j.a().is_some()
                     && j.b().is_some()
-                    && match j.kind {
-                        JointType::Hinge { .. } => !j.angle_limits.is_empty(),
+                    && match kind.joint_type {
+                        JointType::Hinge { .. } => !kind.angle_limits.is_empty(),
                         JointType::Ball => {
-                            matches!(j.swing.map(|s| s.kind), Some(Swing::Cone { .. }))
+                            matches!(kind.swing.map(|s| s.kind), Some(Swing::Cone { .. }))
                         }
                         _ => false,
                     }
@@ -511,21 +515,25 @@ mod tests {
             .collect();
         let hinges = picked
             .iter()
-            .filter(|&&k| matches!(w.joints[k].kind, JointType::Hinge { .. }))
+            .filter(|&&k| {
+                let kind = w.joint_kinds.of(&w.joints[k]);
+                matches!(kind.joint_type, JointType::Hinge { .. })
+            })
             .count();
         assert!(hinges >= 2 && picked.len() > hinges, "{picked:?}");
         for k in picked {
             let j = w.joints[k].clone();
+            let kind = w.joint_kinds.of(&j).clone();
             let (ia, ib) = (j.a().unwrap(), j.b().unwrap());
             let saved = (w.bones[ia].clone(), w.bones[ib].clone());
             // Past the limit by 20°, turned about the anchor so the joint stays closed.
             let (anchor, _) = j.anchors(&w.bones);
-            let (axis, past) = if let Some(l) = j.angle_limits.first() {
+            let (axis, past) = if let Some(l) = kind.angle_limits.first() {
                 let (phi, _) = l.angle(&w.bones, j.a(), j.b());
                 let axis = w.bones[ia].rot * l.axis_a;
                 (axis, l.max - phi + 2f32.to_radians())
             } else {
-                let s = j.swing.unwrap();
+                let s = kind.swing.unwrap();
                 let Swing::Cone { half_angle, .. } = s.kind else {
                     unreachable!()
                 };
@@ -546,7 +554,7 @@ mod tests {
             b.com = (anchor + turn * (c - anchor)).into();
             b.dcom = Vec3A::ZERO;
             b.rot = (turn * b.rot).normalize();
-            let before = j.limit_violation(&w.bones).to_degrees();
+            let before = j.limit_violation(&kind, &w.bones).to_degrees();
             assert!(before > 1.5, "joint {k}: {before}° past");
             let arm = (Vec3::from(w.bones[ia].center()) - anchor).length();
             let (ma, mb) = (w.bones[ia].mass, w.bones[ib].mass);
@@ -556,14 +564,14 @@ mod tests {
             };
             let centre_before = centre(&w);
             let anchors = (j.anchor_a, j.anchor_b);
-            if let Some(s) = &j.swing {
+            if let Some(s) = &kind.swing {
                 s.solve(&mut w.bones, (j.a(), j.b()), anchors, 0.0, 0.0);
             }
-            for l in &j.angle_limits {
+            for l in &kind.angle_limits {
                 l.solve(&mut w.bones, (j.a(), j.b()), anchors, 0.0, 0.0);
             }
-            let after = j.limit_violation(&w.bones).to_degrees();
-            let gap = j.gap(&w.bones);
+            let after = j.limit_violation(&kind, &w.bones).to_degrees();
+            let gap = j.gap(&kind, &w.bones);
             let drift = (centre(&w) - centre_before).length();
             assert!(after < 0.05, "joint {k}: still {after}° past");
             let first_order = arm * before.to_radians();

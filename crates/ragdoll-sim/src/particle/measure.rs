@@ -44,11 +44,16 @@ pub(crate) fn sample(w: &ParticleWorld) -> Sample {
             }
         }
     }
-    let gap = w.joints.iter().map(|j| j.gap(&w.bones)).fold(0.0, f32::max);
+    let kind = |j| w.joint_kinds.of(j);
+    let gap = w
+        .joints
+        .iter()
+        .map(|j| j.gap(kind(j), &w.bones))
+        .fold(0.0, f32::max);
     let limit = w
         .joints
         .iter()
-        .map(|j| j.limit_violation(&w.bones))
+        .map(|j| j.limit_violation(kind(j), &w.bones))
         .fold(0.0, f32::max);
     let stretch = (0..w.bones.len())
         .filter(|&i| !w.bones[i].fixed)

@@ -9,7 +9,8 @@
 //!
 //! Files, one concept each: `particles` (the paper's storage, Verlet), `bone` (tetrahedron, frame,
 //! rigid corrections), `bone_kinds` (what bones of a kind share: shape, rest corners,
-//! materials), `placement` (particulation), `joints`, `limits`, `contacts`
+//! materials), `placement` (particulation), `joints`, `joint_kinds` (what joints of a
+//! kind share: type, limits, compliance, friction), `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
 //! `rigid_frames` and `paper` (the two solver loops), `islands` (the rigid-frames loop on all
 //! cores), `measure` (the metrics).
@@ -21,6 +22,7 @@ mod contacts;
 mod friction;
 mod impulse;
 mod islands;
+mod joint_kinds;
 mod joint_lanes;
 mod joints;
 pub(crate) mod kinematic;
@@ -53,6 +55,7 @@ use bone::{Bone, EDGES};
 use bone_kinds::{BoneKind, BoneKinds, Material};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
+use joint_kinds::JointKinds;
 use joints::{Joint, Link, RestFrames};
 use parry3d::query::{ContactManifold, Ray};
 use parry3d::shape::SharedShape;
@@ -106,6 +109,8 @@ pub struct ParticleWorld {
     /// What bones of a kind share: shapes, rest corners, materials.
     kinds: BoneKinds,
     joints: Vec<Joint>,
+    /// What joints of a kind share: type, limits, compliance, friction.
+    joint_kinds: JointKinds,
     /// Each joint's sides, packed ([`Link`]).
     links: Vec<Link>,
     filter: Filter,
@@ -159,6 +164,7 @@ impl ParticleWorld {
             bones: Vec::new(),
             kinds: BoneKinds::building(),
             joints: Vec::new(),
+            joint_kinds: JointKinds::building(),
             links: Vec::new(),
             filter: Filter::default(),
             contacts: ContactSet::default(),
@@ -203,8 +209,8 @@ impl ParticleWorld {
             let b = c.body2.body().map(|b| b.index());
             let mass_a = w.bones.get(c.body1.index()).map_or(0.0, |b| b.mass);
             let g = w.settings.gravity.length();
-            w.joints
-                .push(Joint::new(&rf, a, b, &c.kind).with_friction(c.friction, mass_a, g));
+            let joint = Joint::new(&rf, (a, b), c, (mass_a, g), &mut w.joint_kinds);
+            w.joints.push(joint);
             if let Some(b) = b {
                 excluded.push((c.body1.index(), b));
             }
@@ -215,7 +221,7 @@ impl ParticleWorld {
             // by position only (`rigid_frames::close_start_slack`,
             // `xpbd::step::close_start_slack`), not in one substep.
             for j in &mut w.joints {
-                j.slack = j.limit_violation(&w.bones);
+                j.slack = j.limit_violation(w.joint_kinds.of(j), &w.bones);
             }
         }
         if solver == ParticleSolver::Xpbd {
@@ -228,11 +234,7 @@ impl ParticleWorld {
         w.bones.shrink_to_fit();
         w.kinds.seal();
         w.joints.shrink_to_fit();
-        // A joint's one or two angle limits would otherwise keep room for four (a
-        // `Vec`'s first growth), 256 bytes.
-        for j in &mut w.joints {
-            j.angle_limits.shrink_to_fit();
-        }
+        w.joint_kinds.seal();
         w.particles.shrink_to_fit();
         w.frame_starts.shrink_to_fit();
         Ok(w)
@@ -682,11 +684,12 @@ impl Method for ParticleWorld {
             }
         }
         for j in &self.joints {
-            if !j.has_anchor {
+            let k = self.joint_kinds.of(j);
+            if !k.has_anchor {
                 continue;
             }
             let (a, b) = j.anchors(&self.bones);
-            let limit = match j.swing {
+            let limit = match k.swing {
                 Some(s) => match s.kind {
                     limits::Swing::Cone { half_angle, .. } => LimitShape::Cone {
                         axis: bone::side_rot(&self.bones, j.b()) * s.axis_b,
@@ -697,7 +700,7 @@ impl Method for ParticleWorld {
                         half_angle: h1.max(h2),
                     },
                 },
-                None => match (j.kind, j.angle_limits.first()) {
+                None => match (k.joint_type, k.angle_limits.first()) {
                     (joints::JointType::Hinge { .. }, Some(l)) => LimitShape::Arc {
                         axis: bone::side_rot(&self.bones, j.a()) * l.axis_a,
                         reference: bone::side_rot(&self.bones, j.b()) * l.ref_b,
@@ -814,6 +817,7 @@ impl Method for ParticleWorld {
             bones,
             kinds,
             joints,
+            joint_kinds,
             links,
             filter,
             contacts,
@@ -827,7 +831,7 @@ impl Method for ParticleWorld {
         } = *self;
         drop((bones, kinds));
         dropped("bones");
-        drop((joints, links, filter, motors, kinematic));
+        drop((joints, joint_kinds, links, filter, motors, kinematic));
         dropped("joints, links, filter");
         drop(contacts);
         dropped("contact points");

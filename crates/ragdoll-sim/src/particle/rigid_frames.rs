@@ -36,7 +36,7 @@ use super::friction::{
 };
 use super::islands::{self, Part};
 use super::joint_lanes::Lockstep;
-use super::joints::{JointSet, in_figures};
+use super::joints::{Joint, JointSet, in_figures};
 use super::{ParticleWorld, sleeping};
 use crate::broadphase::{Reused, speculative_margin};
 use crate::scene::{Ground, Settings, rolling_arm};
@@ -569,9 +569,9 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // Rolling resistance, on the substep's net normal impulses (`rolling`).
         super::rolling::solve(p.bones, p.manifolds, p.points, h);
         // Joint friction, the file's `friction` of each joint that has one.
-        for &(j, a, b) in p.joints {
-            if j.friction_torque > 0.0 {
-                j.solve_friction(p.bones, a, b, h);
+        for &(_, k, a, b) in p.joints {
+            if k.friction_torque > 0.0 {
+                Joint::solve_friction(k, p.bones, a, b, h);
             }
         }
         for b in p.bones.iter_mut() {
@@ -641,8 +641,9 @@ fn close_start_slack(w: &mut ParticleWorld, h: f32) {
         let mut gap = 0.0f32;
         for j in &w.joints {
             if in_figure(&w.bones, j.a().or(j.b())) {
-                j.solve_between(&mut w.bones, j.a(), j.b(), h, Aim::End);
-                gap = gap.max(j.gap(&w.bones));
+                let k = w.joint_kinds.of(j);
+                j.solve_between(k, &mut w.bones, j.a(), j.b(), h, Aim::End);
+                gap = gap.max(j.gap(k, &w.bones));
             }
         }
         if gap <= SLACK_GAP {
@@ -712,7 +713,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             None => {
                 // The kept batches' copies of the bones stepped here are stale now.
                 kept.clear();
-                let joints = JointSet::All(&w.joints).entries();
+                let joints = JointSet::All(&w.joints, &w.joint_kinds).entries();
                 let lockstep = whole.get_or_insert_with(|| Lockstep::new(&joints, &w.bones));
                 let mut part = Part {
                     bones: &mut w.bones,

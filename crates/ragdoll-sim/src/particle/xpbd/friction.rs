@@ -13,6 +13,7 @@
 //! is exactly the impulse. It only removes relative spin: energy taken is at most
 //! `|Δλ · (ω_a − ω_b)|`, never added.
 
+use super::super::joint_kinds::JointKinds;
 use super::super::joints::Joint;
 use super::particles::{PER_BONE, XParticles};
 use glam::{DVec3, Mat3, Vec3};
@@ -70,10 +71,12 @@ fn turn(p: &mut XParticles, i: usize, s: &Spin, dw: Vec3) {
     }
 }
 
-/// Every joint's friction over a substep `h` (module doc), in joint order.
-pub(crate) fn solve(p: &mut XParticles, joints: &[Joint], h: f32) {
+/// Every joint's friction over a substep `h` (module doc), in joint order; their
+/// kinds in `kinds`.
+pub(crate) fn solve(p: &mut XParticles, joints: &[Joint], kinds: &JointKinds, h: f32) {
     for j in joints {
-        if j.friction_torque <= 0.0 {
+        let friction_torque = kinds.of(j).friction_torque;
+        if friction_torque <= 0.0 {
             continue;
         }
         let (sa, sb) = (spin(p, j.a()), spin(p, j.b()));
@@ -86,7 +89,7 @@ pub(crate) fn solve(p: &mut XParticles, joints: &[Joint], h: f32) {
             continue;
         }
         let mut impulse = -(k.inverse() * (om(&sa) - om(&sb)));
-        let cap = j.friction_torque * h;
+        let cap = friction_torque * h;
         if impulse.length_squared() > cap * cap {
             impulse = impulse.normalize() * cap;
         }

@@ -42,6 +42,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::super::bone::{Bone, Side};
+use super::super::joint_kinds::{JointKind, JointKinds};
 use super::super::joints::{Joint, JointType, hinge_turn_ratio};
 use super::super::limits::{Swing, SwingLimit, perpendicular};
 use super::joints::{Anchor, move_linear, rot};
@@ -63,19 +64,22 @@ const LIMIT_SLOTS: usize = MAX_ROWS - POINT_ROWS;
 /// limit past `LIMIT_SLOTS − SWING_SLOTS` takes no row.
 const SWING_SLOTS: usize = 2;
 
-/// Joint `j`'s limit slots, the multipliers its block keeps through a substep: its
-/// swing limit's rows (none, one for a cone, two for a pyramid), then one for each of
-/// its angle limits that takes a row ([`SWING_SLOTS`]).
+/// The limit slots of a joint of kind `kind`, the multipliers its block keeps through
+/// a substep: its swing limit's rows (none, one for a cone, two for a pyramid), then
+/// one for each of its angle limits that takes a row ([`SWING_SLOTS`]).
 #[inline]
-fn limit_slots(j: &Joint) -> (usize, usize) {
-    let swing = match &j.swing {
+fn limit_slots(kind: &JointKind) -> (usize, usize) {
+    let swing = match &kind.swing {
         None => 0,
         Some(s) => match s.kind {
             Swing::Cone { .. } => 1,
             Swing::Pyramid { .. } => 2,
         },
     };
-    (swing, j.angle_limits.len().min(LIMIT_SLOTS - SWING_SLOTS))
+    (
+        swing,
+        kind.angle_limits.len().min(LIMIT_SLOTS - SWING_SLOTS),
+    )
 }
 
 /// One side of a block: its bone (if it takes corrections) and inverse mass. Both
@@ -185,7 +189,7 @@ fn point_rows(lever: &[DVec3; 2]) -> [Row; POINT_ROWS] {
     })
 }
 
-/// Each block joint's [`Start`] into `out` (a slot per joint; the others' stay unset
+/// Each block joint's [`Start`] (its kind in `kinds`) into `out` (a slot per joint; the others' stay unset
 /// and unread), once `x_prev`, the bones' `prev_rot` and the particles' own start
 /// (`XParticles::fix_start`) are the substep's; into `lambda`, each such joint's
 /// limit multipliers (each limit slot's `λ` summed over the substep's passes so far,
@@ -193,7 +197,7 @@ fn point_rows(lever: &[DVec3; 2]) -> [Row; POINT_ROWS] {
 pub(crate) fn begin_substep(
     p: &XParticles,
     bones: &[Bone],
-    joints: &[Joint],
+    (joints, kinds): (&[Joint], &JointKinds),
     anchors: &[[Anchor; 2]],
     out: &mut Vec<Option<Start>>,
     lambda: &mut Vec<f64>,
@@ -201,7 +205,8 @@ pub(crate) fn begin_substep(
     out.clear();
     lambda.clear();
     out.extend(joints.iter().zip(anchors).map(|(j, [ea, eb])| {
-        if !blocks(j) {
+        let kind = kinds.of(j);
+        if !blocks(kind) {
             return None;
         }
         let (a, b) = (Body::of(p, bones, j.a()), Body::of(p, bones, j.b()));
@@ -224,7 +229,7 @@ pub(crate) fn begin_substep(
             }
         }
         let first = lambda.len() as u32;
-        let (swing, angles) = limit_slots(j);
+        let (swing, angles) = limit_slots(kind);
         lambda.resize(lambda.len() + swing + angles, 0.0);
         Some(Start {
             lever,
@@ -306,16 +311,16 @@ impl Rows {
     }
 }
 
-/// Whether joint `j` is solved as a block (the others: a slider's and a spring's
-/// points are not a ball's, `joints::solve_angular` and `joints::solve_point`).
-pub(crate) fn blocks(j: &Joint) -> bool {
+/// Whether a joint of kind `kind` is solved as a block (the others: a slider's and a
+/// spring's points are not a ball's, `joints::solve_angular` and `joints::solve_point`).
+pub(crate) fn blocks(kind: &JointKind) -> bool {
     matches!(
-        j.kind,
+        kind.joint_type,
         JointType::Ball | JointType::Hinge { .. } | JointType::Universal { .. } | JointType::Fixed
     )
 }
 
-/// Joint `j` (a [`blocks`] kind) between its anchors `ends`, `h` the substep: its
+/// Joint `j` of kind `kind` (a [`blocks`] one) between its anchors `ends`, `h` the substep: its
 /// point, angular parts and violated limits as one block (module doc); `start` its
 /// [`begin_substep`] (`None`: neither side takes corrections), `lambda` the substep's
 /// limit multipliers of every joint ([`begin_substep`]). Inlined into both of
@@ -325,7 +330,7 @@ pub(crate) fn blocks(j: &Joint) -> bool {
 pub(crate) fn solve(
     p: &mut XParticles,
     bones: &mut [Bone],
-    j: &Joint,
+    (j, kind): (&Joint, &JointKind),
     ends: &[Anchor; 2],
     start: &Option<Start>,
     lambda: &mut [f64],
@@ -335,7 +340,7 @@ pub(crate) fn solve(
     let Some(start) = start else {
         return;
     };
-    let (swing, angles) = limit_slots(j);
+    let (swing, angles) = limit_slots(kind);
     let first = start.first as usize;
     let lambda = &mut lambda[first..first + swing + angles];
     let mut rows = Rows {
@@ -348,7 +353,7 @@ pub(crate) fn solve(
         rows.push(row);
     }
     let (qa, qb) = (rot(bones, j.a()), rot(bones, j.b()));
-    match j.kind {
+    match kind.joint_type {
         JointType::Hinge { axis_a, axis_b } => {
             // Turn body1's axis onto body2's, by `asin(s)` about `c / s`,
             // `c = t_a × t_b`; the rows span the plane across the mean axis, the turn
@@ -374,7 +379,7 @@ pub(crate) fn solve(
         JointType::Fixed => {
             // Body1's rotation onto its rest orientation relative to body2:
             // `e = q_b q_rest q_a⁻¹`, turned by its rotation vector.
-            let mut e = qb * j.rest_rel * qa.inverse();
+            let mut e = qb * kind.rest_rel * qa.inverse();
             if e.w < 0.0 {
                 e = -e;
             }
@@ -385,11 +390,11 @@ pub(crate) fn solve(
         }
         _ => {}
     }
-    let alpha = j.limit_compliance / (h * h);
-    if let Some(s) = &j.swing {
+    let alpha = kind.limit_compliance / (h * h);
+    if let Some(s) = &kind.swing {
         swing_rows(&mut rows, s, qa, qb, j.slack, alpha, lambda);
     }
-    for (i, l) in j.angle_limits.iter().take(angles).enumerate() {
+    for (i, l) in kind.angle_limits.iter().take(angles).enumerate() {
         // The range widened by the joint's slack (`step::close_start_slack`).
         let (phi, grad) = l.angle(bones, j.a(), j.b());
         let (lo, hi) = (l.min - j.slack, l.max + j.slack);

@@ -15,6 +15,7 @@
 //! mass; the sticks then take back the second-order stretch of the linear turn.
 
 use super::super::bone::{Bone, Side};
+use super::super::joint_kinds::JointKind;
 use super::super::joints::{Joint, JointType, hinge_turn_ratio};
 use super::super::limits::{Swing, SwingLimit, perpendicular};
 use super::frame::combine64;
@@ -266,11 +267,16 @@ pub(super) fn rot(bones: &[Bone], s: Side) -> Quat {
     s.map_or(Quat::IDENTITY, |i| bones[i].rot)
 }
 
-/// The angular parts of joint `j`, then its limits, on the frames in `bones` (read
-/// from the particles this substep and turned with them since).
-pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h: f32) {
+/// The angular parts of joint `j` of kind `kind`, then its limits, on the frames in
+/// `bones` (read from the particles this substep and turned with them since).
+pub(crate) fn solve_angular(
+    p: &mut XParticles,
+    bones: &mut [Bone],
+    (j, kind): (&Joint, &JointKind),
+    h: f32,
+) {
     let (a, b) = (j.a(), j.b());
-    match j.kind {
+    match kind.joint_type {
         JointType::Hinge { axis_a, axis_b } => {
             // Turn body1's axis onto body2's: by `asin(s)` about `c / s`, `c = t_a × t_b`.
             let ta = rot(bones, a) * axis_a;
@@ -301,7 +307,7 @@ pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h
         JointType::Fixed | JointType::Slider { .. } => {
             // Body1's rotation onto its rest orientation relative to body2:
             // `e = q_b q_rest q_a⁻¹`, turned by its rotation vector.
-            let mut e = rot(bones, b) * j.rest_rel * rot(bones, a).inverse();
+            let mut e = rot(bones, b) * kind.rest_rel * rot(bones, a).inverse();
             if e.w < 0.0 {
                 e = -e;
             }
@@ -309,13 +315,13 @@ pub(crate) fn solve_angular(p: &mut XParticles, bones: &mut [Bone], j: &Joint, h
         }
         JointType::Ball | JointType::Spring { .. } => {}
     }
-    let alpha = j.limit_compliance / (h * h);
-    if let Some(s) = &j.swing
+    let alpha = kind.limit_compliance / (h * h);
+    if let Some(s) = &kind.swing
         && let Some(dphi) = swing_correction(s, bones, a, b, j.slack)
     {
         turn(p, bones, a, b, dphi, alpha);
     }
-    for l in &j.angle_limits {
+    for l in &kind.angle_limits {
         // `C = φ − clamp(φ)` along its gradient `J` (per unit turn of body1), the range
         // widened by the joint's slack: a turn `J (target − φ) / |J|²` restores it.
         let (phi, grad) = l.angle(bones, a, b);
@@ -377,18 +383,18 @@ pub(super) fn swing_correction(
     Some(n.normalize() * shaft.dot(t).clamp(-1.0, 1.0).acos())
 }
 
-/// The point part of joint `j` between its anchors `ends`, with `h` the substep, moving
-/// each bone rigidly (`pull_rigid`).
+/// The point part of joint `j` of kind `kind` between its anchors `ends`, with `h` the
+/// substep, moving each bone rigidly (`pull_rigid`).
 pub(crate) fn solve_point(
     p: &mut XParticles,
     bones: &mut [Bone],
-    j: &Joint,
+    (j, kind): (&Joint, &JointKind),
     ends: &[Anchor; 2],
     h: f32,
 ) {
     let [a, b] = ends;
     let d = (b.point64(p) - a.point64(p)).as_vec3();
-    match j.kind {
+    match kind.joint_type {
         JointType::Spring {
             stretch,
             compress,

@@ -150,7 +150,7 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
         joint_block::begin_substep(
             p,
             &w.bones,
-            &w.joints,
+            (&w.joints, &w.joint_kinds),
             &st.anchors,
             &mut st.joint_start,
             &mut st.limit_lambda,
@@ -159,12 +159,13 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
             if !in_figure(&w.bones, j.a().or(j.b())) {
                 continue;
             }
-            if joint_block::blocks(j) {
+            let joint = (j, w.joint_kinds.of(j));
+            if joint_block::blocks(joint.1) {
                 let (p, lambda) = (&mut st.particles, &mut st.limit_lambda);
-                joint_block::solve(p, &mut w.bones, j, ends, start, lambda, h);
+                joint_block::solve(p, &mut w.bones, joint, ends, start, lambda, h);
             } else {
-                solve_angular(&mut st.particles, &mut w.bones, j, h);
-                solve_point(&mut st.particles, &mut w.bones, j, ends, h);
+                solve_angular(&mut st.particles, &mut w.bones, joint, h);
+                solve_point(&mut st.particles, &mut w.bones, joint, ends, h);
             }
         }
         shape_match::project(&mut st.particles, &mut w.bones);
@@ -290,7 +291,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
         joint_block::begin_substep(
             p,
             &w.bones,
-            &w.joints,
+            (&w.joints, &w.joint_kinds),
             &st.anchors,
             &mut st.joint_start,
             &mut st.limit_lambda,
@@ -306,12 +307,13 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 pass % 2 == 1,
             );
             for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
-                if joint_block::blocks(j) {
+                let joint = (j, w.joint_kinds.of(j));
+                if joint_block::blocks(joint.1) {
                     let (p, lambda) = (&mut st.particles, &mut st.limit_lambda);
-                    joint_block::solve(p, &mut w.bones, j, ends, start, lambda, h);
+                    joint_block::solve(p, &mut w.bones, joint, ends, start, lambda, h);
                 } else {
-                    solve_angular(&mut st.particles, &mut w.bones, j, h);
-                    solve_point(&mut st.particles, &mut w.bones, j, ends, h);
+                    solve_angular(&mut st.particles, &mut w.bones, joint, h);
+                    solve_point(&mut st.particles, &mut w.bones, joint, ends, h);
                 }
             }
             shape_match::project(&mut st.particles, &mut w.bones);
@@ -372,5 +374,5 @@ fn update_velocities(w: &ParticleWorld, st: &mut XpbdState, h: f32) {
             }
         }
     }
-    friction::solve(p, &w.joints, h);
+    friction::solve(p, &w.joints, &w.joint_kinds, h);
 }
