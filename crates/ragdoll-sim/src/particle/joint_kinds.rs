@@ -3,16 +3,18 @@
 //!
 //! A joint's own data are its sides, its anchors and its slack ([`Joint`]); the rest is
 //! its constant description, the same for the joints built from one constraint of
-//! figures placed alike. A pile of a thousand humans, every other layer turned, has
-//! two kinds per joint of the human, each joint naming its kind by index, instead of a
-//! thousand copies of each.
+//! figures placed alike. A pile of humans, every other layer turned, has twenty kinds
+//! for the fifteen joints of a human in its two orientations, however many humans, each
+//! joint naming its kind by index, instead of a copy per joint.
 //!
 //! Kinds are equal when their fields are bit for bit equal, so sharing one changes no
 //! number a solver reads. Every field of a kind is in the bones' frames, computed from
 //! their orientations at rest alone (`q_b⁻¹ q_a`, `q⁻¹ d`): figures placed at different
 //! positions with the same orientation get the same bits. The anchors are computed from
 //! the placed world positions too (`q⁻¹ (p − o)`), which rounds differently at each
-//! place: they stay with the joint.
+//! place: they stay with the joint. The paper solver's bone frames are measured from
+//! the particles it placed, which round differently too: its joints share a kind only
+//! where the bits agree.
 
 use super::joints::{Joint, JointType};
 use super::limits::{AngleLimit, Swing, SwingLimit};
