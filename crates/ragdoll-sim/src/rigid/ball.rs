@@ -61,8 +61,8 @@ impl JointSolve for BallJoint {
     }
 
     fn prepare_moved(&mut self, rows: &mut BallRows, s: &BodyStates) {
-        if let Some(sw) = &mut self.swing {
-            sw.prepare_moved(&self.frame, s);
+        if let Some(sw) = &self.swing {
+            sw.prepare_moved(&mut rows.swing, &self.frame, s);
         }
         PointPart::prepare(&mut rows.point, &self.frame, s);
     }

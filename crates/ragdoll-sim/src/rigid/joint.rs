@@ -451,7 +451,9 @@ pub enum RowKind {
 
 /// What a one-dimensional angular row ([`AxisRow`]) keeps from step to step: how it
 /// reacts and its accumulated impulse. The joint holds it; the row itself is set anew
-/// at every substep and lives with the joint's other rows ([`JointSolve::Rows`]).
+/// at every substep and lives with the joint's other rows ([`JointSolve::Rows`]). A
+/// limit of several rows that react alike (a range's two, a pyramid's four) keeps the
+/// kind once and an impulse per row instead.
 #[derive(Clone, Copy, Debug)]
 pub struct RowState {
     /// Reaction.
@@ -501,12 +503,12 @@ impl Default for AxisRow {
 }
 
 impl AxisRow {
-    /// Sets the row of `state` (its kind) with axis and value on the current pose and
+    /// Sets the row of reaction `kind` with axis and value on the current pose and
     /// inertias of `f`'s bodies; rows far from their bound (more than `margin`) sleep,
-    /// and their state's impulse is dropped.
+    /// and their accumulated `impulse` is dropped.
     pub fn set(
         &mut self,
-        state: &mut RowState,
+        (kind, impulse): (RowKind, &mut f32),
         f: &JointFrame,
         s: &BodyStates,
         (axis, c): (Vec3, f32),
@@ -514,10 +516,10 @@ impl AxisRow {
     ) {
         self.axis = axis;
         self.c = c;
-        self.kind = state.kind;
+        self.kind = kind;
         let active = self.kind == RowKind::Equality || c < margin;
         if !active {
-            state.impulse = 0.0;
+            *impulse = 0.0;
         } else {
             let axis = Vec3A::from(axis);
             self.turn = [s.inv_inertia[f.a] * axis, s.inv_inertia[f.b] * axis];

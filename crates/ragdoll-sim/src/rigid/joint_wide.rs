@@ -487,7 +487,7 @@ const FAR_SLACK: f32 = 0.01;
 
 /// A hinge the lanes solve: a hard range, no friction.
 fn hinge_fits(j: &HingeJoint) -> bool {
-    j.friction.max_torque <= 0.0 && j.limit.is_some_and(|l| l.rows[0].kind == RowKind::Limit)
+    j.friction.max_torque <= 0.0 && j.limit.is_some_and(|l| l.kind == RowKind::Limit)
 }
 
 /// A ball joint the lanes solve: a hard cone, no twist limit, no friction.
@@ -654,7 +654,7 @@ impl JointLanes {
             h.point.impulse = Vec3x4::from_fn(|k| j(k).point.impulse);
             h.align.impulse = [0, 1].map(|r| f4(|k| j(k).align.impulse[r]));
             for (r, row) in h.limit.iter_mut().enumerate() {
-                row.impulse = f4(|k| limit_states(j(k))[r].impulse);
+                row.impulse = f4(|k| limit_impulses(j(k))[r]);
             }
             h.point.direct = mask(|k| is_set(h.lanes.live, k) && j(k).point.direct);
             h.point.in_tree = mask(|k| is_set(h.lanes.live, k) && j(k).point.in_tree);
@@ -734,14 +734,14 @@ impl JointLanes {
                 let i = b.lanes.joints[k] as usize;
                 let (j, rows) = (&mut balls[i], &mut ball_rows[i]);
                 if is_set(far, k) {
-                    rows.swing[0].active = false;
+                    rows.swing.axis_mut()[0].active = false;
                     cone_state_mut(j).impulse = 0.0;
                 } else if let Some(sw) = &mut j.swing {
                     sw.update(&mut rows.swing, &j.frame, s);
                 }
             }
             let rows = |k: usize| &ball_rows[b.lanes.joints[k] as usize];
-            b.cone.copy(&b.lanes, |k| rows(k).swing[0]);
+            b.cone.copy(&b.lanes, |k| rows(k).swing.first());
         }
         for h in self.hinges.iter_mut().filter(|x| x.lanes.is_live()) {
             for k in (0..LANES).filter(|&k| is_set(h.lanes.live, k)) {
@@ -862,18 +862,21 @@ impl JointLanes {
                     j.point.impulse = h.point.impulse.lane(k);
                 }
                 j.align.impulse = h.align.impulse.map(|i| i.as_array()[k]);
-                let rows = &mut j.limit.as_mut().expect("hinge_fits checked the range").rows;
-                for (row, lanes) in rows.iter_mut().zip(&h.limit) {
-                    row.impulse = lanes.impulse.as_array()[k];
+                let limit = j.limit.as_mut().expect("hinge_fits checked the range");
+                for (impulse, lanes) in limit.impulse.iter_mut().zip(&h.limit) {
+                    *impulse = lanes.impulse.as_array()[k];
                 }
             }
         }
     }
 }
 
-/// The range rows' states of a hinge that [`hinge_fits`].
-fn limit_states(j: &HingeJoint) -> [RowState; 2] {
-    j.limit.as_ref().expect("hinge_fits checked the range").rows
+/// The range rows' accumulated impulses of a hinge that [`hinge_fits`].
+fn limit_impulses(j: &HingeJoint) -> [f32; 2] {
+    j.limit
+        .as_ref()
+        .expect("hinge_fits checked the range")
+        .impulse
 }
 
 #[cfg(test)]

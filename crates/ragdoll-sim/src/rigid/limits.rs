@@ -26,28 +26,63 @@ pub fn row_kind(style: LimitStyle) -> RowKind {
     }
 }
 
-/// The rows a swing limit sets at each substep ([`JointSolve::Rows`] of its joint): the
-/// cone's first, the pyramid's four (the 0° cone keeps its alignment rows itself).
+/// The rows a swing limit sets at each substep ([`JointSolve::Rows`] of its joint): a
+/// cone's one-dimensional row (the first of the four) or a pyramid's four, or a 0°
+/// cone's two alignment rows. Each [`Swing::update`] makes the entry its own kind (an
+/// entry of the step's row arrays may have held another joint's rows before), so the
+/// swing itself holds no rows: what it keeps from step to step is its description and
+/// its impulses.
 ///
 /// [`JointSolve::Rows`]: super::joint::JointSolve::Rows
-pub(crate) type SwingRows = [AxisRow; 4];
-
-/// A 0° cone's alignment and its rows: the one limit that keeps its rows itself
-/// (rare, and the only swing with two-dimensional rows, which [`SwingRows`] would
-/// otherwise carry for every swing).
 #[derive(Clone, Copy, Debug)]
-pub struct TightCone {
-    /// Shaft in a, axis in b, and their impulse.
-    pub part: AlignPart,
-    /// The rows at the last update.
-    rows: AlignRows<f32>,
+pub(crate) enum SwingRows {
+    /// A cone's row (the first) or a pyramid's four.
+    Axis([AxisRow; 4]),
+    /// A 0° cone's alignment rows.
+    Align(AlignRows<f32>),
 }
 
-/// A swing limit in body space.
-// The 0° cone (a `TightCone`, with its rows) is the largest variant: boxing it would
-// put a pointer in the hot loop and lose `Copy`, which the projection uses to measure a
-// limit without touching the step's rows. It sets the size of every swing (132 B).
-#[allow(clippy::large_enum_variant)]
+/// Inactive axis rows, never read before [`Swing::update`].
+impl Default for SwingRows {
+    fn default() -> SwingRows {
+        SwingRows::Axis([AxisRow::default(); 4])
+    }
+}
+
+impl SwingRows {
+    /// The axis rows, made the entry's kind.
+    pub(crate) fn axis_mut(&mut self) -> &mut [AxisRow; 4] {
+        if !matches!(self, SwingRows::Axis(_)) {
+            *self = SwingRows::default();
+        }
+        match self {
+            SwingRows::Axis(rows) => rows,
+            SwingRows::Align(_) => unreachable!("made axis rows above"),
+        }
+    }
+
+    /// The alignment rows, made the entry's kind.
+    fn align_mut(&mut self) -> &mut AlignRows<f32> {
+        if !matches!(self, SwingRows::Align(_)) {
+            *self = SwingRows::Align(AlignRows::default());
+        }
+        match self {
+            SwingRows::Align(rows) => rows,
+            SwingRows::Axis(_) => unreachable!("made alignment rows above"),
+        }
+    }
+
+    /// A cone's row: the first axis row (an inactive row for alignment rows).
+    pub(crate) fn first(&self) -> AxisRow {
+        match self {
+            SwingRows::Axis(rows) => rows[0],
+            SwingRows::Align(_) => AxisRow::default(),
+        }
+    }
+}
+
+/// A swing limit in body space: its description and the accumulated impulses of its
+/// rows (the rows themselves are the step's, [`SwingRows`]).
 #[derive(Clone, Copy, Debug)]
 pub enum Swing {
     /// Shaft within `half_angle` of the axis; `C = half_angle − ∠(axis, shaft)`.
@@ -63,8 +98,9 @@ pub enum Swing {
         /// The row's state (its row is the first of [`SwingRows`]).
         row: RowState,
     },
-    /// A 0° cone: shaft and axis locked together (two bilateral rows).
-    Tight(TightCone),
+    /// A 0° cone: shaft and axis locked together (two bilateral rows); the part's
+    /// directions are the shaft in a and the axis in b.
+    Tight(AlignPart),
     /// Shaft inside four planes through the axis, tilted by ±half_angle1 towards `side1`
     /// and ±half_angle2 towards `side2`: `C_k = −shaft · n_k`.
     Pyramid {
@@ -78,8 +114,10 @@ pub enum Swing {
         shaft_a: Vec3,
         /// Half-angles.
         half: [f32; 2],
-        /// One row per side plane: their states (the rows are [`SwingRows`]).
-        rows: [RowState; 4],
+        /// How the four side rows react (one kind for all four).
+        kind: RowKind,
+        /// The accumulated impulses of the side rows, one per plane.
+        impulse: [f32; 4],
     },
 }
 
@@ -98,10 +136,7 @@ impl Swing {
                     // the tight cone then holds the shaft on the axis from the first step.
                     let mut part = AlignPart::new(f, s, axis);
                     part.local_a = f.dir_in_a(s, shaft);
-                    Swing::Tight(TightCone {
-                        part,
-                        rows: AlignRows::default(),
-                    })
+                    Swing::Tight(part)
                 } else {
                     Swing::Cone {
                         axis_b: f.dir_in_b(s, axis),
@@ -126,7 +161,8 @@ impl Swing {
                     side2_b: f.dir_in_b(s, v),
                     shaft_a: f.dir_in_a(s, shaft),
                     half: [half_angle1, half_angle2],
-                    rows: [RowState::new(kind); 4],
+                    kind,
+                    impulse: [0.0; 4],
                 }
             }
         }
@@ -165,25 +201,28 @@ impl Swing {
                 } else {
                     a.any_orthonormal_vector()
                 };
-                set[0].set(row, f, s, (-n, *half_angle - phi), MARGIN);
+                let value = (-n, *half_angle - phi);
+                set.axis_mut()[0].set((row.kind, &mut row.impulse), f, s, value, MARGIN);
             }
-            Swing::Tight(t) => t.part.prepare(&mut t.rows, f, s),
+            Swing::Tight(part) => part.prepare(set.align_mut(), f, s),
             Swing::Pyramid {
                 axis_b,
                 side1_b,
                 side2_b,
                 shaft_a,
                 half,
-                rows,
+                kind,
+                impulse,
             } => {
                 let rb = s.rot[f.b];
                 let normals =
                     Self::pyramid_normals(rb * *axis_b, rb * *side1_b, rb * *side2_b, *half);
                 let sh = s.rot[f.a] * *shaft_a;
-                for ((row, state), n) in set.iter_mut().zip(rows).zip(normals) {
+                let rows = set.axis_mut().iter_mut().zip(impulse);
+                for ((row, impulse), n) in rows.zip(normals) {
                     // d(shaft·n)/dt = (ω_a − ω_b)·(shaft × n).
                     let c = -sh.dot(n);
-                    row.set(state, f, s, (-sh.cross(n), c), MARGIN);
+                    row.set((*kind, impulse), f, s, (-sh.cross(n), c), MARGIN);
                 }
             }
         }
@@ -194,7 +233,7 @@ impl Swing {
         match self {
             Swing::Cone { row, .. } => row.kind == RowKind::Limit,
             Swing::Tight(_) => true,
-            Swing::Pyramid { rows, .. } => rows[0].kind == RowKind::Limit,
+            Swing::Pyramid { kind, .. } => *kind == RowKind::Limit,
         }
     }
 
@@ -211,7 +250,7 @@ impl Swing {
                 let sh = s.rot[f.a] * *shaft_a;
                 (a.dot(sh).clamp(-1.0, 1.0).acos() - half_angle).max(0.0)
             }
-            Swing::Tight(TightCone { part: p, .. }) => {
+            Swing::Tight(p) => {
                 let a = s.rot[f.b] * p.local_b;
                 let sh = s.rot[f.a] * p.local_a;
                 a.dot(sh).clamp(-1.0, 1.0).acos()
@@ -234,22 +273,24 @@ impl Swing {
         }
     }
 
-    /// Re-applies accumulated impulses along the rows `set`.
+    /// Re-applies accumulated impulses along the rows `set` (set by this swing's
+    /// [`Swing::update`]).
     pub(crate) fn warm_start(&self, set: &SwingRows, f: &JointFrame, s: &mut BodyStates) {
-        match self {
-            Swing::Cone { row, .. } => set[0].warm_start(row.impulse, f, s),
-            Swing::Tight(t) => t.part.warm_start(&t.rows, f, s),
-            Swing::Pyramid { rows, .. } => {
-                (set.iter().zip(rows)).for_each(|(r, state)| r.warm_start(state.impulse, f, s))
+        match (self, set) {
+            (Swing::Cone { row, .. }, SwingRows::Axis(set)) => set[0].warm_start(row.impulse, f, s),
+            (Swing::Tight(part), SwingRows::Align(rows)) => part.warm_start(rows, f, s),
+            (Swing::Pyramid { impulse, .. }, SwingRows::Axis(set)) => {
+                (set.iter().zip(impulse)).for_each(|(r, &i)| r.warm_start(i, f, s))
             }
+            _ => unreachable!("the swing's update set its kind of rows"),
         }
     }
 
     /// The 0° cone's alignment rows prepared on the moved pose, for the relax pass
     /// (see [`super::joint::JointSolve::prepare_moved`]); the other rows keep theirs.
-    pub(crate) fn prepare_moved(&mut self, f: &JointFrame, s: &BodyStates) {
-        if let Swing::Tight(t) = self {
-            t.part.prepare(&mut t.rows, f, s);
+    pub(crate) fn prepare_moved(&self, set: &mut SwingRows, f: &JointFrame, s: &BodyStates) {
+        if let Swing::Tight(part) = self {
+            part.prepare(set.align_mut(), f, s);
         }
     }
 
@@ -262,11 +303,15 @@ impl Swing {
         ctx: &StepContext,
         use_bias: bool,
     ) {
-        match self {
-            Swing::Cone { row, .. } => set[0].solve(&mut row.impulse, f, s, ctx, use_bias),
-            Swing::Tight(t) => t.part.solve(&t.rows, f, s, ctx, use_bias),
-            Swing::Pyramid { rows, .. } => (set.iter().zip(rows))
-                .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias)),
+        match (self, set) {
+            (Swing::Cone { row, .. }, SwingRows::Axis(set)) => {
+                set[0].solve(&mut row.impulse, f, s, ctx, use_bias)
+            }
+            (Swing::Tight(part), SwingRows::Align(rows)) => part.solve(rows, f, s, ctx, use_bias),
+            (Swing::Pyramid { impulse, .. }, SwingRows::Axis(set)) => {
+                (set.iter().zip(impulse)).for_each(|(r, i)| r.solve(i, f, s, ctx, use_bias))
+            }
+            _ => unreachable!("the swing's update set its kind of rows"),
         }
     }
 
@@ -294,10 +339,13 @@ impl Swing {
         let mut now = *self;
         let mut set = SwingRows::default();
         now.update(&mut set, f, s);
-        match &now {
-            Swing::Cone { .. } => set[0].project(f, s),
-            Swing::Tight(t) => t.part.project(f, s),
-            Swing::Pyramid { .. } => set.iter().for_each(|r| r.project(f, s)),
+        match (&now, &set) {
+            (Swing::Cone { .. }, SwingRows::Axis(set)) => set[0].project(f, s),
+            (Swing::Tight(part), _) => part.project(f, s),
+            (Swing::Pyramid { .. }, SwingRows::Axis(set)) => {
+                set.iter().for_each(|r| r.project(f, s))
+            }
+            _ => unreachable!("the swing's update set its kind of rows"),
         }
     }
 
@@ -307,7 +355,7 @@ impl Swing {
             Swing::Cone {
                 axis_b, half_angle, ..
             } => (s.rot[f.b] * *axis_b, *half_angle),
-            Swing::Tight(t) => (s.rot[f.b] * t.part.local_b, 0.0),
+            Swing::Tight(part) => (s.rot[f.b] * part.local_b, 0.0),
             Swing::Pyramid { axis_b, half, .. } => (s.rot[f.b] * *axis_b, half[0].max(half[1])),
         }
     }
@@ -393,8 +441,11 @@ pub struct AngleLimit {
     pub gauge: AngleGauge,
     /// Bounds (rad).
     pub range: AngleRange,
-    /// The states of the lower and upper rows (the rows are [`RangeRows`]).
-    pub rows: [RowState; 2],
+    /// How both rows react.
+    pub kind: RowKind,
+    /// The accumulated impulses of the lower and upper rows (the rows are
+    /// [`RangeRows`]).
+    pub impulse: [f32; 2],
 }
 
 /// The lower and upper rows an [`AngleLimit`] sets at each substep.
@@ -413,7 +464,8 @@ impl AngleLimit {
         AngleLimit {
             gauge: AngleGauge::new(f, s, axis),
             range,
-            rows: [RowState::new(kind); 2],
+            kind,
+            impulse: [0.0; 2],
         }
     }
 
@@ -442,14 +494,15 @@ impl AngleLimit {
     pub(crate) fn update(&mut self, set: &mut RangeRows, f: &JointFrame, s: &BodyStates) {
         let (axis, angle) = self.gauge.measure(f, s);
         self.gauge.angle = angle;
-        let [lower, upper] = &mut self.rows;
-        set[0].set(lower, f, s, (axis, angle - self.range.min), MARGIN);
-        set[1].set(upper, f, s, (-axis, self.range.max - angle), MARGIN);
+        let [lower, upper] = &mut self.impulse;
+        let kind = self.kind;
+        set[0].set((kind, lower), f, s, (axis, angle - self.range.min), MARGIN);
+        set[1].set((kind, upper), f, s, (-axis, self.range.max - angle), MARGIN);
     }
 
     /// Whether this is a hard limit (the PyODE tutorial's soft limits are springs).
     pub fn is_hard(&self) -> bool {
-        self.rows[0].kind == RowKind::Limit
+        self.kind == RowKind::Limit
     }
 
     /// Excess beyond the range now (rad).
@@ -460,7 +513,7 @@ impl AngleLimit {
 
     /// Re-applies accumulated impulses along the rows `set`.
     pub(crate) fn warm_start(&self, set: &RangeRows, f: &JointFrame, s: &mut BodyStates) {
-        (set.iter().zip(&self.rows)).for_each(|(r, state)| r.warm_start(state.impulse, f, s));
+        (set.iter().zip(&self.impulse)).for_each(|(r, &i)| r.warm_start(i, f, s));
     }
 
     /// Position projection of the range, measured on the current pose without touching
@@ -485,8 +538,7 @@ impl AngleLimit {
         ctx: &StepContext,
         use_bias: bool,
     ) {
-        (set.iter().zip(&mut self.rows))
-            .for_each(|(r, state)| r.solve(&mut state.impulse, f, s, ctx, use_bias));
+        (set.iter().zip(&mut self.impulse)).for_each(|(r, i)| r.solve(i, f, s, ctx, use_bias));
     }
 }
 

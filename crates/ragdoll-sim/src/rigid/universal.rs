@@ -64,10 +64,16 @@ impl UniversalJoint {
         let f = &self.frame;
         let s1 = s.rot[f.a] * self.shaft_a;
         let s2 = s.rot[f.b] * self.shaft_b;
-        let mut state = self.cross_row;
+        let mut impulse = self.cross_row.impulse;
         let mut row = AxisRow::default();
         let value = (s1.cross(s2), s1.dot(s2) - self.rest_dot);
-        row.set(&mut state, f, s, value, f32::INFINITY);
+        row.set(
+            (self.cross_row.kind, &mut impulse),
+            f,
+            s,
+            value,
+            f32::INFINITY,
+        );
         row
     }
 
@@ -102,8 +108,8 @@ impl JointSolve for UniversalJoint {
     }
 
     fn prepare_moved(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
-        if let Some(sw) = &mut self.swing {
-            sw.prepare_moved(&self.frame, s);
+        if let Some(sw) = &self.swing {
+            sw.prepare_moved(&mut rows.swing, &self.frame, s);
         }
         PointPart::prepare(&mut rows.point, &self.frame, s);
     }
