@@ -122,6 +122,10 @@ pub fn solve(
         integrate_positions(s, motion, awake, p.ctx.h, spin_offset, in_contact);
         // The relax passes solve on the moved pose, prepared once: a preparation reads
         // the pose, inertias and masses, which the velocity passes leave as they are.
+        // The world inertias are those of the substep's start pose, the ones its biased
+        // iterations solved with, so the trees are factored again for the next substep:
+        // with the moved pose's inertias here the next substep could keep these rows and
+        // this factorisation, but the figures then rest less often.
         joints.prepare_moved(s, awake);
         for pass in 0..p.relax_passes {
             joints.solve(s, awake, &p.ctx, false);
