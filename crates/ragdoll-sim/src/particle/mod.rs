@@ -655,7 +655,7 @@ impl Method for ParticleWorld {
                 position: self.particles.x[i],
                 role: if self.particles.inv_mass[i] == 0.0 {
                     ParticleRole::Fixed
-                } else if self.particles.joint[i] {
+                } else if self.particles.is_joint(i) {
                     ParticleRole::Joint
                 } else {
                     ParticleRole::Internal
@@ -905,7 +905,7 @@ impl Method for ParticleWorld {
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
                 };
                 if let Some(st) = self.paper.as_mut() {
-                    st.push_bone_sticks(ids, &stick_rest);
+                    st.push_bone_sticks(stick_rest);
                 }
             }
             self.bones.push(bone);

@@ -90,13 +90,34 @@ pub(crate) struct ConeLimit {
     pub c_dist: f32,
 }
 
+/// A stick tying a joint particle that is not among a bone's four to one of them
+/// (3.2), with the bone it belongs to.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Satellite {
+    /// The bone whose particle it ties.
+    pub bone: u32,
+    /// The stick.
+    pub stick: Stick,
+}
+
 /// Runtime state of the paper solver.
+///
+/// A bone's six sticks join its four particles along `EDGES`, so of each only the rest
+/// length is kept, by bone index; the particles are `Particles::of_bone`. The sticks
+/// joining other particles (satellites, ties) name theirs. [`PaperState::relax_sticks`]
+/// satisfies them in the order the paper's build makes them: each bone's six, then its
+/// satellites, bone after bone, then the ties. (A projectile's six, added after the
+/// ties, come before them here: they share no particle with a tie, and a stick moves
+/// only its two particles, so the order between them changes no bit.)
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PaperState {
-    /// Bone and tie sticks.
-    pub sticks: Vec<Stick>,
-    /// Per bone, where its six sticks (`EDGES`, in that order) start in `sticks`.
-    pub first_stick: Vec<u32>,
+    /// Per bone, the rest lengths of its six sticks (`EDGES`, in that order).
+    pub bone_sticks: Vec<[f32; 6]>,
+    /// Sticks from satellite joint particles to a bone's four, ordered by bone.
+    pub satellites: Vec<Satellite>,
+    /// Sticks of fixed and slider joints between two bones' particles (or a bone's and
+    /// fixed anchors).
+    pub ties: Vec<Stick>,
     /// Hinge limits.
     pub hinges: Vec<HingeLimit>,
     /// Cone limits.
@@ -106,29 +127,47 @@ pub(crate) struct PaperState {
 impl PaperState {
     /// Gives back the room the arrays grew beyond their length.
     pub fn shrink_to_fit(&mut self) {
-        self.sticks.shrink_to_fit();
-        self.first_stick.shrink_to_fit();
+        self.bone_sticks.shrink_to_fit();
+        self.satellites.shrink_to_fit();
+        self.ties.shrink_to_fit();
         self.hinges.shrink_to_fit();
         self.cones.shrink_to_fit();
     }
 
-    /// Adds the six sticks (`EDGES`) of the next bone, whose particles are `ids`, of rest
-    /// lengths `rest`.
-    pub fn push_bone_sticks(&mut self, ids: [u32; 4], rest: &[f32; 6]) {
-        self.first_stick.push(self.sticks.len() as u32);
-        for (k, &(a, b)) in EDGES.iter().enumerate() {
-            self.sticks.push(Stick {
-                a: ids[a],
-                b: ids[b],
-                rest: rest[k],
-            });
-        }
+    /// Adds the six sticks (`EDGES`) of the next bone, of rest lengths `rest`.
+    pub fn push_bone_sticks(&mut self, rest: [f32; 6]) {
+        self.bone_sticks.push(rest);
     }
 
     /// The rest lengths of bone `i`'s six sticks (`EDGES`).
     pub fn bone_sticks(&self, i: usize) -> [f32; 6] {
-        let first = self.first_stick[i] as usize;
-        std::array::from_fn(|k| self.sticks[first + k].rest)
+        self.bone_sticks[i]
+    }
+
+    /// The sticks that are not a bone's own six: satellites and ties.
+    pub fn loose_sticks(&self) -> impl Iterator<Item = &Stick> {
+        self.satellites.iter().map(|s| &s.stick).chain(&self.ties)
+    }
+
+    /// One relaxation pass over every stick (Jakobsen 2001): bone by bone its six sticks
+    /// on the particles `of_bone` names, then its satellites; then the ties.
+    pub fn relax_sticks(&self, x: &mut [Vec3], inv: &[f32], of_bone: &[[u32; 4]]) {
+        let mut satellites = self.satellites.iter().peekable();
+        for (i, (&[p0, p1, p2, p3], r)) in of_bone.iter().zip(&self.bone_sticks).enumerate() {
+            // `EDGES`, in its order, spelled out: the four indices stay in registers.
+            satisfy(x, inv, p0, p1, r[0]);
+            satisfy(x, inv, p0, p2, r[1]);
+            satisfy(x, inv, p0, p3, r[2]);
+            satisfy(x, inv, p1, p2, r[3]);
+            satisfy(x, inv, p1, p3, r[4]);
+            satisfy(x, inv, p2, p3, r[5]);
+            while let Some(s) = satellites.next_if(|s| s.bone == i as u32) {
+                satisfy(x, inv, s.stick.a, s.stick.b, s.stick.rest);
+            }
+        }
+        for s in &self.ties {
+            satisfy(x, inv, s.a, s.b, s.rest);
+        }
     }
 }
 
@@ -191,7 +230,6 @@ fn joint_particles(
         let mut ids = Vec::new();
         for p in pts {
             let id = w.particles.push(p, Vec3::ZERO, g, dt, 0.0, movable);
-            w.particles.joint[id as usize] = true;
             joint_points[b1].push((p, id));
             if let Some(b) = b2 {
                 joint_points[b].push((p, id));
@@ -200,6 +238,7 @@ fn joint_particles(
         }
         joint_particles.push(ids);
     }
+    w.particles.joints = w.particles.len() as u32;
     (joint_points, joint_particles)
 }
 
@@ -312,13 +351,16 @@ fn add_bone(
     w.particles.of_bone.push(particles);
     bone.com = pos[0].into();
     bone.rot = rot;
-    st.push_bone_sticks(particles, &EDGES.map(|(a, b)| pos[a].distance(pos[b])));
+    st.push_bone_sticks(EDGES.map(|(a, b)| pos[a].distance(pos[b])));
     let x = &w.particles.x;
     for &s in satellites {
         for &p in &particles {
             let rest = x[s as usize].distance(x[p as usize]);
             if rest > 1e-6 {
-                st.sticks.push(Stick { a: s, b: p, rest });
+                st.satellites.push(Satellite {
+                    bone: i as u32,
+                    stick: Stick { a: s, b: p, rest },
+                });
             }
         }
     }
@@ -346,14 +388,14 @@ fn ties_and_limits(
                         for q in w.particles.of_bone[b2] {
                             let rest =
                                 w.particles.x[p as usize].distance(w.particles.x[q as usize]);
-                            st.sticks.push(Stick { a: p, b: q, rest });
+                            st.ties.push(Stick { a: p, b: q, rest });
                         }
                     }
                 } else {
                     for p in w.particles.of_bone[b1] {
                         let x = w.particles.x[p as usize];
                         let anchor = w.particles.push(x, Vec3::ZERO, g, dt, 0.0, false);
-                        st.sticks.push(Stick {
+                        st.ties.push(Stick {
                             a: p,
                             b: anchor,
                             rest: 0.0,
@@ -707,15 +749,8 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
     w.particles.verlet(g, dt);
     clock.lap(&mut times, "integration");
     for _ in 0..n {
-        for stick in &st.sticks {
-            satisfy(
-                &mut w.particles.x,
-                &w.particles.inv_mass,
-                stick.a,
-                stick.b,
-                stick.rest,
-            );
-        }
+        let p = &mut w.particles;
+        st.relax_sticks(&mut p.x, &p.inv_mass, &p.of_bone);
         clock.lap(&mut times, "sticks");
         solve_limits(w, st);
         clock.lap(&mut times, "limits");
@@ -730,4 +765,69 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
     clock.lap(&mut times, "frames");
     clock.finish(&mut times);
     w.phase_times = times;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{ParticleSolver, ParticleWorld, uniform};
+    use super::*;
+
+    /// One relaxation pass ([`PaperState::relax_sticks`]) gives the bits of the sticks
+    /// satisfied one by one in the build's order — each bone's six along `EDGES`, then its
+    /// satellites, then the ties — on two humans of the pile (their chests tie joint
+    /// particles as satellites) whose particles are scattered at random.
+    #[test]
+    fn relaxation_keeps_the_order_of_the_build() {
+        use crate::scene::af::{AfOptions, parse};
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/scenes/pile.af");
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+        let opts = AfOptions {
+            count: Some(2),
+            ..AfOptions::default()
+        };
+        let scene = parse(&text, &path, &opts)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .desc;
+        let mut w =
+            ParticleWorld::new(&scene, ParticleSolver::Paper).unwrap_or_else(|e| panic!("{e}"));
+        let st = w.paper.take().unwrap_or_else(|| panic!("no paper state"));
+        assert!(!st.satellites.is_empty(), "no satellite sticks to order");
+        let mut next = uniform(0x0bad_cafe);
+        for x in &mut w.particles.x {
+            *x += Vec3::new(next(), next(), next()) * 0.1 - Vec3::splat(0.05);
+        }
+        let p = &w.particles;
+        let mut relaxed = p.x.clone();
+        st.relax_sticks(&mut relaxed, &p.inv_mass, &p.of_bone);
+        let mut one_by_one = p.x.clone();
+        for (i, ids) in p.of_bone.iter().enumerate() {
+            for (k, &(a, b)) in EDGES.iter().enumerate() {
+                satisfy(
+                    &mut one_by_one,
+                    &p.inv_mass,
+                    ids[a],
+                    ids[b],
+                    st.bone_sticks[i][k],
+                );
+            }
+            for s in st.satellites.iter().filter(|s| s.bone as usize == i) {
+                satisfy(
+                    &mut one_by_one,
+                    &p.inv_mass,
+                    s.stick.a,
+                    s.stick.b,
+                    s.stick.rest,
+                );
+            }
+        }
+        for s in &st.ties {
+            satisfy(&mut one_by_one, &p.inv_mass, s.a, s.b, s.rest);
+        }
+        assert!(relaxed != p.x, "the pass moved nothing");
+        assert!(
+            relaxed == one_by_one,
+            "the pass differs from the sticks in order"
+        );
+    }
 }

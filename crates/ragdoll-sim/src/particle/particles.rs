@@ -22,8 +22,9 @@ pub(crate) struct Particles {
     pub mass: Vec<f32>,
     /// Inverse mass (0 = does not move).
     pub inv_mass: Vec<f32>,
-    /// Shared by two bones / a joint point (drawn green in the paper's figure 31).
-    pub joint: Vec<bool>,
+    /// The particles `0..joints` are the joints' points, shared by the bones they join
+    /// (drawn green in the paper's figure 31): the paper's build makes them first.
+    pub joints: u32,
     /// Each bone's four particles (the tetrahedron's corners `0..4`), by bone index.
     pub of_bone: Vec<[u32; 4]>,
 }
@@ -55,7 +56,6 @@ impl Particles {
         self.frame_start.push(prev);
         self.mass.push(mass);
         self.inv_mass.push(if movable { 1.0 } else { 0.0 });
-        self.joint.push(false);
         i
     }
 
@@ -66,8 +66,12 @@ impl Particles {
         self.frame_start.shrink_to_fit();
         self.mass.shrink_to_fit();
         self.inv_mass.shrink_to_fit();
-        self.joint.shrink_to_fit();
         self.of_bone.shrink_to_fit();
+    }
+
+    /// True when particle `i` is a joint's point.
+    pub fn is_joint(&self, i: usize) -> bool {
+        i < self.joints as usize
     }
 
     /// Number of particles.

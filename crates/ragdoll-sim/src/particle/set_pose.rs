@@ -101,10 +101,10 @@ impl ParticleWorld {
             let rest = kind.rest;
             let past = |x: Vec3, v: Vec3| x - v * dt + g * (0.5 * dt * dt);
             // Joint particles tied to the bone by sticks, not among its four: moved
-            // with it, once each.
+            // with it, once each (a bone's own six sticks join core particles only).
             let core = |k: u32| self.particles.of_bone.iter().any(|ids| ids.contains(&k));
             let mut tied: Vec<u32> = Vec::new();
-            for stick in &paper.sticks {
+            for stick in paper.loose_sticks() {
                 for (end, other) in [(stick.a, stick.b), (stick.b, stick.a)] {
                     if own.contains(&end)
                         && !own.contains(&other)
