@@ -134,6 +134,22 @@ const SLACK_GAP: f64 = 1e-6;
 /// left knee, 4° past its range, came back in the first substep (`Δθ/h` ≈ 300
 /// rad/s): after one frame the lower leg moved at 4.5 m/s and 24 rad/s and the
 /// figure had gained 88 J, 13 % of its energy scale.
+/// What stays fixed through a substep, once `x_prev` and the bones' `prev_rot` are its
+/// start: each moving bone's start ([`fix_start`](super::particles::Particles::fix_start)) and the joint blocks'
+/// levers and factored rows ([`joint_block::begin_substep`]).
+fn begin_substep(w: &ParticleWorld, st: &mut XpbdState) {
+    let p = &mut st.particles;
+    p.fix_start(&w.bones);
+    joint_block::begin_substep(
+        p,
+        &w.bones,
+        (&w.joints, &w.joint_kinds),
+        &st.anchors,
+        &mut st.joint_start,
+        &mut st.limit_lambda,
+    );
+}
+
 fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
     let figures = w.close_slack_of_figures();
     if figures.is_empty() {
@@ -146,15 +162,7 @@ fn close_start_slack(w: &mut ParticleWorld, st: &mut XpbdState, h: f32) {
         for b in w.bones.iter_mut() {
             b.prev_rot = b.rot;
         }
-        p.fix_start(&w.bones);
-        joint_block::begin_substep(
-            p,
-            &w.bones,
-            (&w.joints, &w.joint_kinds),
-            &st.anchors,
-            &mut st.joint_start,
-            &mut st.limit_lambda,
-        );
+        begin_substep(w, st);
         for ((j, ends), start) in w.joints.iter().zip(&st.anchors).zip(&st.joint_start) {
             if !in_figure(&w.bones, j.a().or(j.b())) {
                 continue;
@@ -287,16 +295,8 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &mut XpbdState) {
                 p.x[k] += p.v[k].as_dvec3() * h as f64;
             }
         }
-        p.fix_start(&w.bones);
-        joint_block::begin_substep(
-            p,
-            &w.bones,
-            (&w.joints, &w.joint_kinds),
-            &st.anchors,
-            &mut st.joint_start,
-            &mut st.limit_lambda,
-        );
-        contact_block::begin_substep(&st.contacts, &mut st.scratch.work, p, &w.bones);
+        begin_substep(w, st);
+        contact_block::begin_substep(&st.contacts, &mut st.scratch.work, &st.particles, &w.bones);
         read_frames(w, st);
         for pass in 0..w.settings.xpbd_passes {
             contacts::solve(
