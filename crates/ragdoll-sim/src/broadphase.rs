@@ -98,7 +98,22 @@ impl Split {
         Split { moving, resting }
     }
 
-    /// Trees over the moving boxes of `tree_boxes` (see [`build_and_traverse`]), and
+    /// Whether this is the split of `n` boxes by `resting(i)`.
+    fn is_split_of(&self, n: usize, resting: impl Fn(u32) -> bool) -> bool {
+        if self.moving.len() + self.resting.len() != n {
+            return false;
+        }
+        let (mut m, mut r) = (
+            self.moving.iter().peekable(),
+            self.resting.iter().peekable(),
+        );
+        (0..n as u32).all(|i| {
+            let list = if resting(i) { &mut r } else { &mut m };
+            list.next_if_eq(&&i).is_some()
+        })
+    }
+
+    /// Trees over the moving boxes of `tree_boxes` (see [`traverse_runs`]), and
     /// the pairs `keep` accepts appended to `out`, sorted: moving boxes of `tree_boxes`
     /// that overlap each other, and boxes at rest, as `query_boxes` has them, that
     /// overlap a moving one of `tree_boxes`. A step that detects again builds its trees
@@ -111,17 +126,38 @@ impl Split {
         keep: &(impl Fn(u32, u32) -> bool + Sync),
         out: &mut Vec<(u32, u32)>,
     ) -> Vec<Part> {
+        let mut parts = Vec::new();
+        self.find(&mut parts, Trees::Build, tree_boxes, query_boxes, keep, out);
+        parts
+    }
+
+    /// [`Split::build`] with the trees in `parts`: built anew, or the trees of an
+    /// earlier call over the same moving boxes refitted to the boxes as they are now
+    /// ([`Trees`]).
+    fn find(
+        &self,
+        parts: &mut Vec<Part>,
+        trees: Trees,
+        tree_boxes: &[Aabb],
+        query_boxes: &[Aabb],
+        keep: &(impl Fn(u32, u32) -> bool + Sync),
+        out: &mut Vec<(u32, u32)>,
+    ) {
         let moving = &self.moving;
         if self.resting.is_empty() {
-            return build_and_traverse(tree_boxes, keep, out);
+            traverse_runs(parts, trees, tree_boxes, keep, out);
+            return;
         }
         if moving.is_empty() {
-            return Vec::new();
+            parts.clear();
+            return;
         }
         let start = out.len();
         let boxes: Vec<Aabb> = moving.iter().map(|&i| tree_boxes[i as usize]).collect();
         let mut among = Vec::new();
-        let parts = build_and_traverse(
+        traverse_runs(
+            parts,
+            trees,
             &boxes,
             &|a, b| keep(moving[a as usize], moving[b as usize]),
             &mut among,
@@ -140,7 +176,7 @@ impl Split {
                 for &r in chunk {
                     let query = &query_boxes[r as usize];
                     // parry tests every node on the way, the leaf's own box too.
-                    for part in &parts {
+                    for part in parts.iter() {
                         for leaf in part.tree.intersect_aabb(query) {
                             let m = moving[(part.start + leaf) as usize];
                             let pair = (r.min(m), r.max(m));
@@ -160,7 +196,6 @@ impl Split {
             }
             out[start..].sort_unstable();
         }
-        parts
     }
 }
 
@@ -187,7 +222,7 @@ impl Split {
 /// every tree again at each detection.
 ///
 /// Many boxes are cut into runs of consecutive indices, a tree each, two runs per
-/// thread (`parts`): the trees are built and traversed against themselves on all
+/// thread ([`run_count`]): the trees are built and traversed against themselves on all
 /// threads, then against each other. parry builds a tree on one thread, and at 16 000
 /// bones building and traversing one tree was the largest serial part of a particle
 /// frame. A scene's bodies are numbered figure by figure and its figures placed in
@@ -242,7 +277,7 @@ const ESCAPED_FOR_REBUILD: usize = 16;
 /// one run per thread, two threads would have a single cross traversal, run on one of
 /// them; two runs per thread give two threads six cross traversals to share. The pairs
 /// do not depend on the runs (they are sorted), so neither does any result.
-fn parts(n: usize) -> usize {
+fn run_count(n: usize) -> usize {
     let threads = rayon::current_num_threads();
     let cut_from = if threads > 1 {
         BOXES_TO_CUT_SHARED
@@ -263,6 +298,20 @@ impl Part {
             start: start as u32,
             tree: Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs[start..end]),
         }
+    }
+
+    /// The run's tree fitted to the run's boxes in `aabbs` as they are now: each leaf
+    /// takes its box, then every inner node the union of its children's, bottom up. The
+    /// tree's shape is kept, so it bounds the boxes exactly but may be looser than a new
+    /// tree's nodes (more nodes visited, the same pairs found).
+    fn refit(&mut self, aabbs: &[Aabb]) {
+        let start = self.start as usize;
+        let end = start + self.tree.leaf_count() as usize;
+        for (leaf, aabb) in aabbs[start..end].iter().enumerate() {
+            self.tree
+                .update_partially_if_present(*aabb, leaf as u32, 0.0);
+        }
+        self.tree.refit_without_opt();
     }
 
     /// The run's overlapping pairs `keep` accepts, by box index, into `out`.
@@ -294,6 +343,65 @@ impl Part {
     }
 }
 
+/// The broad phase of a method that detects once a step: its trees, kept from one
+/// step to the next and refitted to the boxes of the next (Rapier's and Box2D's dynamic
+/// trees are kept likewise), built anew when the boxes that move are not the same ones
+/// or after [`REFITS_PER_BUILD`] refits. A refit visits every node once, O(n); a new
+/// tree sorts the boxes into bins level by level, O(n log n). A refitted tree's nodes grow looser as its boxes move
+/// relative to each other, so its traversal visits more nodes; a new tree every few
+/// steps bounds that. The pairs are those of the boxes either way (sorted), so no
+/// result depends on when the trees are built.
+///
+/// The trees hold about 80 bytes per moving box (parry's `heap_memory_size`) between
+/// steps; [`KeptTrees::release`] gives them back, as a world at rest does.
+#[derive(Default)]
+pub struct KeptTrees {
+    /// The moving and resting boxes the trees were built for.
+    split: Split,
+    parts: Vec<Part>,
+    /// Refits since the trees were built.
+    refits: u32,
+}
+
+/// Steps a [`KeptTrees`] refits its trees before building them again.
+const REFITS_PER_BUILD: u32 = 32;
+
+impl KeptTrees {
+    /// Drops the trees: the next call builds them again.
+    pub fn release(&mut self) {
+        *self = KeptTrees::default();
+    }
+
+    /// The free [`moving_pairs_where`], with the trees kept from the last call when the
+    /// same boxes move (see [`KeptTrees`]).
+    pub fn moving_pairs_where(
+        &mut self,
+        aabbs: &[Aabb],
+        resting: impl Fn(u32) -> bool,
+        keep: impl Fn(u32, u32) -> bool + Sync,
+        out: &mut Vec<(u32, u32)>,
+    ) {
+        if aabbs.len() < 2 {
+            self.release();
+            return;
+        }
+        let same = !self.parts.is_empty()
+            && self.refits < REFITS_PER_BUILD
+            && self.split.is_split_of(aabbs.len(), &resting)
+            && self.parts.len() == run_count(self.split.moving.len());
+        let trees = if same {
+            self.refits += 1;
+            Trees::Refit
+        } else {
+            self.split = Split::new(aabbs.len(), resting);
+            self.refits = 0;
+            Trees::Build
+        };
+        self.split
+            .find(&mut self.parts, trees, aabbs, aabbs, &keep, out);
+    }
+}
+
 impl Reused {
     /// Trees built from the boxes loosened by `fat` (m), for a step that detects
     /// several times ([`Reused`]); the default, no fat, suits a single detection.
@@ -302,6 +410,11 @@ impl Reused {
             fat,
             ..Reused::default()
         }
+    }
+
+    /// Whether the trees are built from loosened boxes, for several detections.
+    pub fn is_fattened(&self) -> bool {
+        self.fat > 0.0
     }
 
     /// Drops the trees and candidates: the next call builds them again.
@@ -461,33 +574,65 @@ fn dedup_from(out: &mut Vec<(u32, u32)>, start: usize) {
     out.truncate(kept);
 }
 
-/// New trees over `aabbs` (a run each, see [`parts`]), and their overlapping pairs that
-/// `keep` accepts appended to `out`, sorted.
-fn build_and_traverse(
+/// Whether [`traverse_runs`] builds its trees anew or refits those it is given.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Trees {
+    Build,
+    Refit,
+}
+
+/// The trees of `parts` over `aabbs` (a run each, see [`run_count`]), built anew or refitted
+/// (`Trees::Refit`: `parts` holds the trees of an earlier call over as many boxes, cut
+/// into as many runs), and their overlapping pairs that `keep` accepts appended to
+/// `out`, sorted. The pairs are those of the boxes whatever the trees' shape: a tree
+/// only decides which nodes are visited, every leaf pair reported is tested on the
+/// leaves' own boxes.
+fn traverse_runs(
+    parts: &mut Vec<Part>,
+    trees: Trees,
     aabbs: &[Aabb],
     keep: &(impl Fn(u32, u32) -> bool + Sync),
     out: &mut Vec<(u32, u32)>,
-) -> Vec<Part> {
+) {
     let start = out.len();
     let n = aabbs.len();
-    let k = parts(n);
-    let parts = if k == 1 {
-        let part = Part::build(aabbs, 0, n);
-        part.self_pairs(keep, out);
-        vec![part]
+    let k = run_count(n);
+    debug_assert!(trees == Trees::Build || parts.len() == k);
+    if k == 1 {
+        match trees {
+            Trees::Build => *parts = vec![Part::build(aabbs, 0, n)],
+            Trees::Refit => parts[0].refit(aabbs),
+        }
+        parts[0].self_pairs(keep, out);
     } else {
         let run = |p: usize| (n * p / k, n * (p + 1) / k);
         // Each run's tree and the pairs within it, in one task.
-        let (parts, found): (Vec<Part>, Vec<Vec<(u32, u32)>>) = (0..k)
-            .into_par_iter()
-            .map(|p| {
-                let (s, e) = run(p);
-                let part = Part::build(aabbs, s, e);
-                let mut pairs = Vec::new();
-                part.self_pairs(keep, &mut pairs);
-                (part, pairs)
-            })
-            .unzip();
+        let found: Vec<Vec<(u32, u32)>> = match trees {
+            Trees::Build => {
+                let (built, found): (Vec<Part>, Vec<Vec<(u32, u32)>>) = (0..k)
+                    .into_par_iter()
+                    .map(|p| {
+                        let (s, e) = run(p);
+                        let part = Part::build(aabbs, s, e);
+                        let mut pairs = Vec::new();
+                        part.self_pairs(keep, &mut pairs);
+                        (part, pairs)
+                    })
+                    .unzip();
+                *parts = built;
+                found
+            }
+            Trees::Refit => parts
+                .par_iter_mut()
+                .map(|part| {
+                    part.refit(aabbs);
+                    let mut pairs = Vec::new();
+                    part.self_pairs(keep, &mut pairs);
+                    pairs
+                })
+                .collect(),
+        };
+        let parts = &*parts;
         let crossing: Vec<Vec<(u32, u32)>> = (0..k)
             .flat_map(|p| (p + 1..k).map(move |q| (p, q)))
             .collect::<Vec<_>>()
@@ -500,10 +645,8 @@ fn build_and_traverse(
         for pairs in found.iter().chain(&crossing) {
             out.extend_from_slice(pairs);
         }
-        parts
-    };
+    }
     out[start..].sort_unstable();
-    parts
 }
 
 #[cfg(test)]
@@ -625,10 +768,10 @@ mod tests {
         assert!(want_first.len() > n && want_first != want_moved);
         for threads in [1, 2, 3] {
             pool(threads).install(|| {
-                assert_eq!(parts(n), 2 * threads);
+                assert_eq!(run_count(n), 2 * threads);
                 // Fewer boxes are cut only when the runs' trees are built at once.
                 let fewer = BOXES_TO_CUT_SHARED + 100;
-                assert_eq!(parts(fewer), if threads == 1 { 1 } else { 2 * threads });
+                assert_eq!(run_count(fewer), if threads == 1 { 1 } else { 2 * threads });
                 let mut reused = Reused::fattened(0.01);
                 let (mut a, mut b) = (Vec::new(), Vec::new());
                 reused.overlapping_pairs_where(&first, keep, &mut a);
@@ -674,6 +817,34 @@ mod tests {
                 reused.overlapping_pairs_where(&moved, keep_some, &mut b);
                 assert_eq!(reused.fat_boxes, built, "{n} boxes: built again");
                 assert_eq!(b, want, "{n} boxes, after moving");
+            });
+        }
+    }
+
+    /// Trees kept from call to call and refitted: after the boxes moved (so far that a
+    /// refitted node bounds boxes a new tree would not put together), after a change
+    /// of the boxes at rest (built again) and on trees cut into runs, the pairs are the
+    /// quadratic answer's less those of two boxes at rest. Fails if a refit leaves a
+    /// node short of a moved box, or keeps trees built for other moving boxes.
+    #[test]
+    fn kept_trees_refitted_find_the_same_pairs() {
+        for (n, threads) in [(1200, 1), (1200, 2), (BOXES_TO_CUT + 700, 2)] {
+            pool(threads).install(|| {
+                let mut kept = KeptTrees::default();
+                let calls = [(0.0, 0), (0.3, 0), (0.6, 0), (0.9, 3), (1.2, 3), (0.0, 3)];
+                for (call, &(shift, every)) in calls.iter().enumerate() {
+                    let boxes = scattered(n, shift);
+                    let resting = |i: u32| every != 0 && i % every == 1;
+                    let want: Vec<(u32, u32)> = slow(&boxes)
+                        .into_iter()
+                        .filter(|&(a, b)| !(resting(a) && resting(b)))
+                        .collect();
+                    let mut found = Vec::new();
+                    kept.moving_pairs_where(&boxes, resting, keep_some, &mut found);
+                    assert_eq!(found, want, "{n} boxes, {threads} threads, call {call}");
+                    let refitted = !matches!(call, 0 | 3);
+                    assert_eq!(kept.refits > 0, refitted, "call {call}");
+                }
             });
         }
     }

@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::body::{BodyInfo, BodyStates};
-use crate::broadphase::{Reused, box_height_above_plane, speculative_margin};
+use crate::broadphase::{KeptTrees, Reused, box_height_above_plane, speculative_margin};
 use crate::scene::Collider;
 use crate::scene::rolling_arm;
 use glam::{Quat, Vec3};
@@ -201,6 +201,8 @@ pub struct Contacts {
     pub pairs: Vec<ContactPair>,
     candidates: Vec<(u32, u32)>,
     aabbs: Vec<Aabb>,
+    /// The broad phase's trees of a step that detects once, refitted by the next.
+    trees: KeptTrees,
     /// Pairs that never collide (jointed, overlapping at rest, self-collision off), sorted.
     pub excluded: Vec<(u32, u32)>,
     /// The ground, if any.
@@ -210,6 +212,11 @@ pub struct Contacts {
 }
 
 impl Contacts {
+    /// Gives back the broad phase's kept trees (a world at rest needs none).
+    pub fn release_trees(&mut self) {
+        self.trees.release();
+    }
+
     /// Drops the contact state by owner (see `Method::drop_by_owner`): the pairs'
     /// manifold points, the pair cache, the broad phase's boxes and candidates, the
     /// excluded pairs, the ground and hull colliders.
@@ -218,6 +225,7 @@ impl Contacts {
             mut pairs,
             candidates,
             aabbs,
+            trees,
             excluded,
             ground,
             hulls,
@@ -226,7 +234,7 @@ impl Contacts {
         dropped("contact points");
         drop(pairs);
         dropped("contact pairs");
-        drop((candidates, aabbs));
+        drop((candidates, aabbs, trees));
         dropped("broad phase");
         drop(excluded);
         dropped("excluded pairs");
@@ -305,15 +313,18 @@ impl Contacts {
         // most overlaps are a figure's jointed neighbours. Pairs of two resting bodies
         // are not looked for at all (`moving_pairs_where`).
         let excluded = &self.excluded;
-        tree.moving_pairs_where(
-            &self.aabbs,
-            |a| !awake[a as usize],
-            |a, b| {
-                may_collide(info, a as usize, b as usize)
-                    && excluded.binary_search(&(a, b)).is_err()
-            },
-            &mut self.candidates,
-        );
+        let resting = |a: u32| !awake[a as usize];
+        let keep = |a: u32, b: u32| {
+            may_collide(info, a as usize, b as usize) && excluded.binary_search(&(a, b)).is_err()
+        };
+        // A step that detects in several windows shares its trees among them (`Reused`);
+        // one that detects once refits the last step's.
+        if tree.is_fattened() {
+            tree.moving_pairs_where(&self.aabbs, resting, keep, &mut self.candidates);
+        } else {
+            self.trees
+                .moving_pairs_where(&self.aabbs, resting, keep, &mut self.candidates);
+        }
         // Sleeping pairs stay in the cache as they are (islands need them). Every pair
         // has a body of its own as `a`; when all of them move, as in a pile's busy
         // frames, no pair is between two resting bodies and the cache is not walked.

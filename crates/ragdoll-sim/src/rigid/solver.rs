@@ -72,6 +72,7 @@ pub fn step(
         *buffers = SolveBuffers::default();
         *tasks = IslandTasks::default();
         joints.release_rows();
+        contacts.release_trees();
         clock.finish(times);
         return;
     }
