@@ -1,8 +1,9 @@
 //! The broad phase both methods share: which bodies' (loosened) bounding boxes
 //! overlap, from parry3d's bounding volume hierarchy.
 //!
-//! The tree is built afresh from the boxes each time (a binned SAH build, O(n log n))
-//! and traversed against itself (the bounding volume test tree), so the cost follows the
+//! The tree is built from the boxes (a binned SAH build, O(n log n)), or kept from the
+//! last step and refitted to the new boxes (O(n), [`KeptTrees`]), and traversed against
+//! itself (the bounding volume test tree), so the cost follows the
 //! number of bodies and of overlaps wherever the bodies are: a sort-and-sweep along one
 //! axis visits every pair that overlaps on that axis, O(n √n) for a pile laid out in a
 //! grid whose columns all span the same x. The pairs come out sorted, so what follows
