@@ -13,7 +13,7 @@
 //! target. (The one exception is [`V3::cross_a`], glam's fused cross, kept for code that
 //! must reproduce glam.)
 
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Quat, Vec3, Vec3A, Vec4};
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 use wide::f32x4;
@@ -80,6 +80,10 @@ pub(crate) trait Real:
     fn any(m: Self::Mask) -> bool;
     /// Whether `m` holds in every lane.
     fn all(m: Self::Mask) -> bool;
+    /// The vectors `v[0] … v[WIDTH − 1]` in the lanes (the rest of `v` unread).
+    fn v3_from_lanes(v: [Vec3A; LANES]) -> V3<Self>;
+    /// The lanes of `v` as vectors (the last `LANES − WIDTH` zero).
+    fn v3_to_lanes(v: V3<Self>) -> [Vec3A; LANES];
 }
 
 impl Real for f32 {
@@ -143,6 +147,23 @@ impl Real for f32 {
     fn all(m: bool) -> bool {
         m
     }
+    #[inline]
+    fn v3_from_lanes(v: [Vec3A; LANES]) -> V3<f32> {
+        V3 {
+            x: v[0].x,
+            y: v[0].y,
+            z: v[0].z,
+        }
+    }
+    #[inline]
+    fn v3_to_lanes(v: V3<f32>) -> [Vec3A; LANES] {
+        [
+            Vec3A::new(v.x, v.y, v.z),
+            Vec3A::ZERO,
+            Vec3A::ZERO,
+            Vec3A::ZERO,
+        ]
+    }
 }
 
 impl Real for f32x4 {
@@ -205,6 +226,19 @@ impl Real for f32x4 {
     #[inline]
     fn all(m: f32x4) -> bool {
         m.all()
+    }
+    /// A 4×4 transpose of the vectors as rows (their fourth lane is dropped with the
+    /// fourth row): whole registers moved, no lane read one at a time.
+    #[inline]
+    fn v3_from_lanes(v: [Vec3A; LANES]) -> Vec3x4 {
+        let [x, y, z, _] = f32x4::transpose(v.map(|v| f32x4::new(v.extend(0.0).to_array())));
+        V3 { x, y, z }
+    }
+    /// The transpose back: rows `x, y, z, 0` become the lanes' vectors.
+    #[inline]
+    fn v3_to_lanes(v: Vec3x4) -> [Vec3A; LANES] {
+        f32x4::transpose([v.x, v.y, v.z, f32x4::ZERO])
+            .map(|l| Vec3A::from_vec4(Vec4::from_array(*l.as_array())))
     }
 }
 

@@ -468,11 +468,20 @@ impl<R: Real> PairRows<R> {
     /// The lanes' body velocities.
     #[inline]
     fn gather(&self, s: &BodyStates) -> Velocities<R> {
+        let lanes = |v: &[Vec3A], body: &[usize; LANES]| {
+            R::v3_from_lanes(std::array::from_fn(|k| {
+                if k < R::WIDTH {
+                    v[body[k]]
+                } else {
+                    Vec3A::ZERO
+                }
+            }))
+        };
         [
-            V3::from_fn(|k| Vec3::from(s.lin_vel[self.a[k]])),
-            V3::from_fn(|k| Vec3::from(s.ang_vel[self.a[k]])),
-            V3::from_fn(|k| Vec3::from(s.lin_vel[self.b[k]])),
-            V3::from_fn(|k| Vec3::from(s.ang_vel[self.b[k]])),
+            lanes(&s.lin_vel, &self.a),
+            lanes(&s.ang_vel, &self.a),
+            lanes(&s.lin_vel, &self.b),
+            lanes(&s.ang_vel, &self.b),
         ]
     }
 
@@ -480,14 +489,15 @@ impl<R: Real> PairRows<R> {
     /// body is in two lanes; static and sleeping bodies are not written).
     #[inline]
     fn scatter(&self, s: &mut BodyStates, [va, wa, vb, wb]: Velocities<R>) {
+        let [va, wa, vb, wb] = [va, wa, vb, wb].map(R::v3_to_lanes);
         for k in (0..R::WIDTH).filter(|&k| self.count[k] != 0) {
             if self.inv_mass_a.lane(k) > 0.0 {
-                s.lin_vel[self.a[k]] = Vec3A::from(va.lane(k));
-                s.ang_vel[self.a[k]] = Vec3A::from(wa.lane(k));
+                s.lin_vel[self.a[k]] = va[k];
+                s.ang_vel[self.a[k]] = wa[k];
             }
             if self.inv_mass_b.lane(k) > 0.0 {
-                s.lin_vel[self.b[k]] = Vec3A::from(vb.lane(k));
-                s.ang_vel[self.b[k]] = Vec3A::from(wb.lane(k));
+                s.lin_vel[self.b[k]] = vb[k];
+                s.ang_vel[self.b[k]] = wb[k];
             }
         }
     }
