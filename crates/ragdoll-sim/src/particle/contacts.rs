@@ -99,6 +99,12 @@ pub(crate) fn point_runs<'a>(
 }
 
 /// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
+///
+/// 64 bytes: its two material points and eight numbers of the solve. What is the same
+/// for every point of the set is not kept here: how far the frame so far allows an old
+/// overlap to be pushed out is one product a substep (`friction::PushOut`), and a
+/// point not yet pressed is told by a sentinel offset ([`UNTOUCHED`]), not an
+/// `Option`'s tag.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ContactPoint {
     /// Contact point on `a`, bone frame.
@@ -118,11 +124,11 @@ pub(crate) struct ContactPoint {
     /// Tangential offset `pa − pb` of the two points when they last came into touch (at
     /// the start of the first substep of an unbroken run of touching ones): what they
     /// drift from it since is slip static friction may take back
-    /// (`friction::ANCHOR_PULL`); their approach before touching is not. `None` until
-    /// the point is first pressed in such a run: it is measured then
-    /// (`friction::normal_target`), not for every speculative point at every substep's
-    /// start.
-    pub touched_at: Option<Vec3>,
+    /// (`friction::ANCHOR_PULL`); their approach before touching is not. [`UNTOUCHED`]
+    /// until the point is first pressed in such a run ([`ContactPoint::touched_at`]):
+    /// it is measured then (`friction::normal_target`), not for every speculative point
+    /// at every substep's start.
+    touched_at: Vec3,
     /// Overlap (m) the point's last normal solve left to push out later, at most
     /// `max_push_out_speed` × h a substep (`friction::normal_target`); `∞` before its
     /// first solve.
@@ -134,9 +140,14 @@ pub(crate) struct ContactPoint {
     /// Overlap (m) of the point's two material points where the bones stood as the
     /// frame began (≤ 0: apart), set at detection; `−∞` until then.
     pub frame_overlap: f32,
-    /// Substeps of the frame up to and including the current one.
-    pub frame_substeps: u32,
 }
+
+/// The `x` of [`ContactPoint::touched_at`] while the point has no touch offset: a NaN
+/// with a payload of its own. An offset the solver measures is finite, or, in a world
+/// gone to NaN, a NaN arithmetic made: the processor's default NaN or one of its
+/// operands' payloads, and this value is never an operand. Compared by its bits, it
+/// tells "none" from every offset, as the `Option`'s tag would, in 4 bytes fewer.
+const UNTOUCHED: f32 = f32::from_bits(0x7fc0_7a11);
 
 impl ContactPoint {
     /// A point at `ra` on `a` and `rb` on `b`, not yet solved.
@@ -148,12 +159,25 @@ impl ContactPoint {
             lambda_t: 0.0,
             lambda_v: 0.0,
             vn_before: 0.0,
-            touched_at: None,
+            touched_at: Vec3::splat(UNTOUCHED),
             left: f32::INFINITY,
             left_before: f32::INFINITY,
             frame_overlap: f32::NEG_INFINITY,
-            frame_substeps: 0,
         }
+    }
+
+    /// The tangential offset of its two points when they came into touch in the
+    /// current run of touching substeps (field `touched_at`); `None` before it is first
+    /// pressed in the run.
+    #[inline]
+    pub fn touched_at(&self) -> Option<Vec3> {
+        (self.touched_at.x.to_bits() != UNTOUCHED.to_bits()).then_some(self.touched_at)
+    }
+
+    /// Sets the offset of [`ContactPoint::touched_at`]; `None` starts a new run.
+    #[inline]
+    pub fn set_touched_at(&mut self, offset: Option<Vec3>) {
+        self.touched_at = offset.unwrap_or(Vec3::splat(UNTOUCHED));
     }
 }
 

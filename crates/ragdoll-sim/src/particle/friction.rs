@@ -45,6 +45,31 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3A) -> Vec3A {
     }
 }
 
+/// How far an old overlap may be pushed out ([`normal_target`]) in the substep under
+/// way: the same for every point of the contact set, so formed once a substep rather
+/// than kept with each point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PushOut {
+    /// In the substep, `max_push_out_speed × h` (m).
+    pub substep: f32,
+    /// In the frame so far, `substep` times the frame's substeps up to and including
+    /// this one, `k`: the product `substep × (k as f32)`, formed once. Every point of the
+    /// set was detected in the frame and is solved in each of its substeps since (a
+    /// detection only makes manifolds with a moving side, and the substeps visit every
+    /// such manifold), so `k` counts the substeps its overlap allowance has run for.
+    pub frame: f32,
+}
+
+impl PushOut {
+    /// Substep `k` of the frame (counted from 1) at `max_push_out_speed × h` = `substep`.
+    pub fn at(substep: f32, k: u32) -> PushOut {
+        PushOut {
+            substep,
+            frame: substep * k as f32,
+        }
+    }
+}
+
 /// How deep contact point `c` of manifold `m` may still be at the end of this solve, and
 /// what it takes to get there: returns the points `pa`, `pb` and the correction along
 /// the normal the point needs, `depth − left` (negative for a point not touching: how
@@ -58,16 +83,15 @@ pub(crate) fn point_velocity(bones: &[Bone], s: Side, p: Vec3A) -> Vec3A {
 /// one a body started in (a file's rest pose, a body added inside another), or one a
 /// new collision detection finds that the last one's points did not cover (a capsule
 /// rolling off its contact point, a limb turning a corner into the ground between two
-/// detections) — is pushed out by at most `push_out` = `Settings::max_push_out_speed` ×
-/// h a substep, and the velocity pass takes the push velocity back: in one substep the
+/// detections) — is pushed out by at most `push.substep` = `Settings::max_push_out_speed`
+/// × h a substep, and the velocity pass takes the push velocity back: in one substep the
 /// whole overlap would turn into a velocity of depth / h (25 cm in 1/1200 s is
 /// 300 m/s), more than the velocity pass takes back. Pushed out in full, the overlaps a
 /// detection found at 1000 substeps of 1/10 s frames threw the capsule human's limbs at
 /// up to 30 m/s.
 ///
 /// The old overlap also never ends a substep shallower than the frame's allowance,
-/// [`ContactPoint::frame_overlap`] less `push_out` × the frame's substeps so far, one
-/// product measured from where the bones stood as the frame began. Without it the
+/// [`ContactPoint::frame_overlap`] less `push.frame` ([`PushOut`]), one product measured from where the bones stood as the frame began. Without it the
 /// bound only chains from substep to substep (`old` is the lesser of the depth now and
 /// the last target), and that chain keeps every f32 rounding of a bone's centre that
 /// lifts it out and corrects every one that leaves it deeper: a 1 m cube rising out of
@@ -78,7 +102,7 @@ fn normal_target(
     bones: &[Bone],
     m: &Manifold,
     c: &mut ContactPoint,
-    push_out: f32,
+    push: PushOut,
 ) -> (Vec3A, Vec3A, f32) {
     let pa = bones[m.a()].world(c.ra);
     let pb = side_world(bones, m.b(), c.rb);
@@ -87,14 +111,14 @@ fn normal_target(
         c.left = 0.0;
         return (pa, pb, depth);
     }
-    if c.touched_at.is_none() {
-        c.touched_at = Some(Vec3::from(start_offset(bones, m, c, pa, pb)));
+    if c.touched_at().is_none() {
+        c.set_touched_at(Some(Vec3::from(start_offset(bones, m, c, pa, pb))));
     }
     let approach =
         (bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb)).dot(m.n);
     let old = (depth - approach).min(c.left_before).max(0.0);
-    let frame_left = c.frame_overlap - push_out * c.frame_substeps as f32;
-    let left = (old - push_out).max(frame_left).max(0.0);
+    let frame_left = c.frame_overlap - push.frame;
+    let left = (old - push.substep).max(frame_left).max(0.0);
     c.left = left;
     (pa, pb, depth - left)
 }
@@ -109,9 +133,9 @@ pub(crate) fn solve_normal(
     bones: &mut [Bone],
     m: &Manifold,
     c: &mut ContactPoint,
-    push_out: f32,
+    push: PushOut,
 ) -> Option<(Vec3A, Vec3A)> {
-    let (pa, pb, correction) = normal_target(bones, m, c, push_out);
+    let (pa, pb, correction) = normal_target(bones, m, c, push);
     let lowest = lowest_push(c);
     // A correction under 1e-9 m is left: below the f32 rounding of any position read.
     let moves = correction >= 1e-9 || (correction <= -1e-9 && lowest < 0.0);
@@ -366,14 +390,14 @@ pub(crate) fn solve_normals(
     bones: &mut [Bone],
     m: &Manifold,
     points: &mut [ContactPoint],
-    push_out: f32,
+    push: PushOut,
 ) -> ([f32; BLOCK], bool) {
     let k = points.len();
     debug_assert!(k <= BLOCK, "a block of {k} points");
     let mut lambda = [0.0; BLOCK];
     if k == 1 {
         let before = points[0].lambda_n;
-        let moved = solve_normal(bones, m, &mut points[0], push_out).is_none();
+        let moved = solve_normal(bones, m, &mut points[0], push).is_none();
         lambda[0] = points[0].lambda_n - before;
         return (lambda, moved);
     }
@@ -381,7 +405,7 @@ pub(crate) fn solve_normals(
     let mut lowest = [0.0; BLOCK];
     let mut pressed = false;
     for (i, c) in points.iter_mut().enumerate() {
-        (pa[i], pb[i], need[i]) = normal_target(bones, m, c, push_out);
+        (pa[i], pb[i], need[i]) = normal_target(bones, m, c, push);
         lowest[i] = lowest_push(c);
         pressed |= need[i] > 0.0 || (need[i] < 0.0 && lowest[i] < 0.0);
     }
@@ -474,7 +498,7 @@ pub(crate) fn solve_friction(
     let sub = tangential(bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb));
     // A point not pressed itself (its manifold is) has not drifted.
     let drift = c
-        .touched_at
+        .touched_at()
         .map_or(Vec3A::ZERO, |t| tangential(pa - pb) - sub - Vec3A::from(t));
     // Corrections move pa − pb against the slip `d`, along `−d` itself (not normalised:
     // `Correction::along_scaled`, whose `w` is `|d|²` times the unit direction's).

@@ -23,6 +23,7 @@ use crate::scene::Settings;
 use crate::union_find::UnionFind;
 use glam::Vec3A;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Batches per thread: a few, so that rayon's work stealing evens out islands of
 /// unequal cost, but not so many that gathering dominates small islands.
@@ -367,7 +368,8 @@ pub(super) struct Part<'a> {
 /// joints, kept for the next chunk ([`Batch::gather`]).
 pub(super) type Kept = (Batch, Lockstep);
 
-/// Runs `count` substeps of length `h` (`substeps`, the solver's kernel over a [`Part`]),
+/// Runs the frame's substeps `subs` of length `h` (`substeps`, the solver's kernel over a
+/// [`Part`]),
 /// each of the plan's batches on its own rayon task.
 /// `kept` holds the batches of the frame's last chunk and their joint passes: the
 /// batch at the same place here is gathered into the kept one (its bones not copied
@@ -376,11 +378,11 @@ pub(super) type Kept = (Batch, Lockstep);
 pub(super) fn run_substeps(
     w: &mut ParticleWorld,
     plan: &Plan,
-    count: u32,
+    subs: Range<u32>,
     h: f32,
     s: &Settings,
     kept: &mut Vec<Kept>,
-    substeps: impl Fn(&mut Part, u32, f32, &Settings) + Sync,
+    substeps: impl Fn(&mut Part, Range<u32>, f32, &Settings) + Sync,
 ) {
     // What the substeps do to a static bone, once: its frame holds still and its
     // velocity is zero. The copies in the batches get the same; this covers the static
@@ -425,7 +427,7 @@ pub(super) fn run_substeps(
                 lockstep: &lockstep,
                 grab: world.grab,
             };
-            substeps(&mut part, count, h, s);
+            substeps(&mut part, subs.clone(), h, s);
             (batch, lockstep)
         })
         .collect();

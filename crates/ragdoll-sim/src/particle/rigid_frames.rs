@@ -32,7 +32,8 @@ use super::contacts::{
     ground_pair, ground_plane, point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{
-    BLOCK, point_velocity, solve_friction, solve_normal, solve_normals, solve_velocities,
+    BLOCK, PushOut, point_velocity, solve_friction, solve_normal, solve_normals,
+    solve_velocities,
 };
 use super::islands::{self, Part};
 use super::joint_lanes::Lockstep;
@@ -45,6 +46,7 @@ use glam::{Quat, Vec3, Vec3A};
 use parry3d::bounding_volume::Aabb;
 use parry3d::query::ContactManifold;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Collision detection for the rest of the frame, `dt`.
 ///
@@ -234,10 +236,10 @@ fn record_frame_starts(w: &mut ParticleWorld) {
 }
 
 /// Each contact point's overlap where its bones stood as the frame began
-/// (`ContactPoint::frame_overlap`, from [`record_frame_starts`]), for a detection made
-/// after `sub` of the frame's substeps: the push-out allowance of an overlap is
-/// measured from there (`friction::normal_target`).
-fn overlaps_at_frame_start(w: &mut ParticleWorld, sub: u32) {
+/// (`ContactPoint::frame_overlap`, from [`record_frame_starts`]): the push-out
+/// allowance of an overlap is measured from there (`friction::normal_target`, with
+/// the frame's substeps so far, [`PushOut`]).
+fn overlaps_at_frame_start(w: &mut ParticleWorld) {
     let starts = &w.frame_starts;
     let at_start = |i: usize, local: Vec3| {
         let (com, rot) = starts[i];
@@ -251,7 +253,6 @@ fn overlaps_at_frame_start(w: &mut ParticleWorld, sub: u32) {
                 None => Vec3A::from(c.rb),
             };
             c.frame_overlap = (at_start(m.a(), c.ra) - pb).dot(m.n);
-            c.frame_substeps = sub;
         }
     }
 }
@@ -303,8 +304,8 @@ fn wake_touched(w: &mut ParticleWorld) -> bool {
 /// than by that wait, so this gains little, but detection order already deals most
 /// points into such groups, the layout for solving a group in SIMD lanes.
 ///
-/// `push_out` is how far an old overlap may be pushed out in a substep
-/// ([`solve_normals`]).
+/// `push` is how far an old overlap may be pushed out in the substep and in the frame
+/// so far ([`solve_normals`]).
 ///
 /// Every pass reads every manifold, also one an earlier pass found apart: a resting
 /// contact left a fraction of a millimetre apart is pressed again once a later pass's
@@ -313,7 +314,7 @@ fn contact_pass(
     bones: &mut [Bone],
     manifolds: &[Manifold],
     points: &mut [ContactPoint],
-    push_out: f32,
+    push: PushOut,
 ) {
     let mut k = 0;
     while k < manifolds.len() {
@@ -333,12 +334,12 @@ fn contact_pass(
             *slot = Some(ManifoldSolve::new(m, run));
         }
         for s in solves.iter_mut().flatten() {
-            s.normals(bones, push_out);
+            s.normals(bones, push);
         }
         let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
         for i in 0..longest {
             for s in solves.iter_mut().flatten() {
-                s.friction(bones, i, push_out);
+                s.friction(bones, i, push);
             }
         }
         k = end;
@@ -401,9 +402,9 @@ impl<'a> ManifoldSolve<'a> {
 
     /// The normal corrections of all its points, as one block.
     #[inline(always)]
-    fn normals(&mut self, bones: &mut [Bone], push_out: f32) {
+    fn normals(&mut self, bones: &mut [Bone], push: PushOut) {
         if self.points.len() <= BLOCK {
-            let (pushed, moved) = solve_normals(bones, self.m, self.points, push_out);
+            let (pushed, moved) = solve_normals(bones, self.m, self.points, push);
             self.later = pushed.iter().sum();
             self.pushed = Some(pushed);
             self.still = !moved;
@@ -417,7 +418,7 @@ impl<'a> ManifoldSolve<'a> {
     /// where each point against the whole cone would leave it all to the first and
     /// turn the face about its normal (58° down a 35° slope in 2 s).
     #[inline(always)]
-    fn friction(&mut self, bones: &mut [Bone], i: usize, push_out: f32) {
+    fn friction(&mut self, bones: &mut [Bone], i: usize, push: PushOut) {
         if i >= self.points.len() {
             return;
         }
@@ -429,12 +430,12 @@ impl<'a> ManifoldSolve<'a> {
             Some(pushed) => {
                 self.later -= pushed[i];
                 if i > 0 && !self.still {
-                    solve_normal(bones, self.m, &mut self.points[i], push_out)
+                    solve_normal(bones, self.m, &mut self.points[i], push)
                 } else {
                     None
                 }
             }
-            None => solve_normal(bones, self.m, &mut self.points[i], push_out),
+            None => solve_normal(bones, self.m, &mut self.points[i], push),
         };
         let normal: f32 = self.points.iter().map(|c| c.lambda_n).sum::<f32>() - self.later;
         if let Some(spent) =
@@ -492,11 +493,13 @@ pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
     (s.substeps.max(1) * s.iterations.max(1)).min(1000)
 }
 
-/// Runs `count` substeps of length `h` on a part.
-pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
+/// Runs the frame's substeps `subs` (counted from 0) of length `h` on a part.
+pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings) {
     // How far an old overlap may be pushed out in a substep (`friction::solve_normals`).
     let push_out = s.max_push_out_speed * h;
-    for _ in 0..count {
+    for sub in subs {
+        // ... and in the frame up to and including this substep.
+        let push = PushOut::at(push_out, sub + 1);
         // 1–2. integrate the particles (relative to the frame origin, see `Bone::dcom`)
         // and shape-match each moving bone to its rigid frame, in closed form.
         for b in p.bones.iter_mut() {
@@ -515,14 +518,13 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
                 if c.lambda_n == 0.0 {
                     // Not pressed in the last substep: a new run of touching ones may
                     // start here (`ContactPoint::touched_at`).
-                    c.touched_at = None;
+                    c.set_touched_at(None);
                 }
                 roll_contact(p.bones, p.kinds, m, c);
                 c.lambda_n = 0.0;
                 c.lambda_t = 0.0;
                 c.lambda_v = 0.0;
                 c.left_before = c.left;
-                c.frame_substeps += 1;
                 c.vn_before = if m.e > 0.0 {
                     let pa = p.bones[m.a()].world(c.ra);
                     let pb = super::bone::side_world(p.bones, m.b(), c.rb);
@@ -536,7 +538,7 @@ pub(super) fn run_substeps(p: &mut Part, count: u32, h: f32, s: &Settings) {
         // 3. constraints: contacts then joints, `PASSES` times (the joints' anchors aimed
         // from the substep's start, then from its end: `Aim`)
         for pass in 0..PASSES {
-            contact_pass(p.bones, p.manifolds, p.points, push_out);
+            contact_pass(p.bones, p.manifolds, p.points, push);
             p.lockstep
                 .solve(p.joints, p.bones, h, Aim::of_pass(pass, PASSES));
             if let Some(g) = p.grab {
@@ -605,8 +607,8 @@ fn roll_contact(bones: &[Bone], kinds: &BoneKinds, m: &Manifold, c: &mut Contact
         jump += start(&bones[m.a()], ra) - start(&bones[m.a()], c.ra);
         c.ra = ra;
     }
-    if let Some(t) = &mut c.touched_at {
-        *t += Vec3::from(jump - m.n * jump.dot(m.n));
+    if let Some(t) = c.touched_at() {
+        c.set_touched_at(Some(t + Vec3::from(jump - m.n * jump.dot(m.n))));
     }
 }
 
@@ -705,11 +707,13 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             tree.forget();
             detect(w, &mut tree, rest_of_frame);
         }
-        overlaps_at_frame_start(w, sub);
+        overlaps_at_frame_start(w);
         clock.lap(&mut times, "detection");
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {
-            Some(plan) => islands::run_substeps(w, &plan, count, h, &s, &mut kept, run_substeps),
+            Some(plan) => {
+                islands::run_substeps(w, &plan, sub..sub + count, h, &s, &mut kept, run_substeps)
+            }
             None => {
                 // The kept batches' copies of the bones stepped here are stale now.
                 kept.clear();
@@ -724,7 +728,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
                     lockstep,
                     grab: w.grab,
                 };
-                run_substeps(&mut part, count, h, &s);
+                run_substeps(&mut part, sub..sub + count, h, &s);
             }
         }
         clock.lap(&mut times, "substeps");
