@@ -32,8 +32,7 @@ use super::contacts::{
     ground_pair, ground_plane, point_runs, reaches_ground, shape_pair,
 };
 use super::friction::{
-    BLOCK, PushOut, point_velocity, solve_friction, solve_normal, solve_normals,
-    solve_velocities,
+    BLOCK, PushOut, point_velocity, solve_friction, solve_normal, solve_normals, solve_velocities,
 };
 use super::islands::{self, Part};
 use super::joint_lanes::Lockstep;

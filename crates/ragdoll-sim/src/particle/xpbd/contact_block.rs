@@ -30,7 +30,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::super::bone::Bone;
-use super::super::contacts::reserve_kept;
+use super::super::contacts::{give_back_room, reserve_kept};
 use super::contacts::{Contact, Work};
 use super::joints::{Anchor, move_linear};
 use super::particles::XParticles;
@@ -108,11 +108,13 @@ pub(crate) fn block_len_back(contacts: &[Contact]) -> usize {
     same_pair_run(contacts.iter().rev())
 }
 
-/// Each contact's angular Jacobians and their `I⁻¹ J` at the substep's start into its
-/// slot of `work` ([`Work::Position`]), with the arithmetic the passes use: the levers
-/// from the bodies' centres then (`joints::pull_rigid`), fixed through the substep.
-/// Once `contacts::begin_substep` and `XParticles::fix_start` ran. The slots are kept
-/// at the largest count of contacts, not doubled past it.
+/// Each contact's angular Jacobians at the substep's start into its slot of `work`
+/// ([`Work::Position`]), with the arithmetic the passes use: the levers from the
+/// bodies' centres then (`joints::pull_rigid`), fixed through the substep. Once
+/// `contacts::begin_substep` and `XParticles::fix_start` ran. The slots are kept
+/// between substeps, grown by an eighth, not doubled, and their room is given back
+/// once the contacts fill less than half of it (`contacts::give_back_room`): a pile's
+/// landing would otherwise hold its peak for good.
 pub(crate) fn begin_substep(
     contacts: &[Contact],
     work: &mut Vec<Work>,
@@ -133,9 +135,9 @@ pub(crate) fn begin_substep(
         if b.bone.is_some() {
             turn[1] = (start[1] - b.centre).cross(n);
         }
-        let inv_turn = [a.inv_inertia * turn[0], b.inv_inertia * turn[1]];
-        Work::Position { turn, inv_turn }
+        Work::Position { turn }
     }));
+    give_back_room(work);
 }
 
 /// The normal pushes of the block `group` (one pair of bodies; module doc), `work`
@@ -155,7 +157,7 @@ pub(crate) fn normals(
         return;
     }
     // Each point's error and angular Jacobians (`r × n`, kept from the substep's
-    // start with their `I⁻¹ (r × n)`), and which rows take part.
+    // start) with their `I⁻¹ (r × n)`, and which rows take part.
     let mut c = [0.0f64; MAX_POINTS];
     let mut ja = [DVec3::ZERO; MAX_POINTS];
     let mut jb = [DVec3::ZERO; MAX_POINTS];
@@ -170,7 +172,10 @@ pub(crate) fn normals(
         active[i] = d < 0.0 || ct.lambda > 0.0;
         any |= active[i];
         n[i] = ct.n.as_dvec3();
-        ([ja[i], jb[i]], [ia[i], ib[i]]) = work[i].turns();
+        [ja[i], jb[i]] = work[i].turns();
+        // `I⁻¹ (r × n)`, as the slot's Jacobians: every point of the block is on its
+        // two bodies (`block_len`), whose `I⁻¹` at the substep's start `a` and `b` hold.
+        (ia[i], ib[i]) = (a.inv_inertia * ja[i], b.inv_inertia * jb[i]);
     }
     if !any {
         return;

@@ -24,7 +24,8 @@
 use super::super::bone::{Bone, rolled_point};
 use super::super::bone_kinds::BoneKinds;
 use super::super::contacts::{
-    Filter, broad_phase_on, ground_pair, ground_plane, reaches_ground, reserve_kept, shape_pair,
+    Filter, broad_phase_on, give_back_room, ground_pair, ground_plane, reaches_ground,
+    reserve_kept, shape_pair,
 };
 use super::super::rolling;
 use super::contact_block::{block_len, block_len_back, normals};
@@ -75,12 +76,11 @@ pub(crate) struct Contact {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Work {
     /// Through the position passes: its normal row's angular Jacobians `r × n` on `a`
-    /// and `b` and their `I⁻¹ (r × n)` at the substep's start; 0 on a side that takes
-    /// no correction.
-    Position {
-        turn: [DVec3; 2],
-        inv_turn: [DVec3; 2],
-    },
+    /// and `b` at the substep's start; 0 on a side that takes no correction. Their
+    /// `I⁻¹ (r × n)` are not kept: the block forms them from its bodies' `I⁻¹` at the
+    /// substep's start, which it holds anyway (`contact_block::normals`), the same
+    /// product in the same bits, and a slot is 56 bytes, not 104.
+    Position { turn: [DVec3; 2] },
     /// Through the velocity step: its two sides' arms ([`Lever::arm`]; the bones are
     /// the contact's), and its friction and normal impulses so far.
     Velocity {
@@ -91,12 +91,12 @@ pub(crate) enum Work {
 }
 
 impl Work {
-    /// The position passes' angular Jacobians and their `I⁻¹ J` (zero outside them).
+    /// The position passes' angular Jacobians (zero outside them).
     #[inline(always)]
-    pub fn turns(&self) -> ([DVec3; 2], [DVec3; 2]) {
+    pub fn turns(&self) -> [DVec3; 2] {
         match *self {
-            Work::Position { turn, inv_turn } => (turn, inv_turn),
-            Work::Velocity { .. } => ([DVec3::ZERO; 2], [DVec3::ZERO; 2]),
+            Work::Position { turn } => turn,
+            Work::Velocity { .. } => [DVec3::ZERO; 2],
         }
     }
 
@@ -168,8 +168,10 @@ pub(crate) fn detect(
     scratch: &mut Scratch,
     out: &mut Vec<Contact>,
 ) {
-    // The contacts are kept between detections at their largest count (a pile's
-    // landing), grown by an eighth at a time, not doubled past it (`reserve_kept`).
+    // The contacts are kept between detections, grown by an eighth at a time, not
+    // doubled (`reserve_kept`), and their room is given back once they fill less than
+    // half of it (`give_back_room`, at the end): a pile's landing would otherwise hold
+    // its peak count for good.
     out.clear();
     let reach = speculative_margin(settings.gravity.length(), span);
     // A bone's points move no faster than its fastest particle plus its turn; the
@@ -274,6 +276,8 @@ pub(crate) fn detect(
             );
         }
     }
+    give_back_room(out);
+    give_back_room(&mut scratch.pairs);
 }
 
 /// Relative normal velocity of a contact's points, `(v_b − v_a) · n`.
