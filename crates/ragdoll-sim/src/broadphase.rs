@@ -344,13 +344,13 @@ impl Part {
     }
 }
 
-/// The broad phase of a method that detects once a step: its trees, kept from one
-/// step to the next and refitted to the boxes of the next (Rapier's and Box2D's dynamic
-/// trees are kept likewise), built anew when the boxes that move are not the same ones
-/// or after [`REFITS_PER_BUILD`] refits. A refit visits every node once, O(n); a new
-/// tree sorts the boxes into bins level by level, O(n log n). A refitted tree's nodes grow looser as its boxes move
-/// relative to each other, so its traversal visits more nodes; a new tree every few
-/// steps bounds that. The pairs are those of the boxes either way (sorted), so no
+/// The broad phase of a method that detects once a step: its trees, kept from one step to
+/// the next and refitted to the boxes of the next (Rapier's and Box2D's dynamic trees are
+/// kept likewise), built anew when the boxes that move are not the same ones or after
+/// [`REFITS_PER_BUILD`] refits. A refit visits every node once, O(n); a new tree sorts the
+/// boxes into bins level by level, O(n log n). A refitted tree's nodes grow looser as its
+/// boxes move relative to each other, so its traversal visits more nodes; a new tree every
+/// few steps bounds that. The pairs are those of the boxes either way (sorted), so no
 /// result depends on when the trees are built.
 ///
 /// The trees hold about 80 bytes per moving box (parry's `heap_memory_size`) between
@@ -582,12 +582,12 @@ enum Trees {
     Refit,
 }
 
-/// The trees of `parts` over `aabbs` (a run each, see [`run_count`]), built anew or refitted
-/// (`Trees::Refit`: `parts` holds the trees of an earlier call over as many boxes, cut
-/// into as many runs), and their overlapping pairs that `keep` accepts appended to
-/// `out`, sorted. The pairs are those of the boxes whatever the trees' shape: a tree
-/// only decides which nodes are visited, every leaf pair reported is tested on the
-/// leaves' own boxes.
+/// The trees of `parts` over `aabbs` (a run each, see [`run_count`]), built anew or
+/// refitted (`Trees::Refit`: `parts` holds the trees of an earlier call over as many boxes,
+/// cut into as many runs), and their overlapping pairs that `keep` accepts appended to
+/// `out`, sorted. The pairs are those of the boxes whatever the trees' shape: a tree only
+/// decides which nodes are visited, every leaf pair reported is tested on the leaves' own
+/// boxes.
 fn traverse_runs(
     parts: &mut Vec<Part>,
     trees: Trees,

@@ -91,13 +91,14 @@ impl PushOut {
 /// up to 30 m/s.
 ///
 /// The old overlap also never ends a substep shallower than the frame's allowance,
-/// [`ContactPoint::frame_overlap`] less `push.frame` ([`PushOut`]), one product measured from where the bones stood as the frame began. Without it the
-/// bound only chains from substep to substep (`old` is the lesser of the depth now and
-/// the last target), and that chain keeps every f32 rounding of a bone's centre that
-/// lifts it out and corrects every one that leaves it deeper: a 1 m cube rising out of
-/// the ground moved up to 12 ulp of its height (3.7e-7 m) a frame more than
-/// `max_push_out_speed` × dt. Measured against the frame's start, what is left is the
-/// rounding of the frame's last position, which the next frame measures from.
+/// [`ContactPoint::frame_overlap`] less `push.frame` ([`PushOut`]), one product measured
+/// from where the bones stood as the frame began. Without it the bound only chains from
+/// substep to substep (`old` is the lesser of the depth now and the last target), and that
+/// chain keeps every f32 rounding of a bone's centre that lifts it out and corrects every
+/// one that leaves it deeper: a 1 m cube rising out of the ground moved up to 12 ulp of its
+/// height (3.7e-7 m) a frame more than `max_push_out_speed` × dt. Measured against the
+/// frame's start, what is left is the rounding of the frame's last position, which the next
+/// frame measures from.
 fn normal_target(
     bones: &[Bone],
     m: &Manifold,
