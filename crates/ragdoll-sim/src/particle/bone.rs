@@ -140,7 +140,7 @@ impl Bone {
     }
 
     /// World pose of the shape frame (the bone's kind is `kind`).
-    pub fn shape_pose(&self, kind: BoneKind<'_>) -> Pose {
+    pub fn shape_pose(&self, kind: &BoneKind) -> Pose {
         Pose {
             position: Vec3::from(self.center()),
             rotation: self.rot,
@@ -149,7 +149,7 @@ impl Bone {
     }
 
     /// The shape pose in parry's type.
-    pub fn parry_pose(&self, kind: BoneKind<'_>) -> parry3d::math::Pose {
+    pub fn parry_pose(&self, kind: &BoneKind) -> parry3d::math::Pose {
         let p = self.shape_pose(kind);
         parry3d::math::Pose::from_parts(p.position, p.rotation)
     }
@@ -344,11 +344,11 @@ pub(crate) type Side = Option<usize>;
 /// segment nearest `local`, moved out by the radius along `dir`. `None` for a shape
 /// that is not round all over (a box, cylinder, cone or hull keeps its material
 /// points: they do not roll).
-pub(crate) fn rolled_point(b: &Bone, kind: BoneKind<'_>, local: Vec3, dir: Vec3A) -> Option<Vec3> {
+pub(crate) fn rolled_point(b: &Bone, kind: &BoneKind, local: Vec3, dir: Vec3A) -> Option<Vec3> {
     let BodyCollider::Capsule {
         half_height,
         radius,
-    } = *kind.shape
+    } = kind.shape
     else {
         return None;
     };

@@ -52,7 +52,7 @@ use crate::snapshot::{
 };
 use crate::timings::{PhaseClock, PhaseTimes};
 use bone::{Bone, EDGES};
-use bone_kinds::{BoneKinds, BoneShape, Material};
+use bone_kinds::{BoneKind, BoneKinds, Material};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
 use joint_kinds::JointKinds;
@@ -251,13 +251,14 @@ impl ParticleWorld {
         rest: [Vec3; 4],
         shape_in_bone: Pose,
     ) -> Bone {
-        let shape = BoneShape {
+        let kind = self.kinds.kind(BoneKind {
+            rest,
+            shape_in_bone,
             shape: BodyCollider::new(desc)
                 .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             drawn: desc.shape.clone(),
-        };
-        let kind = self.kinds.kind(rest, shape_in_bone, shape);
+        });
         let material = self.kinds.material_index(Material {
             friction: desc.friction.contact,
             restitution: desc.restitution,
@@ -899,10 +900,10 @@ impl Method for ParticleWorld {
                 let stick_rest = bone.rest_stick_lengths(&self.kinds);
                 let kind = self.kinds.of_mut(&bone);
                 kind.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
-                kind.set_shape_in_bone(Pose {
+                kind.shape_in_bone = Pose {
                     position: frame.inverse_transform_point(shape_pose.position),
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
-                });
+                };
                 if let Some(st) = self.paper.as_mut() {
                     st.push_bone_sticks(stick_rest);
                 }
