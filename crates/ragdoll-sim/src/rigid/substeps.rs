@@ -135,9 +135,17 @@ pub fn solve(
         // (110–140 J) in 40 of 72 ensemble starts (180–230 J in all 72 with one inertia)
         // and sleeps in 59.
         // With every relax row on the moved pose's inertias the next substep could keep
-        // these rows and this factorisation (three of eight factorisations a frame), but
-        // the capsule human then sleeps in 22 of 72 starts (58 with the start pose's),
-        // so the trees are factored again for the next substep.
+        // these rows and this factorisation (three of eight factorisations a frame). The
+        // resting piles forbid it, through the limit rows: relaxed on limit rows measured
+        // again on the moved pose instead of the ones the biased iterations solved, a
+        // light limb end lying on the floor beyond a straight limb pressed on its stop
+        // (the pile's bottom-layer fists) goes on sliding at 7–8 mm/s and turning at
+        // 0.11–0.14 rad/s, just over the sleep speed, for seconds, where relaxed on the
+        // iterations' own limit rows it stops within two frames; the other rows on the
+        // moved pose's inertias do so in a few figures (docs/benchmarks.md, What is
+        // left). The capsule human's free obstacle is another matter: flung by the
+        // landing, it rolls out under the rolling resistance alone, `a = ρ g / (1 + I /
+        // (m r²))` (`scene::rolling_arm`), on either inertias.
         joints.prepare_moved(s, awake);
         for pass in 0..p.relax_passes {
             joints.solve(s, awake, &p.ctx, false);
