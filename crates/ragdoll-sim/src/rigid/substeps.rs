@@ -140,12 +140,14 @@ pub fn solve(
         // again on the moved pose instead of the ones the biased iterations solved, a
         // light limb end lying on the floor beyond a straight limb pressed on its stop
         // (the pile's bottom-layer fists) goes on sliding at 7–8 mm/s and turning at
-        // 0.11–0.14 rad/s, just over the sleep speed, for seconds, where relaxed on the
-        // iterations' own limit rows it stops within two frames; the other rows on the
-        // moved pose's inertias do so in a few figures (docs/benchmarks.md, What is
-        // left). The capsule human's free obstacle is another matter: flung by the
-        // landing, it rolls out under the rolling resistance alone, `a = ρ g / (1 + I /
-        // (m r²))` (`scene::rolling_arm`), on either inertias.
+        // 0.11–0.14 rad/s, just over the sleep speed, for seconds. That creep is this
+        // schedule's too; what ends it here is the position projection, which moves no
+        // body under the sleep speeds (`project::project_positions`), and on the
+        // iterations' own limit rows the fists fall under them within a second of the
+        // landing (docs/benchmarks.md, What is left). The capsule human's
+        // free obstacle is another matter: flung by the landing, it rolls out under the
+        // rolling resistance alone, `a = ρ g / (1 + I / (m r²))` (`scene::rolling_arm`),
+        // on either inertias.
         joints.prepare_moved(s, awake);
         for pass in 0..p.relax_passes {
             joints.solve(s, awake, &p.ctx, false);
