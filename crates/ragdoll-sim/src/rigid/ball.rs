@@ -51,12 +51,12 @@ impl JointSolve for BallJoint {
     }
 
     fn prepare(&mut self, rows: &mut BallRows, s: &BodyStates) {
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare(&mut rows.point, &self.frame, s);
         self.update_limits(rows, s);
     }
 
     fn prepare_after_relax(&mut self, rows: &mut BallRows, s: &BodyStates) {
-        PointPart::weigh(&mut rows.point, &self.frame, s);
+        self.point.weigh(&mut rows.point, &self.frame, s);
         self.update_limits(rows, s);
     }
 
@@ -64,7 +64,7 @@ impl JointSolve for BallJoint {
         if let Some(sw) = &self.swing {
             sw.prepare_moved(&mut rows.swing, &self.frame, s);
         }
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare_moved(&mut rows.point, &self.frame, s);
     }
 
     fn warm_start(&self, rows: &BallRows, s: &mut BodyStates) {

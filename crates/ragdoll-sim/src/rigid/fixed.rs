@@ -24,15 +24,15 @@ impl JointSolve for FixedJoint {
     }
 
     fn prepare(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::prepare(rows, &self.frame, s);
+        self.point.prepare(rows, &self.frame, s);
     }
 
     fn prepare_after_relax(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::weigh(rows, &self.frame, s);
+        self.point.weigh(rows, &self.frame, s);
     }
 
     fn prepare_moved(&mut self, rows: &mut PointRows<f32>, s: &BodyStates) {
-        PointPart::prepare(rows, &self.frame, s);
+        self.point.prepare_moved(rows, &self.frame, s);
     }
 
     fn warm_start(&self, rows: &PointRows<f32>, s: &mut BodyStates) {

@@ -55,20 +55,20 @@ impl JointSolve for HingeJoint {
     }
 
     fn prepare(&mut self, rows: &mut HingeRows, s: &BodyStates) {
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare(&mut rows.point, &self.frame, s);
         self.align.prepare(&mut rows.align, &self.frame, s);
         self.update_limit(&mut rows.limit, s);
     }
 
     fn prepare_after_relax(&mut self, rows: &mut HingeRows, s: &BodyStates) {
-        PointPart::weigh(&mut rows.point, &self.frame, s);
+        self.point.weigh(&mut rows.point, &self.frame, s);
         AlignPart::weigh(&mut rows.align, &self.frame, s);
         self.update_limit(&mut rows.limit, s);
     }
 
     fn prepare_moved(&mut self, rows: &mut HingeRows, s: &BodyStates) {
         self.align.prepare(&mut rows.align, &self.frame, s);
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare_moved(&mut rows.point, &self.frame, s);
     }
 
     fn warm_start(&self, rows: &HingeRows, s: &mut BodyStates) {

@@ -190,18 +190,45 @@ fn masses(f: &JointFrame, s: &BodyStates) -> [f32; 2] {
 }
 
 impl PointPart {
-    /// Evaluates the offsets, the error, the turns and `K⁻¹` on the current positions.
-    pub(crate) fn prepare(rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
+    /// Evaluates the offsets, the error and what the solve reads of the weights on the
+    /// current positions ([`PointPart::weigh`]).
+    pub(crate) fn prepare(&self, rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
         let local = [one(f.local_a), one(f.local_b)];
         let pose = Pose::of(s, f.a, f.b);
-        rows.prepare(local, &pose, masses(f, s), true);
+        rows.place(local, &pose);
+        self.weigh(rows, f, s);
     }
 
     /// The turns and `K⁻¹` for the offsets of the last [`PointPart::prepare`] and the
-    /// inertias now: all that changes when only the inertias were refreshed since.
-    pub(crate) fn weigh(rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
+    /// inertias now: all that changes when only the inertias were refreshed since. A
+    /// joint whose tree solves its point rows (`direct`) reads only the turns, in its
+    /// warm start; its tree weighs `K⁻¹` if it hands the joint back to Gauss–Seidel
+    /// ([`PointPart::weigh_all`]).
+    pub(crate) fn weigh(&self, rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
+        if self.direct {
+            rows.turn([inertia(s, f.a), inertia(s, f.b)]);
+        } else {
+            PointPart::weigh_all(rows, f, s);
+        }
+    }
+
+    /// The turns and `K⁻¹` whether or not a tree solves the joint.
+    pub(super) fn weigh_all(rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
         let inertias = [inertia(s, f.a), inertia(s, f.b)];
         rows.weigh(inertias, masses(f, s), true);
+    }
+
+    /// The relax passes' rows on the pose the substep moved to
+    /// ([`JointSolve::prepare_moved`]): a joint whose tree solves its point rows reads
+    /// only the offsets and the error there (the relax passes start no warm start), and
+    /// its tree weighs the rest if it hands the joint back to Gauss–Seidel.
+    pub(crate) fn prepare_moved(&self, rows: &mut PointRows<f32>, f: &JointFrame, s: &BodyStates) {
+        if self.direct {
+            let local = [one(f.local_a), one(f.local_b)];
+            rows.place(local, &Pose::of(s, f.a, f.b));
+        } else {
+            self.prepare(rows, f, s);
+        }
     }
 
     /// The world offsets of the anchor from a's and from b's centre of mass and

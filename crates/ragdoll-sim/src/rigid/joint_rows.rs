@@ -147,7 +147,7 @@ pub(crate) fn inertia(s: &BodyStates, i: usize) -> M3<f32> {
 #[inline]
 pub(crate) fn point_response<R: Real>(ii: M3<R>, m: R, r: V3<R>) -> (M3<R>, [R; 6]) {
     let [c0, c1, c2] = M3::skew(r).cols;
-    let t = [ii * c0, ii * c1, ii * c2];
+    let t = point_turn(ii, r).cols;
     let k = [
         m + c0.dot(t[0]),
         c0.dot(t[1]),
@@ -157,6 +157,16 @@ pub(crate) fn point_response<R: Real>(ii: M3<R>, m: R, r: V3<R>) -> (M3<R>, [R; 
         m + c2.dot(t[2]),
     ];
     (M3 { cols: t }, k)
+}
+
+/// The turn `T = I⁻¹ r̂` of [`point_response`] alone, by the columns `ĉ_k` of `r̂`:
+/// `t_k = I⁻¹ ĉ_k`.
+#[inline]
+pub(crate) fn point_turn<R: Real>(ii: M3<R>, r: V3<R>) -> M3<R> {
+    let [c0, c1, c2] = M3::skew(r).cols;
+    M3 {
+        cols: [ii * c0, ii * c1, ii * c2],
+    }
 }
 
 /// Inverse of a symmetric 3×3 matrix given by its six entries (as [`point_response`]),
@@ -230,10 +240,26 @@ impl<R: Real> PointRows<R> {
     /// Offsets and error on the pose, then [`PointRows::weigh`].
     #[inline]
     pub fn prepare(&mut self, local: [V3<R>; 2], p: &Pose<R>, inv_mass: [R; 2], live: R::Mask) {
+        self.place(local, p);
+        self.weigh([p.ia, p.ib], inv_mass, live);
+    }
+
+    /// The offsets of the anchor `local` (in a's and b's space) and the error on the
+    /// pose: all that a joint tree reads of rows whose block it solves itself.
+    #[inline]
+    pub fn place(&mut self, local: [V3<R>; 2], p: &Pose<R>) {
         self.ra = p.rot_a.rotate(local[0]);
         self.rb = p.rot_b.rotate(local[1]);
         self.c = (p.com_b + self.rb) - (p.com_a + self.ra);
-        self.weigh([p.ia, p.ib], inv_mass, live);
+    }
+
+    /// The turns alone for the offsets of the last preparation and these inertias (the
+    /// turns of [`PointRows::weigh`]): what applying an impulse reads, for rows whose
+    /// `K⁻¹` a joint tree's factorisation stands in for.
+    #[inline]
+    pub fn turn(&mut self, [ia, ib]: [M3<R>; 2]) {
+        self.turn_a = point_turn(ia, self.ra);
+        self.turn_b = point_turn(ib, self.rb);
     }
 
     /// The turns and `K⁻¹` for the offsets of the last preparation and these inertias.

@@ -552,6 +552,15 @@ impl JointTrees {
         for node in &self.joints {
             point_of_mut(joints, node.joint).direct = ok;
         }
+        if !ok {
+            // Handed back to Gauss–Seidel, whose rows also read `K⁻¹`, which a joint of
+            // a tree leaves unweighed (`PointPart::weigh`): weighed now, on the pose,
+            // inertias and masses its rows were prepared on (no velocity pass moves them).
+            for node in &self.joints {
+                let f = frame_of(joints, node.joint);
+                PointPart::weigh_all(rows_of_mut(joints, node.joint), &f, s);
+            }
+        }
     }
 
     /// One block update of every tree's point rows: the exact `λ' = K⁻¹(−r)` with
@@ -757,6 +766,17 @@ fn rows_of(joints: &JointSet, j: JointRef) -> &PointRows<f32> {
         JointRef::Ball(i) => &joints.rows.ball[slot(ball, i)].point,
         JointRef::Hinge(i) => &joints.rows.hinge[slot(hinge, i)].point,
         JointRef::Universal(i) => &joints.rows.universal[slot(universal, i)].point,
+    }
+}
+
+/// [`rows_of`], to be written.
+fn rows_of_mut(joints: &mut JointSet, j: JointRef) -> &mut PointRows<f32> {
+    let [ball, hinge, universal] = &joints.rows.slots;
+    let slot = |slots: &[u32], i: usize| slots[i] as usize;
+    match j {
+        JointRef::Ball(i) => &mut joints.rows.ball[slot(ball, i)].point,
+        JointRef::Hinge(i) => &mut joints.rows.hinge[slot(hinge, i)].point,
+        JointRef::Universal(i) => &mut joints.rows.universal[slot(universal, i)].point,
     }
 }
 

@@ -98,12 +98,12 @@ impl JointSolve for UniversalJoint {
     }
 
     fn prepare(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare(&mut rows.point, &self.frame, s);
         self.set_angular_rows(rows, s);
     }
 
     fn prepare_after_relax(&mut self, rows: &mut UniversalRows, s: &BodyStates) {
-        PointPart::weigh(&mut rows.point, &self.frame, s);
+        self.point.weigh(&mut rows.point, &self.frame, s);
         self.set_angular_rows(rows, s);
     }
 
@@ -111,7 +111,7 @@ impl JointSolve for UniversalJoint {
         if let Some(sw) = &self.swing {
             sw.prepare_moved(&mut rows.swing, &self.frame, s);
         }
-        PointPart::prepare(&mut rows.point, &self.frame, s);
+        self.point.prepare_moved(&mut rows.point, &self.frame, s);
     }
 
     fn warm_start(&self, rows: &UniversalRows, s: &mut BodyStates) {
