@@ -54,14 +54,17 @@ pub(super) struct PointRows<R> {
     /// `I_a⁻¹ (r_a × n)`, `I_b⁻¹ (r_b × n)` with the substep's inertia.
     ia_n: V3<R>,
     ib_n: V3<R>,
-    normal_mass: R,
+    /// The normal row of the pass (see [`PairRows::solve_normals`]): `−normal_mass ·
+    /// mass_scale`, the bias velocity and the impulse scale, from the separation at the
+    /// last [`ContactLanes::refresh`] ([`ContactLanes::weigh_normals`]).
+    mass: R,
+    bias: R,
+    impulse_scale: R,
     /// `1 / normal_mass` (zero for an empty slot): the row velocity an impulse changes.
     normal_stiffness: R,
     /// The row's normal velocity when the block solve last reached it.
     block_velocity: R,
     normal_impulse: R,
-    /// Separation at the last [`ContactLanes::refresh`].
-    separation: R,
     /// `r_a × t_k`, `r_b × t_k`.
     ja_t: [V3<R>; 2],
     jb_t: [V3<R>; 2],
@@ -74,13 +77,17 @@ pub(super) struct PointRows<R> {
 }
 
 /// The anchors in the bodies' frames and the separation at build time less
-/// `n·(p_b − p_a)`, for the separation now: per point, what only
-/// [`ContactLanes::refresh`] reads, kept out of the rows the passes stream through.
+/// `n·(p_b − p_a)`, for the separation now, the separation and the normal row's
+/// effective mass: per point, what only [`ContactLanes::refresh`] and
+/// [`ContactLanes::weigh_normals`] read, kept out of the rows the passes stream through.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PointAnchors<R> {
     local_a: V3<R>,
     local_b: V3<R>,
     base_separation: R,
+    /// Separation at the last [`ContactLanes::refresh`].
+    separation: R,
+    normal_mass: R,
 }
 
 /// `R::WIDTH` pairs (one, or four of one colour) solved side by side.
@@ -121,6 +128,9 @@ pub(super) struct ContactLanes<R> {
     rows: Vec<PointRows<R>>,
     /// Each row's anchors, at the row's index.
     anchors: Vec<PointAnchors<R>>,
+    /// The pass whose normal rows the rows hold (`use_bias`), `None` after a
+    /// [`ContactLanes::refresh`] ([`ContactLanes::weigh_normals`]).
+    weighed_for: Option<bool>,
 }
 
 /// The velocities `v_a, ω_a, v_b, ω_b` of each lane's bodies.
@@ -178,7 +188,6 @@ impl<R: Real> ContactLanes<R> {
                 jb_n: v3(|p| p.jb_n),
                 ja_t: [v3(|p| p.ja_t[0]), v3(|p| p.ja_t[1])],
                 jb_t: [v3(|p| p.jb_t[0]), v3(|p| p.jb_t[1])],
-                normal_mass: s(|p| p.normal_mass),
                 normal_stiffness: s(|p| {
                     if p.normal_mass > 0.0 {
                         1.0 / p.normal_mass
@@ -195,6 +204,8 @@ impl<R: Real> ContactLanes<R> {
                 local_a: v3(|p| p.local_a),
                 local_b: v3(|p| p.local_b),
                 base_separation: s(|p| p.base_separation),
+                normal_mass: s(|p| p.normal_mass),
+                ..PointAnchors::default()
             });
         }
         self.groups.push(group);
@@ -206,6 +217,7 @@ impl<R: Real> ContactLanes<R> {
     /// (separations only: between the velocity and the position integration the bodies
     /// do not move).
     pub(super) fn refresh(&mut self, s: &BodyStates, inertia: bool) {
+        self.weighed_for = None;
         for g in &mut self.groups {
             let (com_a, com_b) = (
                 V3::<R>::from_fn(|k| s.com[g.a[k]]),
@@ -215,12 +227,12 @@ impl<R: Real> ContactLanes<R> {
                 Q::<R>::from_fn(|k| s.rot[g.a[k]]),
                 Q::<R>::from_fn(|k| s.rot[g.b[k]]),
             );
-            let rows = &mut self.rows[g.rows..g.rows + g.slots];
-            for (w, c) in rows.iter_mut().zip(&self.anchors[g.rows..g.rows + g.slots]) {
+            for c in &mut self.anchors[g.rows..g.rows + g.slots] {
                 let pa = com_a + rot_a.rotate(c.local_a);
                 let pb = com_b + rot_b.rotate(c.local_b);
-                w.separation = c.base_separation + g.normal.dot(pb - pa);
+                c.separation = c.base_separation + g.normal.dot(pb - pa);
             }
+            let rows = &mut self.rows[g.rows..g.rows + g.slots];
             if !inertia {
                 continue;
             }
@@ -272,13 +284,12 @@ impl<R: Real> ContactLanes<R> {
         }
     }
 
-    /// One Gauss–Seidel pass over every group: the pair's soft non-penetration rows as
-    /// one block ([`PairRows::solve_normals`]), then each point's friction capped by the
-    /// normal impulse just computed (Box2D v3's order; friction first would cap it with
-    /// a normal impulse the relax pass is about to raise, and slide too easily), then the
-    /// pair's rolling resistance. The separations are those of the last
-    /// [`ContactLanes::refresh`].
-    pub(super) fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+    /// Each point's normal row for the passes of `use_bias` until the next
+    /// [`ContactLanes::refresh`], from its separation: speculative (the gap may close
+    /// this substep, no further) or soft; its bias velocity, its mass `−normal_mass ·
+    /// mass_scale` and its impulse scale. The biased iterations of a substep share one
+    /// separation and so one row, formed once for them all.
+    fn weigh_normals(&mut self, ctx: &StepContext, use_bias: bool) {
         let zero = R::ZERO;
         let one = R::ONE;
         let inv_h = R::splat(ctx.inv_h);
@@ -292,21 +303,33 @@ impl<R: Real> ContactLanes<R> {
         } else {
             (zero, zero, one, zero)
         };
-        // A point's row: speculative (the gap may close this substep, no further) or
-        // soft. Its bias velocity, mass scale and impulse scale.
-        let coefficients = |sep: R| {
+        for (w, c) in self.rows.iter_mut().zip(&self.anchors) {
+            let sep = c.separation;
             let speculative = sep.gt(zero);
             let soft_bias = (bias_rate * sep).max(push_out);
-            (
-                R::select(speculative, sep * inv_h, soft_bias),
-                R::select(speculative, one, soft_mass),
-                R::select(speculative, zero, soft_impulse),
-            )
-        };
+            w.bias = R::select(speculative, sep * inv_h, soft_bias);
+            w.mass = -c.normal_mass * R::select(speculative, one, soft_mass);
+            w.impulse_scale = R::select(speculative, zero, soft_impulse);
+        }
+        self.weighed_for = Some(use_bias);
+    }
+
+    /// One Gauss–Seidel pass over every group: the pair's soft non-penetration rows as
+    /// one block ([`PairRows::solve_normals`]), then each point's friction capped by the
+    /// normal impulse just computed (Box2D v3's order; friction first would cap it with
+    /// a normal impulse the relax pass is about to raise, and slide too easily), then the
+    /// pair's rolling resistance. The separations are those of the last
+    /// [`ContactLanes::refresh`].
+    pub(super) fn solve(&mut self, s: &mut BodyStates, ctx: &StepContext, use_bias: bool) {
+        if self.weighed_for != Some(use_bias) {
+            self.weigh_normals(ctx, use_bias);
+        }
+        let zero = R::ZERO;
+        let one = R::ONE;
         for g in &mut self.groups {
             let [mut va, mut wa, mut vb, mut wb] = g.gather(s);
             let rows = &mut self.rows[g.rows..g.rows + g.slots];
-            g.solve_normals(rows, [&mut va, &mut wa, &mut vb, &mut wb], coefficients);
+            g.solve_normals(rows, [&mut va, &mut wa, &mut vb, &mut wb]);
             let (ma, mb) = (g.inv_mass_a, g.inv_mass_b);
             let [t0, t1] = g.tangents;
             let mut total_normal = zero;
@@ -373,6 +396,7 @@ impl<R: Real> ContactLanes<R> {
         self.groups.clear();
         self.rows.clear();
         self.anchors.clear();
+        self.weighed_for = None;
     }
 }
 
@@ -406,12 +430,7 @@ impl<R: Real> PairRows<R> {
     /// (`K` of four coplanar points is singular: impulses that sum to no force and no
     /// torque move nothing, and the sweeps leave that part of `λ` where it is.)
     #[inline]
-    fn solve_normals(
-        &self,
-        rows: &mut [PointRows<R>],
-        [va, wa, vb, wb]: [&mut V3<R>; 4],
-        coefficients: impl Fn(R) -> (R, R, R),
-    ) {
+    fn solve_normals(&self, rows: &mut [PointRows<R>], [va, wa, vb, wb]: [&mut V3<R>; 4]) {
         let zero = R::ZERO;
         let tolerance = R::splat(BLOCK_TOLERANCE);
         let (ma, mb, n) = (self.inv_mass_a, self.inv_mass_b, self.normal);
@@ -423,10 +442,8 @@ impl<R: Real> PairRows<R> {
             // it; in the first sweep, each row's own update.
             let mut change = zero;
             for p in rows.iter_mut() {
-                let (bias, mass_scale, impulse_scale) = coefficients(p.separation);
                 let vn = n.dot(*vb - *va) + p.jb_n.dot(*wb) - p.ja_n.dot(*wa);
-                let l =
-                    -p.normal_mass * mass_scale * (vn + bias) - impulse_scale * p.normal_impulse;
+                let l = p.mass * (vn + p.bias) - p.impulse_scale * p.normal_impulse;
                 let new = (p.normal_impulse + l).max(zero);
                 let d = new - p.normal_impulse;
                 match open {
@@ -675,11 +692,12 @@ mod tests {
         let [va, wa, vb, wb] = g.gather(&s);
         let (mut pressed, mut free) = (0, 0);
         for k in 0..4 {
-            for p in &lanes.rows[g.rows..g.rows + g.count[k]] {
+            let anchors = &lanes.anchors[g.rows..g.rows + g.count[k]];
+            for (p, c) in lanes.rows[g.rows..g.rows + g.count[k]].iter().zip(anchors) {
                 let n = g.normal.lane(k);
                 let v = n.dot(vb.lane(k) - va.lane(k)) + p.jb_n.lane(k).dot(wb.lane(k))
                     - p.ja_n.lane(k).dot(wa.lane(k));
-                let sep = p.separation.lane(k);
+                let sep = c.separation.lane(k);
                 let w = v + if sep > 0.0 { sep * ctx.inv_h } else { 0.0 };
                 let lambda = p.normal_impulse.lane(k);
                 assert!(lambda >= 0.0, "pair {k}: impulse {lambda}");
