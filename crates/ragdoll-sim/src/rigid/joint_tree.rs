@@ -617,6 +617,19 @@ impl JointTrees {
             match node {
                 NodeRef::Body(k) => {
                     let body = &bodies[k];
+                    if !body.inner {
+                        // A leaf's right-hand side is +0 (no joint below it writes it),
+                        // and so is `u = D⁻¹ x` (its D⁻¹ is its inverse mass and inertia,
+                        // finite once factored, with a non-negative diagonal: each row's
+                        // sum of products with +0 is +0) and `u_lin + u_ang × r`. The
+                        // push up `x_parent −= σ (+0)` then leaves x_parent as it is, but
+                        // for σ = −1, where `x − (−0)` turns a −0 into +0: that subtraction
+                        // alone is made.
+                        if body.parent != NO_PARENT && body.sign < 0.0 {
+                            x_joint[body.parent] -= Vec3A::splat(-0.0);
+                        }
+                        continue;
+                    }
                     let (v, w) = (x_lin[k], x_ang[k]);
                     let u_lin = body.p * v + body.q * w;
                     let u_ang = transpose_mul(&body.q, v) + body.s * w;
