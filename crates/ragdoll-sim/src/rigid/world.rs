@@ -621,6 +621,66 @@ mod tests {
         }
     }
 
+    /// A joint tree that does not factor hands its joints back to Gauss–Seidel, whose
+    /// rows read `K⁻¹`, which a joint in a tree leaves unweighed: the tree weighs it
+    /// then, as a full preparation on the same pose and inertias would have.
+    #[test]
+    fn a_tree_that_does_not_factor_weighs_its_joints_for_gauss_seidel() {
+        use super::super::joint::PointPart;
+        use crate::lanes::{M3, V3};
+        let mut w = MultibodyWorld::new(&pile(1)).unwrap_or_else(|e| panic!("{e}"));
+        w.step();
+        let MultibodyWorld {
+            states: s,
+            joints,
+            awake,
+            buffers,
+            ..
+        } = &mut w;
+        assert!(
+            awake[..s.len() - 1].iter().all(|&a| a),
+            "the falling figure is awake"
+        );
+        // Without world inverse inertias each point row keeps an invertible
+        // `K = (m_a⁻¹ + m_b⁻¹) 1`, but an inner body's block of the tree cannot be formed.
+        s.inv_inertia
+            .iter_mut()
+            .for_each(|i| *i = glam::Mat3A::ZERO);
+        let trees = buffers.trees_mut();
+        trees.rebuild(joints, s, awake);
+        joints.prepare(s, awake);
+        let nan = V3 {
+            x: f32::NAN,
+            y: f32::NAN,
+            z: f32::NAN,
+        };
+        let rows = &mut joints.rows;
+        let points = (rows.ball.iter_mut().map(|r| &mut r.point))
+            .chain(rows.hinge.iter_mut().map(|r| &mut r.point));
+        for p in points {
+            (p.k_inv, p.on) = (M3 { cols: [nan; 3] }, false);
+        }
+        trees.factor(joints, s);
+        let bits = |m: &M3<f32>| m.lane(0).to_cols_array().map(f32::to_bits);
+        let mut checked = 0;
+        let balls = (joints.ball.iter()).map(|j| (j.point, j.frame));
+        let hinges = (joints.hinge.iter()).map(|j| (j.point, j.frame));
+        let rows = (joints.rows.ball.iter().map(|r| r.point))
+            .chain(joints.rows.hinge.iter().map(|r| r.point));
+        for ((point, frame), got) in balls.chain(hinges).zip(rows) {
+            if !point.in_tree {
+                continue;
+            }
+            assert!(!point.direct, "a joint of a tree that did not factor");
+            let mut want = got;
+            PointPart::weigh_all(&mut want, &frame, s);
+            assert!(got.on && want.on);
+            assert_eq!(bits(&got.k_inv), bits(&want.k_inv));
+            checked += 1;
+        }
+        assert!(checked > 0, "no joint tree");
+    }
+
     /// The rows a step prepares for the joints live in the arrays being solved: a world
     /// solved in batches holds none of its own (each batch's gathered arrays do), one
     /// solved in place holds one per joint that touches an awake body (fewer as the
