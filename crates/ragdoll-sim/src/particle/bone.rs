@@ -15,7 +15,7 @@
 //! free bone moves as that limit does, keeping its momentum and angular momentum
 //! ([`Bone::advance`]).
 
-use super::bone_kinds::{BoneKind, BoneKinds};
+use super::bone_kinds::BoneKinds;
 use crate::scene::{BodyCollider, Pose};
 use glam::{Mat3, Quat, Vec3, Vec3A};
 
@@ -58,8 +58,10 @@ pub(crate) struct Bone {
     pub body: u32,
     /// Connected component of the joint graph ("figure").
     pub figure: u32,
-    /// Its shape and rest corners: [`BoneKinds::of`].
+    /// Its shape: [`BoneKinds::of`].
     pub kind: u32,
+    /// Its rest corners and shape frame: [`BoneKinds::placement`].
+    pub placement: u32,
     /// Its contact and air materials: [`BoneKinds::material`].
     pub material: u32,
     /// Seconds this bone has been below the sleep speeds.
@@ -81,6 +83,8 @@ pub(crate) struct Bone {
     /// Collides with bones of its own figure.
     pub self_collision: bool,
 }
+
+const _: () = assert!(std::mem::size_of::<Bone>() == 192);
 
 impl Bone {
     /// True when the bone takes no correction (fixed, or asleep).
@@ -139,18 +143,18 @@ impl Bone {
         self.dcom + (self.rot * local - self.prev_rot * local)
     }
 
-    /// World pose of the shape frame (the bone's kind is `kind`).
-    pub fn shape_pose(&self, kind: &BoneKind) -> Pose {
+    /// World pose of the shape frame (its placement in `kinds`).
+    pub fn shape_pose(&self, kinds: &BoneKinds) -> Pose {
         Pose {
             position: Vec3::from(self.center()),
             rotation: self.rot,
         }
-        .mul_pose(&kind.shape_in_bone)
+        .mul_pose(&kinds.placement(self).shape_in_bone)
     }
 
     /// The shape pose in parry's type.
-    pub fn parry_pose(&self, kind: &BoneKind) -> parry3d::math::Pose {
-        let p = self.shape_pose(kind);
+    pub fn parry_pose(&self, kinds: &BoneKinds) -> parry3d::math::Pose {
+        let p = self.shape_pose(kinds);
         parry3d::math::Pose::from_parts(p.position, p.rotation)
     }
 
@@ -162,13 +166,13 @@ impl Bone {
     /// Improved mode: particle `k`, rigidly placed in the frame. Between substeps this is
     /// where the solver's particle is; the improved world stores no particle arrays.
     pub fn corner(&self, kinds: &BoneKinds, k: usize) -> Vec3 {
-        Vec3::from(self.world(kinds.of(self).rest[k]))
+        Vec3::from(self.world(kinds.placement(self).rest[k]))
     }
 
     /// Improved mode: the velocity of particle `k` as the next substep starts from it,
     /// the frame's rigid motion `v + ω × (R rest_k)`.
     pub fn corner_velocity(&self, kinds: &BoneKinds, k: usize) -> Vec3 {
-        let rest = kinds.of(self).rest[k];
+        let rest = kinds.placement(self).rest[k];
         Vec3::from(self.lin_vel + self.ang_vel.cross(self.rot * Vec3A::from(rest)))
     }
 
@@ -177,7 +181,7 @@ impl Bone {
     /// solver measures its sticks from the world positions it placed, `paper::add_bone`,
     /// and keeps them in its own stick list).
     pub fn rest_stick_lengths(&self, kinds: &BoneKinds) -> [f32; 6] {
-        let rest = &kinds.of(self).rest;
+        let rest = &kinds.placement(self).rest;
         EDGES.map(|(a, b)| rest[a].distance(rest[b]))
     }
 
@@ -344,15 +348,15 @@ pub(crate) type Side = Option<usize>;
 /// segment nearest `local`, moved out by the radius along `dir`. `None` for a shape
 /// that is not round all over (a box, cylinder, cone or hull keeps its material
 /// points: they do not roll).
-pub(crate) fn rolled_point(b: &Bone, kind: &BoneKind, local: Vec3, dir: Vec3A) -> Option<Vec3> {
+pub(crate) fn rolled_point(b: &Bone, kinds: &BoneKinds, local: Vec3, dir: Vec3A) -> Option<Vec3> {
     let BodyCollider::Capsule {
         half_height,
         radius,
-    } = kind.shape
+    } = kinds.of(b).shape
     else {
         return None;
     };
-    let s = kind.shape_in_bone;
+    let s = kinds.placement(b).shape_in_bone;
     let along = s
         .inverse_transform_point(local)
         .y

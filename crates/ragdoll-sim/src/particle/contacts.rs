@@ -395,12 +395,12 @@ pub(crate) fn broad_phase_on(
         .with_min_len(BONES_PER_TASK)
         .zip(margin)
         .map(|(b, m)| {
-            let kind = kinds.of(b);
-            let aabb = kind
+            let aabb = kinds
+                .of(b)
                 .shape
                 .get()
                 .shape()
-                .compute_aabb(&b.parry_pose(kind))
+                .compute_aabb(&b.parry_pose(kinds))
                 .loosened(*m);
             (aabb, FilterKey::of(b))
         })
@@ -433,7 +433,7 @@ pub(crate) fn shape_pair(
     mut emit: impl FnMut(Vec3, Vec3, Vec3, f32),
 ) {
     let (ki, kj) = (kinds.of(&bones[i]), kinds.of(&bones[j]));
-    let (pi, pj) = (bones[i].parry_pose(ki), bones[j].parry_pose(kj));
+    let (pi, pj) = (bones[i].parry_pose(kinds), bones[j].parry_pose(kinds));
     let pos12 = pi.inv_mul(&pj);
     manifolds.clear();
     let mut ws = None;
@@ -491,7 +491,7 @@ pub(crate) fn ground_pair(
     let plane = HalfSpace::new(ground.normal());
     let pg = parry3d::math::Pose::from_translation(Vec3::new(0.0, ground.height, 0.0));
     let kind = kinds.of(&bones[i]);
-    let pb = bones[i].parry_pose(kind);
+    let pb = bones[i].parry_pose(kinds);
     let pos12 = pg.inv_mul(&pb);
     manifolds.clear();
     let mut ws = None;
@@ -551,7 +551,11 @@ mod tests {
                 b.com = Vec3A::from(plane_point + ground.normal() * above);
                 let margin = next() * 0.05;
                 let kind = w.kinds.of(b);
-                let aabb = kind.shape.get().shape().compute_aabb(&b.parry_pose(kind));
+                let aabb = kind
+                    .shape
+                    .get()
+                    .shape()
+                    .compute_aabb(&b.parry_pose(&w.kinds));
                 let reaches = reaches_ground(ground_plane(&ground), &aabb.loosened(margin));
                 let mut found = false;
                 ground_pair(

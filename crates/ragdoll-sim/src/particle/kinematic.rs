@@ -156,7 +156,7 @@ impl ParticleWorld {
         };
         let b = &self.bones[i];
         let kind = self.kinds.of(b);
-        let pose = b.shape_pose(kind);
+        let pose = b.shape_pose(&self.kinds);
         let com = pose.transform_point(kind.shape_com);
         let target_com = target.transform_point(kind.shape_com);
         k.velocity = velocity_towards(com, pose.rotation, target_com, target.rotation, dt);
@@ -173,7 +173,7 @@ impl ParticleWorld {
             };
             let b = &self.bones[i];
             let kind = self.kinds.of(b);
-            let pose = b.shape_pose(kind);
+            let pose = b.shape_pose(&self.kinds);
             let next = advanced(pose, kind.shape_com, k.velocity, dt);
             self.wake_swept(i, next);
             // The paper's particles of the bone move as if they were free (`place_bone`
@@ -223,7 +223,7 @@ impl ParticleWorld {
         b.lin_vel = Vec3A::from(v.linear);
         b.ang_vel = Vec3A::from(v.angular);
         let kind = self.kinds.of(b);
-        let com = b.shape_pose(kind).transform_point(kind.shape_com);
+        let com = b.shape_pose(&self.kinds).transform_point(kind.shape_com);
         let rigid = |x: Vec3| v.linear + v.angular.cross(x - com);
         if let Some(st) = self.xpbd.as_mut() {
             for p in PER_BONE * i..PER_BONE * (i + 1) {
@@ -246,7 +246,9 @@ impl ParticleWorld {
     fn wake_swept(&mut self, i: usize, next: Pose) {
         let kind = self.kinds.of(&self.bones[i]);
         let shape = kind.shape.get();
-        let now = shape.shape().compute_aabb(&self.bones[i].parry_pose(kind));
+        let now = shape
+            .shape()
+            .compute_aabb(&self.bones[i].parry_pose(&self.kinds));
         let then = shape.shape().compute_aabb(&parry3d::math::Pose::from_parts(
             next.position,
             next.rotation,
@@ -256,11 +258,12 @@ impl ParticleWorld {
             .filter(|&j| j != i && self.bones[j].asleep && !self.bones[j].fixed)
             .filter(|&j| {
                 let b = &self.bones[j];
-                let kind = self.kinds.of(b);
-                kind.shape
+                self.kinds
+                    .of(b)
+                    .shape
                     .get()
                     .shape()
-                    .compute_aabb(&b.parry_pose(kind))
+                    .compute_aabb(&b.parry_pose(&self.kinds))
                     .intersects(&swept)
             })
             .collect();

@@ -124,7 +124,7 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
     let dt = w.settings.timestep;
     for (i, b) in w.bones.iter().enumerate() {
         let kind = w.kinds.of(b);
-        let pose = b.shape_pose(kind);
+        let pose = b.shape_pose(&w.kinds);
         let com = pose.transform_point(kind.shape_com);
         let (lin, ang) = match w.solver {
             ParticleSolver::RigidFrames | ParticleSolver::Xpbd => {
@@ -139,7 +139,7 @@ pub(crate) fn body_states(w: &ParticleWorld, out: &mut Vec<BodyState>) {
                     position: p0,
                     rotation: r,
                 }
-                .mul_pose(&kind.shape_in_bone);
+                .mul_pose(&w.kinds.placement(b).shape_in_bone);
                 let prev_com = prev.transform_point(kind.shape_com);
                 let (axis, angle) = (pose.rotation * prev.rotation.inverse()).to_axis_angle();
                 let angle = if angle > std::f32::consts::PI {

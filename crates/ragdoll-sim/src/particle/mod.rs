@@ -8,8 +8,8 @@
 //!   manifolds with Coulomb friction and restitution; sleeping.
 //!
 //! Files, one concept each: `particles` (the paper's storage, Verlet), `bone` (tetrahedron, frame,
-//! rigid corrections), `bone_kinds` (what bones of a kind share: shape, rest corners,
-//! materials), `placement` (particulation), `joints`, `joint_kinds` (what joints of a
+//! rigid corrections), `bone_kinds` (what bones share: shape, rest corners and shape
+//! frame, materials), `placement` (particulation), `joints`, `joint_kinds` (what joints of a
 //! kind share: type, limits, compliance, friction), `limits`, `contacts`
 //! (filter, broad and narrow phase), `friction` (contact response), `sleeping`,
 //! `rigid_frames` and `paper` (the two solver loops), `islands` (the rigid-frames loop on all
@@ -52,7 +52,7 @@ use crate::snapshot::{
 };
 use crate::timings::{PhaseClock, PhaseTimes};
 use bone::{Bone, EDGES};
-use bone_kinds::{BoneKind, BoneKinds, Material};
+use bone_kinds::{BoneKind, BoneKinds, Material, Placement};
 use contacts::{ContactSet, Filter};
 use glam::{Quat, Vec3, Vec3A};
 use joint_kinds::JointKinds;
@@ -106,7 +106,7 @@ pub struct ParticleWorld {
     /// current frame, for the energy metric's `(x(t) − x(t−dt))/dt`.
     frame_starts: Vec<(Vec3, Quat)>,
     bones: Vec<Bone>,
-    /// What bones of a kind share: shapes, rest corners, materials.
+    /// What bones share: shapes, rest corners and shape frames, materials.
     kinds: BoneKinds,
     joints: Vec<Joint>,
     /// What joints of a kind share: type, limits, compliance, friction.
@@ -241,8 +241,9 @@ impl ParticleWorld {
     }
 
     /// A bone with everything but its particles (used by both placements): its frame
-    /// at the body's pose, its kind (rest corners `rest`, shape frame `shape_in_bone`
-    /// in the bone frame) and materials those of the table ([`BoneKinds`]).
+    /// at the body's pose, its kind, its placement (rest corners `rest`, shape frame
+    /// `shape_in_bone` in the bone frame) and materials those of the table
+    /// ([`BoneKinds`]).
     fn make_bone(
         &mut self,
         body: usize,
@@ -252,12 +253,14 @@ impl ParticleWorld {
         shape_in_bone: Pose,
     ) -> Bone {
         let kind = self.kinds.kind(BoneKind {
-            rest,
-            shape_in_bone,
             shape: BodyCollider::new(desc)
                 .unwrap_or_else(|_| BodyCollider::Shared(SharedShape::ball(0.01))),
             shape_com: mass_props(desc).map(|m| m.local_com).unwrap_or(Vec3::ZERO),
             drawn: desc.shape.clone(),
+        });
+        let placement = self.kinds.placement_index(Placement {
+            rest,
+            shape_in_bone,
         });
         let material = self.kinds.material_index(Material {
             friction: desc.friction.contact,
@@ -267,6 +270,7 @@ impl ParticleWorld {
         Bone {
             body: body as u32,
             kind,
+            placement,
             material,
             com: desc.pose.position.into(),
             dcom: Vec3A::ZERO,
@@ -489,7 +493,7 @@ pub(crate) fn grab_improved(bones: &mut [Bone], kinds: &BoneKinds, g: Grab, h: f
         return;
     };
     let local = kinds
-        .of(&bones[i])
+        .placement(&bones[i])
         .shape_in_bone
         .transform_point(g.local_point);
     let p = bones[i].world(local);
@@ -522,7 +526,7 @@ pub(crate) fn grab_paper(w: &mut ParticleWorld, g: Grab) {
     };
     let local = w
         .kinds
-        .of(&w.bones[i])
+        .placement(&w.bones[i])
         .shape_in_bone
         .transform_point(g.local_point);
     let p = Vec3::from(w.bones[i].world(local));
@@ -626,7 +630,7 @@ impl Method for ParticleWorld {
             out.bodies.push(BodyInstance {
                 body: BodyId(b.body),
                 shape: self.kinds.of(b).drawn.clone(),
-                pose: b.shape_pose(self.kinds.of(b)),
+                pose: b.shape_pose(&self.kinds),
                 role,
             });
             let corners = self.corners(bone);
@@ -776,7 +780,7 @@ impl Method for ParticleWorld {
         let mut best: Option<RayHit> = None;
         for b in &self.bones {
             let kind = self.kinds.of(b);
-            let pose = b.parry_pose(kind);
+            let pose = b.parry_pose(&self.kinds);
             if let Some(t) = kind
                 .shape
                 .get()
@@ -784,7 +788,9 @@ impl Method for ParticleWorld {
                 .cast_ray(&pose, &ray, f32::MAX, true)
                 && best.is_none_or(|h| t < h.distance)
             {
-                let local = b.shape_pose(kind).inverse_transform_point(origin + dir * t);
+                let local = b
+                    .shape_pose(&self.kinds)
+                    .inverse_transform_point(origin + dir * t);
                 best = Some(RayHit {
                     body: BodyId(b.body),
                     distance: t,
@@ -887,9 +893,9 @@ impl Method for ParticleWorld {
             }
             if self.solver == ParticleSolver::Paper {
                 // The paper's frame: particle 0 and Gram–Schmidt, shape stored in it
-                // (the bone's kind is its own: a projectile's is never shared).
+                // (the bone's placement is its own: a projectile's is never shared).
                 let x = &self.particles.x;
-                let shape_pose = bone.shape_pose(self.kinds.of(&bone));
+                let shape_pose = bone.shape_pose(&self.kinds);
                 let ids = self.particles.of_bone[self.bones.len()];
                 bone.paper_frame(ids, x);
                 let frame = Pose {
@@ -898,9 +904,9 @@ impl Method for ParticleWorld {
                 };
                 // Its sticks are as long as the placement's rest particles are apart.
                 let stick_rest = bone.rest_stick_lengths(&self.kinds);
-                let kind = self.kinds.of_mut(&bone);
-                kind.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
-                kind.shape_in_bone = Pose {
+                let placement = self.kinds.placement_mut(&bone);
+                placement.rest = ids.map(|p| frame.inverse_transform_point(x[p as usize]));
+                placement.shape_in_bone = Pose {
                     position: frame.inverse_transform_point(shape_pose.position),
                     rotation: (frame.rotation.inverse() * shape_pose.rotation).normalize(),
                 };

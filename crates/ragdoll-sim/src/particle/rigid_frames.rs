@@ -600,8 +600,7 @@ fn roll_contact(bones: &[Bone], kinds: &BoneKinds, m: &Manifold, c: &mut Contact
     let start = |b: &Bone, local: Vec3| b.rot * Vec3A::from(local);
     let mut jump = Vec3A::ZERO;
     if m.b().is_none()
-        && let Some(ra) =
-            super::bone::rolled_point(&bones[m.a()], kinds.of(&bones[m.a()]), c.ra, m.n)
+        && let Some(ra) = super::bone::rolled_point(&bones[m.a()], kinds, c.ra, m.n)
     {
         jump += start(&bones[m.a()], ra) - start(&bones[m.a()], c.ra);
         c.ra = ra;

@@ -64,8 +64,11 @@ impl ParticleWorld {
         velocity: BodyVelocity,
         new_velocity: bool,
     ) {
-        let kind = self.kinds.of(&self.bones[i]);
-        let s = &kind.shape_in_bone;
+        let (kind, placement) = (
+            self.kinds.of(&self.bones[i]),
+            self.kinds.placement(&self.bones[i]),
+        );
+        let s = &placement.shape_in_bone;
         let bone_in_shape = Pose {
             position: -(s.rotation.inverse() * s.position),
             rotation: s.rotation.inverse(),
@@ -87,7 +90,7 @@ impl ParticleWorld {
         if let Some(st) = self.xpbd.as_mut() {
             let f = PER_BONE * i;
             for k in 0..PER_BONE {
-                let x = frame.transform_point(kind.rest[k]);
+                let x = frame.transform_point(placement.rest[k]);
                 st.particles.x[f + k] = x.as_dvec3();
                 st.particles.x_prev[f + k] = x.as_dvec3();
                 st.particles.v[f + k] = rigid(x);
@@ -98,7 +101,7 @@ impl ParticleWorld {
         }
         if let Some(paper) = self.paper.as_ref() {
             let own = self.particles.of_bone[i];
-            let rest = kind.rest;
+            let rest = placement.rest;
             let past = |x: Vec3, v: Vec3| x - v * dt + g * (0.5 * dt * dt);
             // Joint particles tied to the bone by sticks, not among its four: moved
             // with it, once each (a bone's own six sticks join core particles only).

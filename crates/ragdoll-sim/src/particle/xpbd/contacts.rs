@@ -151,7 +151,7 @@ pub(crate) struct Scratch {
 fn attach(bones: &[Bone], kinds: &BoneKinds, i: usize, world: Vec3) -> Anchor {
     let b = &bones[i];
     let local = b.rot.inverse() * (world - Vec3::from(b.center()));
-    Anchor::Bone(i as u32, weights(&kinds.of(b).rest, local))
+    Anchor::Bone(i as u32, weights(&kinds.placement(b).rest, local))
 }
 
 /// Finds the contacts of the next `span` seconds into `out` (module doc). `tree` is
@@ -187,8 +187,12 @@ pub(crate) fn detect(
         let spin = (0..4)
             .map(|k| (p.v[f + k] - c).length())
             .fold(0.0, f32::max);
-        let kind = kinds.of(b);
-        let inner = kind.rest.iter().map(|r| r.length()).fold(1e-6, f32::max);
+        let (kind, placement) = (kinds.of(b), kinds.placement(b));
+        let inner = placement
+            .rest
+            .iter()
+            .map(|r| r.length())
+            .fold(1e-6, f32::max);
         let outer = kind
             .shape
             .get()
@@ -196,7 +200,7 @@ pub(crate) fn detect(
             .compute_local_aabb()
             .half_extents()
             .length()
-            + kind.shape_in_bone.position.length();
+            + placement.shape_in_bone.position.length();
         let speed = c.length() + spin * (outer / inner).max(1.0);
         scratch.speeds.push(speed);
         scratch.margins.push(speed * span + reach);
@@ -330,10 +334,10 @@ fn roll_ground_points(contacts: &mut [Contact], bones: &[Bone], kinds: &BoneKind
             continue;
         };
         let b = &bones[i as usize];
-        let kind = kinds.of(b);
-        let local = combine(&kind.rest, &w);
-        if let Some(rolled) = rolled_point(b, kind, local, Vec3A::from(c.n)) {
-            c.a = Anchor::Bone(i, weights(&kind.rest, rolled));
+        let rest = &kinds.placement(b).rest;
+        let local = combine(rest, &w);
+        if let Some(rolled) = rolled_point(b, kinds, local, Vec3A::from(c.n)) {
+            c.a = Anchor::Bone(i, weights(rest, rolled));
         }
     }
 }

@@ -30,7 +30,7 @@ pub(crate) fn body_states(w: &ParticleWorld, st: &XpbdState, out: &mut Vec<BodyS
     let p = &st.particles;
     for (i, b) in w.bones.iter().enumerate() {
         let kind = w.kinds.of(b);
-        let pose = b.shape_pose(kind);
+        let pose = b.shape_pose(&w.kinds);
         let f = PER_BONE * i;
         let c = p.centre(i);
         let x = p.bone64(i).map(|xk| (xk - c).as_vec3());

@@ -60,7 +60,7 @@ impl XpbdState {
     /// velocities.
     pub fn add_bone(&mut self, i: usize, b: &Bone, kinds: &BoneKinds) {
         debug_assert_eq!(self.rest.len(), i);
-        let rest = &kinds.of(b).rest;
+        let rest = &kinds.placement(b).rest;
         let x = std::array::from_fn(|k| Vec3::from(b.world(rest[k])));
         let (v, om) = (glam::Vec3::from(b.lin_vel), glam::Vec3::from(b.ang_vel));
         let c = Vec3::from(b.center());
@@ -82,9 +82,10 @@ impl XpbdState {
             .iter()
             .map(|j| {
                 let side = |s: Option<usize>, local: Vec3| match s {
-                    Some(i) => {
-                        Anchor::Bone(i as u32, frame::weights(&kinds.of(&bones[i]).rest, local))
-                    }
+                    Some(i) => Anchor::Bone(
+                        i as u32,
+                        frame::weights(&kinds.placement(&bones[i]).rest, local),
+                    ),
                     None => Anchor::World(local),
                 };
                 [side(j.a(), j.anchor_a), side(j.b(), j.anchor_b)]

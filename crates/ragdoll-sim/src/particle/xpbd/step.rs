@@ -201,7 +201,7 @@ pub(crate) fn substep_count(s: &Settings) -> u32 {
 fn read_frames(w: &mut ParticleWorld, st: &XpbdState) {
     for (i, b) in w.bones.iter_mut().enumerate() {
         if st.particles.moves(i) {
-            frame::read(b, &w.kinds.of(b).rest, &st.particles.bone64(i));
+            frame::read(b, &w.kinds.placement(b).rest, &st.particles.bone64(i));
         }
     }
 }
@@ -217,9 +217,9 @@ fn grab(w: &ParticleWorld, st: &mut XpbdState, g: Grab, h: f32) {
         return;
     };
     let b = &w.bones[i];
-    let kind = w.kinds.of(b);
-    let local = kind.shape_in_bone.transform_point(g.local_point);
-    let a = Anchor::Bone(i as u32, frame::weights(&kind.rest, local));
+    let placement = w.kinds.placement(b);
+    let local = placement.shape_in_bone.transform_point(g.local_point);
+    let a = Anchor::Bone(i as u32, frame::weights(&placement.rest, local));
     let omega = std::f32::consts::TAU * 5.0;
     let compliance = 1.0 / (b.mass.max(1e-3) * omega * omega);
     let d = (g.target.as_dvec3() - a.point64(&st.particles)).as_vec3();
