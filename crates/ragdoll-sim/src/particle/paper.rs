@@ -52,7 +52,7 @@ pub(crate) struct Stick {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HingeLimit {
     /// Bone A (body2), `None` for the world.
-    pub bone_a: Option<usize>,
+    pub bone_a: Option<u32>,
     /// The two axis particles; the axis points from `p1` to `p2`.
     pub p1: u32,
     /// Second axis particle.
@@ -77,7 +77,7 @@ pub(crate) struct HingeLimit {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ConeLimit {
     /// Bone A (body2), `None` for the world.
-    pub bone_a: Option<usize>,
+    pub bone_a: Option<u32>,
     /// The joint particle.
     pub joint: u32,
     /// Reference particle in B.
@@ -419,8 +419,9 @@ fn ties_and_limits(
     }
 }
 
-fn frame_rot(w: &ParticleWorld, bone: Option<usize>) -> Quat {
-    bone.map_or(Quat::IDENTITY, |b| w.bones[b].rot)
+/// Orientation of bone `bone`'s frame (identity for the world, `None`).
+fn frame_rot(w: &ParticleWorld, bone: Option<u32>) -> Quat {
+    bone.map_or(Quat::IDENTITY, |b| w.bones[b as usize].rot)
 }
 
 fn farthest_from_line(w: &ParticleWorld, bone: usize, p1: Vec3, axis: Vec3, skip: &[u32]) -> u32 {
@@ -447,6 +448,7 @@ fn hinge_limit(
     max: f32,
     dt: f32,
 ) -> HingeLimit {
+    let bone_a = b2.map(|b| b as u32);
     let x1 = w.particles.x[p1 as usize];
     let axis = (w.particles.x[p2 as usize] - x1).normalize();
     let ref_b = farthest_from_line(w, b1, x1, axis, &[p1, p2]);
@@ -466,12 +468,12 @@ fn hinge_limit(
     let on_axis = xb - radial;
     let limit_point = |angle: f32| on_axis + Quat::from_axis_angle(axis, angle) * radial;
     HingeLimit {
-        bone_a: b2,
+        bone_a,
         p1,
         p2,
         ref_a,
         ref_b,
-        rest_dir: frame_rot(w, b2).inverse() * radial.normalize_or_zero(),
+        rest_dir: frame_rot(w, bone_a).inverse() * radial.normalize_or_zero(),
         min,
         max,
         len_min: xa.distance(limit_point(min)),
@@ -487,6 +489,7 @@ fn cone_limit(
     s: &SwingLimit,
     dt: f32,
 ) -> ConeLimit {
+    let bone_a = b2.map(|b| b as u32);
     let (axis, theta, shaft) = match *s {
         SwingLimit::Cone {
             axis,
@@ -534,11 +537,11 @@ fn cone_limit(
         ),
     };
     ConeLimit {
-        bone_a: b2,
+        bone_a,
         joint,
         ref_b,
         other_a,
-        normal: frame_rot(w, b2).inverse() * axis,
+        normal: frame_rot(w, bone_a).inverse() * axis,
         c_dist: a_len * theta.cos(),
     }
 }
