@@ -90,21 +90,29 @@ pub(crate) struct ConeLimit {
     pub c_dist: f32,
 }
 
-/// A stick tying a joint particle that is not among a bone's four to one of them
-/// (3.2), with the bone it belongs to.
+/// A joint particle that is not among a bone's four, tied to each of the four by a
+/// stick (3.2): the stick to the bone's `k`-th particle (`Particles::of_bone`) has rest
+/// length `rest[k]`. The four sticks share the two particle indices, 24 bytes in all.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Satellite {
-    /// The bone whose particle it ties.
+    /// The bone whose particles it is tied to.
     pub bone: u32,
-    /// The stick.
-    pub stick: Stick,
+    /// The joint particle.
+    pub particle: u32,
+    /// Rest lengths of its sticks to the bone's four particles; [`NO_STICK`] where the
+    /// two particles coincide and the build makes no stick.
+    pub rest: [f32; 4],
 }
+
+/// A satellite's rest length where it has no stick: no distance is negative.
+const NO_STICK: f32 = -1.0;
 
 /// Runtime state of the paper solver.
 ///
 /// A bone's six sticks join its four particles along `EDGES`, so of each only the rest
-/// length is kept, by bone index; the particles are `Particles::of_bone`. The sticks
-/// joining other particles (satellites, ties) name theirs. [`PaperState::relax_sticks`]
+/// length is kept, by bone index; the particles are `Particles::of_bone`. A satellite's
+/// four sticks name its particle and bone; a tie names its two particles.
+/// [`PaperState::relax_sticks`]
 /// satisfies them in the order the paper's build makes them: each bone's six, then its
 /// satellites, bone after bone, then the ties. (A projectile's six, added after the
 /// ties, come before them here: they share no particle with a tie, and a stick moves
@@ -113,7 +121,7 @@ pub(crate) struct Satellite {
 pub(crate) struct PaperState {
     /// Per bone, the rest lengths of its six sticks (`EDGES`, in that order).
     pub bone_sticks: Vec<[f32; 6]>,
-    /// Sticks from satellite joint particles to a bone's four, ordered by bone.
+    /// Satellite joint particles, each tied to a bone's four, ordered by bone.
     pub satellites: Vec<Satellite>,
     /// Sticks of fixed and slider joints between two bones' particles (or a bone's and
     /// fixed anchors).
@@ -144,9 +152,19 @@ impl PaperState {
         self.bone_sticks[i]
     }
 
-    /// The sticks that are not a bone's own six: satellites and ties.
-    pub fn loose_sticks(&self) -> impl Iterator<Item = &Stick> {
-        self.satellites.iter().map(|s| &s.stick).chain(&self.ties)
+    /// The two particles of each stick that is not a bone's own six: satellites' (the
+    /// bones' particles are `of_bone`) and ties'.
+    pub fn loose_sticks<'a>(
+        &'a self,
+        of_bone: &'a [[u32; 4]],
+    ) -> impl Iterator<Item = (u32, u32)> + 'a {
+        let satellites = self.satellites.iter().flat_map(move |s| {
+            let ids = of_bone[s.bone as usize];
+            (0..4)
+                .filter(move |&k| s.rest[k] != NO_STICK)
+                .map(move |k| (s.particle, ids[k]))
+        });
+        satellites.chain(self.ties.iter().map(|t| (t.a, t.b)))
     }
 
     /// One relaxation pass over every stick (Jakobsen 2001): bone by bone its six sticks
@@ -162,7 +180,11 @@ impl PaperState {
             satisfy(x, inv, p1, p3, r[4]);
             satisfy(x, inv, p2, p3, r[5]);
             while let Some(s) = satellites.next_if(|s| s.bone == i as u32) {
-                satisfy(x, inv, s.stick.a, s.stick.b, s.stick.rest);
+                for (p, r) in [p0, p1, p2, p3].into_iter().zip(s.rest) {
+                    if r != NO_STICK {
+                        satisfy(x, inv, s.particle, p, r);
+                    }
+                }
             }
         }
         for s in &self.ties {
@@ -354,15 +376,15 @@ fn add_bone(
     st.push_bone_sticks(EDGES.map(|(a, b)| pos[a].distance(pos[b])));
     let x = &w.particles.x;
     for &s in satellites {
-        for &p in &particles {
+        let rest = particles.map(|p| {
             let rest = x[s as usize].distance(x[p as usize]);
-            if rest > 1e-6 {
-                st.satellites.push(Satellite {
-                    bone: i as u32,
-                    stick: Stick { a: s, b: p, rest },
-                });
-            }
-        }
+            if rest > 1e-6 { rest } else { NO_STICK }
+        });
+        st.satellites.push(Satellite {
+            bone: i as u32,
+            particle: s,
+            rest,
+        });
     }
     w.bones.push(bone);
 }
@@ -815,13 +837,11 @@ mod tests {
                 );
             }
             for s in st.satellites.iter().filter(|s| s.bone as usize == i) {
-                satisfy(
-                    &mut one_by_one,
-                    &p.inv_mass,
-                    s.stick.a,
-                    s.stick.b,
-                    s.stick.rest,
-                );
+                for (&b, r) in ids.iter().zip(s.rest) {
+                    if r != NO_STICK {
+                        satisfy(&mut one_by_one, &p.inv_mass, s.particle, b, r);
+                    }
+                }
             }
         }
         for s in &st.ties {

@@ -107,8 +107,8 @@ impl ParticleWorld {
             // with it, once each (a bone's own six sticks join core particles only).
             let core = |k: u32| self.particles.of_bone.iter().any(|ids| ids.contains(&k));
             let mut tied: Vec<u32> = Vec::new();
-            for stick in paper.loose_sticks() {
-                for (end, other) in [(stick.a, stick.b), (stick.b, stick.a)] {
+            for (a, b) in paper.loose_sticks(&self.particles.of_bone) {
+                for (end, other) in [(a, b), (b, a)] {
                     if own.contains(&end)
                         && !own.contains(&other)
                         && !tied.contains(&other)
