@@ -11,43 +11,49 @@ use super::bone::{Bone, Side};
 use super::bone_kinds::BoneKinds;
 use crate::broadphase::{Reused, box_height_above_plane};
 use crate::scene::Ground;
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec4};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
 use parry3d::shape::HalfSpace;
 use rayon::prelude::*;
+use std::ops::Range;
 
-/// A contact manifold: where two sides touch, and what its points share. The points
-/// are `points[start..end]` of the same [`ContactSet`].
+/// A contact manifold: where two sides touch, and what its points share. Its points
+/// are those of the same [`ContactSet`] from its `start` up to the next manifold's
+/// (the last one's up to the set's end, [`ranges`]).
 ///
 /// Split from the points (Box2D's manifold/point split) because a box face brings
 /// four points with one normal and one pair of materials: kept once per manifold the
 /// set is less than half the bytes, and the passes over the points stream less. Its
-/// sides are packed in 4 bytes each ([`Manifold::a`], [`Manifold::b`]): 48 bytes.
+/// sides are packed in 4 bytes each ([`Manifold::a`], [`Manifold::b`]), its normal in
+/// three floats followed by its Coulomb coefficient, so that one unaligned load gives
+/// the normal's SIMD lanes ([`Manifold::n`]), and its points' end is the next
+/// manifold's start, not kept: 36 bytes, four-byte aligned (a normal held in lanes,
+/// 16 bytes and 16-aligned, and an end made it 48).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Manifold {
     /// The first bone.
     a: u32,
     /// The second bone, or the ground ([`GROUND`]).
     b: u32,
-    /// Unit normal from `a` towards `b` (world), fixed for the frame; in SIMD lanes, as
-    /// the solver uses it.
-    pub n: Vec3A,
-    /// Combined Coulomb coefficient.
-    pub mu: f32,
+    /// The unit normal from `a` towards `b` (world, fixed for the frame), then the
+    /// combined Coulomb coefficient ([`Manifold::n`], [`Manifold::mu`]).
+    n_mu: [f32; 4],
     /// Combined restitution.
     pub e: f32,
     /// `ρ r` of its rolling resistance (m, `crate::scene::rolling_arm`): 0 when
     /// neither side rolls.
     pub roll: f32,
-    /// First point.
+    /// First point; the manifold's points run up to the next manifold's first.
     pub start: u32,
-    /// One past the last point.
-    pub end: u32,
 }
 
 /// A [`Manifold`]'s ground side.
 const GROUND: u32 = u32::MAX;
+
+// The sizes the docs of `Manifold` and `ContactPoint` give, which the memory bench's
+// figures are made of.
+const _: () = assert!(size_of::<Manifold>() == 36 && size_of::<ContactPoint>() == 56);
 
 impl Manifold {
     /// The first bone.
@@ -62,37 +68,63 @@ impl Manifold {
         (self.b != GROUND).then_some(self.b as usize)
     }
 
+    /// Unit normal from `a` towards `b` (world), fixed for the frame, in SIMD lanes as
+    /// the solver uses it: the four floats of `n_mu` in one load, the normal's bits in
+    /// `x`, `y`, `z` and the Coulomb coefficient in the lane a `Vec3A` leaves unread.
+    #[inline]
+    pub fn n(&self) -> Vec3A {
+        Vec3A::from_vec4(Vec4::from_array(self.n_mu))
+    }
+
+    /// Combined Coulomb coefficient, `√(μ_a μ_b)`.
+    #[inline]
+    pub fn mu(&self) -> f32 {
+        self.n_mu[3]
+    }
+
     /// The manifold between sides `a` and `b` (bones below `u32::MAX`) whose points
-    /// are `start..end`: its copy in a batch, bones and points renumbered.
-    pub fn renumbered(self, (a, b): (usize, Side), start: u32, end: u32) -> Manifold {
+    /// start at `start`: its copy in a batch, bones and points renumbered.
+    pub fn renumbered(self, (a, b): (usize, Side), start: u32) -> Manifold {
         Manifold {
             a: a as u32,
             b: b.map_or(GROUND, |j| j as u32),
             start,
-            end,
             ..self
         }
     }
+}
 
-    /// Its points' range in the set.
-    pub fn range(&self) -> std::ops::Range<usize> {
-        self.start as usize..self.end as usize
-    }
+/// Manifold `k`'s points' range in its set, whose points end at `end`: from its start
+/// up to the next manifold's, the last one's up to `end`.
+pub(crate) fn range(manifolds: &[Manifold], k: usize, end: usize) -> Range<usize> {
+    let next = manifolds.get(k + 1).map_or(end, |m| m.start as usize);
+    debug_assert!(
+        manifolds[k].start as usize <= next,
+        "manifolds' points in order"
+    );
+    manifolds[k].start as usize..next
+}
+
+/// Each manifold's points' range in turn ([`range`]), in a set whose points end at
+/// `end`. Consecutive manifolds' points are consecutive: `ContactSet::push` and
+/// `append`, and `Batch::gather`, keep them so.
+pub(crate) fn ranges(manifolds: &[Manifold], end: usize) -> impl Iterator<Item = Range<usize>> {
+    let next = (manifolds.iter().skip(1).map(|m| m.start as usize)).chain(std::iter::once(end));
+    manifolds.iter().zip(next).map(|(m, next)| {
+        debug_assert!(m.start as usize <= next, "manifolds' points in order");
+        m.start as usize..next
+    })
 }
 
 /// The points of consecutive manifolds, cut into each one's run in order: `points`
-/// starts at the first manifold's first point, and each manifold's points follow the
-/// last one's (`ContactSet::push` and `append`, `Batch::gather` keep them so; debug
-/// builds check it).
+/// holds exactly their points, from the first manifold's first point on ([`ranges`]).
 pub(crate) fn point_runs<'a>(
     manifolds: &'a [Manifold],
     mut points: &'a mut [ContactPoint],
 ) -> impl Iterator<Item = &'a mut [ContactPoint]> + 'a {
-    let mut next = manifolds.first().map_or(0, |m| m.start);
-    manifolds.iter().map(move |m| {
-        debug_assert_eq!(m.start, next, "a manifold's points follow the last one's");
-        next = m.end;
-        let (run, after) = std::mem::take(&mut points).split_at_mut(m.range().len());
+    let end = manifolds.first().map_or(0, |m| m.start as usize) + points.len();
+    ranges(manifolds, end).map(move |r| {
+        let (run, after) = std::mem::take(&mut points).split_at_mut(r.len());
         points = after;
         run
     })
@@ -100,11 +132,15 @@ pub(crate) fn point_runs<'a>(
 
 /// One contact point, kept in the bones' frames so it can be re-evaluated every substep.
 ///
-/// 64 bytes: its two material points and eight numbers of the solve. What is the same
+/// 56 bytes: its two material points and six numbers of the solve. What is the same
 /// for every point of the set is not kept here: how far the frame so far allows an old
 /// overlap to be pushed out is one product a substep (`friction::PushOut`), and a
 /// point not yet pressed is told by a sentinel offset ([`UNTOUCHED`]), not an
-/// `Option`'s tag.
+/// `Option`'s tag. The friction multiplier of the position passes and the normal
+/// impulse of the velocity pass share one number ([`ContactPoint::lambda_tv`]): a
+/// substep is done with the first before it starts the second. The relative normal
+/// velocity before a substep's solve, which only restitution reads, is the substep
+/// loop's, measured only on manifolds that bounce (`rigid_frames::run_substeps`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ContactPoint {
     /// Contact point on `a`, bone frame.
@@ -113,14 +149,14 @@ pub(crate) struct ContactPoint {
     pub rb: Vec3,
     /// Normal multiplier of the current substep (0 when not touching).
     pub lambda_n: f32,
-    /// Tangential (friction) multiplier spent in the current substep.
-    pub lambda_t: f32,
-    /// Normal impulse (N s) the velocity pass has applied in the current substep, `> 0`
-    /// pushing: with the position pass's `lambda_n / h` it sums to the substep's whole
-    /// normal impulse, which never pulls (`friction::solve_velocities`).
-    pub lambda_v: f32,
-    /// Relative normal velocity before the substep's solve (m/s, > 0 approaching).
-    pub vn_before: f32,
+    /// Through the current substep's position passes, `λ_t`: the tangential (friction)
+    /// multiplier they have spent, read by the manifold's Coulomb cone
+    /// (`friction::solve_friction`). From its velocity pass on, `λ_v`: the normal
+    /// impulse (N s) that pass has applied, `> 0` pushing, which with the position
+    /// passes' `lambda_n / h` sums to the substep's whole normal impulse, never a pull
+    /// (`friction::solve_velocities`), and which rolling resistance reads. Zero at the
+    /// start of each (`rigid_frames::run_substeps`).
+    pub lambda_tv: f32,
     /// Tangential offset `pa − pb` of the two points when they last came into touch (at
     /// the start of the first substep of an unbroken run of touching ones): what they
     /// drift from it since is slip static friction may take back
@@ -156,9 +192,7 @@ impl ContactPoint {
             ra,
             rb,
             lambda_n: 0.0,
-            lambda_t: 0.0,
-            lambda_v: 0.0,
-            vn_before: 0.0,
+            lambda_tv: 0.0,
             touched_at: Vec3::splat(UNTOUCHED),
             left: f32::INFINITY,
             left_before: f32::INFINITY,
@@ -201,7 +235,8 @@ impl ContactSet {
     /// ([`Manifold`]): to the last manifold if it was opened for this pair (index
     /// `first` or later) with the same normal, else to a new one. Parry reports a pair's
     /// points manifold by manifold, so a pair of convex shapes makes one manifold and a
-    /// pair with no points makes none.
+    /// pair with no points makes none. The last manifold's points run to the set's end,
+    /// so a point added to it needs no change to it.
     pub fn push(
         &mut self,
         first: usize,
@@ -210,21 +245,16 @@ impl ContactSet {
         (mu, e, roll): (f32, f32, f32),
         point: ContactPoint,
     ) {
-        let n = Vec3A::from(n);
-        let end = self.points.len() as u32;
         let open = self.manifolds.len() > first;
-        match self.manifolds.last_mut() {
-            Some(m) if open && m.n == n => m.end = end + 1,
-            _ => self.manifolds.push(Manifold {
+        if !(self.manifolds.last()).is_some_and(|m| open && Vec3::from_slice(&m.n_mu) == n) {
+            self.manifolds.push(Manifold {
                 a: a as u32,
                 b: b.map_or(GROUND, |j| j as u32),
-                n,
-                mu,
+                n_mu: [n.x, n.y, n.z, mu],
                 e,
                 roll,
-                start: end,
-                end: end + 1,
-            }),
+                start: self.points.len() as u32,
+            });
         }
         self.points.push(point);
     }
@@ -252,7 +282,6 @@ impl ContactSet {
         self.manifolds
             .extend(other.manifolds.iter().map(|m| Manifold {
                 start: m.start + offset,
-                end: m.end + offset,
                 ..*m
             }));
         self.points.extend_from_slice(&other.points);
@@ -638,10 +667,10 @@ mod tests {
         // last manifold, which must not absorb it.
         let first = set.manifolds.len();
         set.push(first, (2, None), side, (0.3, 0.1, 0.0), point(3.0));
-        let ranges: Vec<_> = set.manifolds.iter().map(|m| m.range()).collect();
-        assert_eq!(ranges, vec![0..2, 2..3, 3..4]);
+        let runs: Vec<_> = ranges(&set.manifolds, set.points.len()).collect();
+        assert_eq!(runs, vec![0..2, 2..3, 3..4]);
         assert_eq!((set.manifolds[2].a(), set.manifolds[2].b()), (2, None));
-        assert_eq!(set.manifolds[2].mu, 0.3);
+        assert_eq!(set.manifolds[2].mu(), 0.3);
     }
 
     /// Sets filled apart and appended in order are the set filled in one go: the
@@ -671,10 +700,9 @@ mod tests {
         joined.append(&left);
         joined.append(&right);
         let key = |s: &ContactSet| {
-            let m: Vec<_> = s
-                .manifolds
-                .iter()
-                .map(|m| (m.a(), m.b(), m.n, m.range()))
+            let m: Vec<_> = (s.manifolds.iter())
+                .zip(ranges(&s.manifolds, s.points.len()))
+                .map(|(m, r)| (m.a(), m.b(), m.n(), r))
                 .collect();
             let p: Vec<_> = s.points.iter().map(|c| c.ra).collect();
             (m, p)

@@ -105,9 +105,10 @@ fn normal_target(
     c: &mut ContactPoint,
     push: PushOut,
 ) -> (Vec3A, Vec3A, f32) {
+    let n = m.n();
     let pa = bones[m.a()].world(c.ra);
     let pb = side_world(bones, m.b(), c.rb);
-    let depth = (pa - pb).dot(m.n);
+    let depth = (pa - pb).dot(n);
     if depth <= 0.0 {
         c.left = 0.0;
         return (pa, pb, depth);
@@ -115,8 +116,7 @@ fn normal_target(
     if c.touched_at().is_none() {
         c.set_touched_at(Some(Vec3::from(start_offset(bones, m, c, pa, pb))));
     }
-    let approach =
-        (bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb)).dot(m.n);
+    let approach = (bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb)).dot(n);
     let old = (depth - approach).min(c.left_before).max(0.0);
     let frame_left = c.frame_overlap - push.frame;
     let left = (old - push.substep).max(frame_left).max(0.0);
@@ -143,7 +143,7 @@ pub(crate) fn solve_normal(
     if !moves {
         return Some((pa, pb));
     }
-    let corr = Correction::along(bones, (Some(m.a()), pa), (m.b(), pb), -m.n);
+    let corr = Correction::along(bones, (Some(m.a()), pa), (m.b(), pb), -m.n());
     if corr.w > 0.0 {
         let lambda = (correction / corr.w).max(lowest);
         corr.apply(bones, lambda);
@@ -273,9 +273,9 @@ struct Block {
 
 impl Block {
     fn new(bones: &[Bone], m: &Manifold, pa: &[Vec3A], pb: &[Vec3A]) -> Block {
-        let k = pa.len();
-        let a = BlockSide::new(bones, Some(m.a()), pa, -m.n);
-        let b = BlockSide::new(bones, m.b(), pb, m.n);
+        let (k, n) = (pa.len(), m.n());
+        let a = BlockSide::new(bones, Some(m.a()), pa, -n);
+        let b = BlockSide::new(bones, m.b(), pb, n);
         let mut matrix = [[0.0; BLOCK]; BLOCK];
         for side in a.iter().chain(&b) {
             side.add_to(k, &mut matrix);
@@ -417,11 +417,12 @@ pub(crate) fn solve_normals(
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
     lambda = block.solve(&need[..k], &lowest[..k]);
+    let n = m.n();
     if let Some(s) = &block.a {
-        s.apply(bones, -m.n, &lambda[..k]);
+        s.apply(bones, -n, &lambda[..k]);
     }
     if let Some(s) = &block.b {
-        s.apply(bones, m.n, &lambda[..k]);
+        s.apply(bones, n, &lambda[..k]);
     }
     for (c, l) in points.iter_mut().zip(lambda) {
         c.lambda_n += l;
@@ -434,8 +435,8 @@ pub(crate) fn solve_normals(
 /// the same).
 fn start_offset(bones: &[Bone], m: &Manifold, c: &ContactPoint, pa: Vec3A, pb: Vec3A) -> Vec3A {
     let sub = bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb);
-    let d = pa - pb - sub;
-    d - m.n * d.dot(m.n)
+    let (d, n) = (pa - pb - sub, m.n());
+    d - n * d.dot(n)
 }
 
 /// Share of a contact point's tangential drift since it came into touch
@@ -487,13 +488,14 @@ pub(crate) fn solve_friction(
 ) -> Option<f32> {
     // Nothing to spend (a manifold not pressed yet, or its cone used up): return before
     // measuring the slip, four rotations of the contact's arms.
-    let allowed = m.mu * group_n - group_t;
+    let allowed = m.mu() * group_n - group_t;
     if allowed <= 0.0 {
         return None;
     }
     let a = Some(m.a());
     let (pa, pb) = at.unwrap_or_else(|| (bones[m.a()].world(c.ra), side_world(bones, m.b(), c.rb)));
-    let tangential = |d: Vec3A| d - m.n * d.dot(m.n);
+    let n = m.n();
+    let tangential = |d: Vec3A| d - n * d.dot(n);
     // The substep's slip, and the drift since the points came into touch:
     // `pa − pb = touched_at + drift + substep slip` along the tangent.
     let sub = tangential(bones[m.a()].displacement(c.ra) - side_displacement(bones, m.b(), c.rb));
@@ -534,7 +536,7 @@ pub(crate) fn solve_friction(
     let mu = (len2 / corr.w).min(allowed / len);
     corr.apply(bones, mu);
     let lt = mu * len;
-    c.lambda_t += lt;
+    c.lambda_tv += lt;
     Some(lt)
 }
 
@@ -543,20 +545,31 @@ pub(crate) fn solve_friction(
 /// without losing energy, since a point cannot resist twist.
 const PATCH_RADIUS: f32 = 0.01;
 
-/// Normal velocity a contact point leaves with: restitution on the approach speed
-/// before the solve (above the threshold), never more; zero otherwise.
-fn velocity_target(m: &Manifold, c: &ContactPoint, restitution_threshold: f32) -> f32 {
-    if c.vn_before > restitution_threshold {
-        -m.e * c.vn_before
+/// Normal velocity a contact point leaves with: restitution on its relative normal
+/// velocity before the substep's solve, `vn_before` (m/s, > 0 approaching; above the
+/// threshold), never more; zero otherwise.
+fn velocity_target(m: &Manifold, vn_before: f32, restitution_threshold: f32) -> f32 {
+    if vn_before > restitution_threshold {
+        -m.e * vn_before
     } else {
         0.0
     }
 }
 
+/// Point `i`'s relative normal velocity before the substep's solve, of a manifold's
+/// `approach` ([`solve_velocities`]): 0 where none was measured (`e = 0`, whose target
+/// is zero whatever the approach).
+fn approach_of(approach: &[f32], i: usize) -> f32 {
+    approach.get(i).copied().unwrap_or(0.0)
+}
+
 /// Velocity pass for one manifold: the normal velocity of each point that pressed this
 /// substep brought to its target ([`velocity_target`]) by impulses solved as one block
 /// ([`Block::solve`], for the reason [`solve_normals`] gives), then each point's
-/// torsional friction. Accumulates each point's `lambda_v` over the velocity passes.
+/// torsional friction. Accumulates each point's `λ_v` (`ContactPoint::lambda_tv`) over
+/// the velocity passes. `approach` holds each point's relative normal velocity before
+/// the substep's solve (m/s, > 0 approaching) for restitution, measured only on
+/// manifolds that bounce (`rigid_frames::run_substeps`); empty, it reads as zero.
 ///
 /// A contact only pushes: over the substep, the position pass's impulse `λ_n / h` and
 /// the velocity pass's `λ_v` sum to at least zero at each point. The velocity pass may
@@ -574,6 +587,7 @@ pub(crate) fn solve_velocities(
     bones: &mut [Bone],
     m: &Manifold,
     points: &mut [ContactPoint],
+    approach: &[f32],
     h: f32,
     restitution_threshold: f32,
 ) {
@@ -593,61 +607,63 @@ pub(crate) fn solve_velocities(
     // frames and inertia, which the velocity pass does not change.
     let mut turn = None;
     if k <= 1 || k > BLOCK {
-        for c in points {
-            solve_velocity(bones, m, c, h, restitution_threshold, &mut turn);
+        for (i, c) in points.iter_mut().enumerate() {
+            if c.lambda_n > 0.0 {
+                let target = velocity_target(m, approach_of(approach, i), restitution_threshold);
+                solve_velocity(bones, m, c, target, h, &mut turn);
+            }
         }
         return;
     }
     let (mut pa, mut pb) = ([Vec3A::ZERO; BLOCK], [Vec3A::ZERO; BLOCK]);
     let (mut excess, mut lower) = ([0.0; BLOCK], [0.0; BLOCK]);
+    let n = m.n();
     for (slot, &i) in active[..k].iter().enumerate() {
         let c = &points[i];
         pa[slot] = bones[m.a()].world(c.ra);
         pb[slot] = side_world(bones, m.b(), c.rb);
         let v =
             point_velocity(bones, Some(m.a()), pa[slot]) - point_velocity(bones, m.b(), pb[slot]);
-        excess[slot] = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
-        lower[slot] = -c.lambda_n / h - c.lambda_v;
+        let target = velocity_target(m, approach_of(approach, i), restitution_threshold);
+        excess[slot] = v.dot(n) - target;
+        lower[slot] = -c.lambda_n / h - c.lambda_tv;
     }
     let block = Block::new(bones, m, &pa[..k], &pb[..k]);
     let lambda = block.solve(&excess[..k], &lower[..k]);
     if let Some(s) = &block.a {
-        s.apply_velocity(bones, -m.n, &lambda[..k]);
+        s.apply_velocity(bones, -n, &lambda[..k]);
     }
     if let Some(s) = &block.b {
-        s.apply_velocity(bones, m.n, &lambda[..k]);
+        s.apply_velocity(bones, n, &lambda[..k]);
     }
     for (&i, l) in active[..k].iter().zip(lambda) {
-        points[i].lambda_v += l;
+        points[i].lambda_tv += l;
         solve_twist(bones, m, &points[i], h, &mut turn);
     }
 }
 
-/// Velocity pass for one contact that was active this substep, on its own: its normal
-/// velocity brought to its target by an impulse bounded as [`solve_velocities`] bounds
-/// a block's, `λ_v ≥ −λ_n / h` accumulated.
+/// Velocity pass for one contact that was active this substep (`λ_n > 0`), on its own:
+/// its normal velocity brought to its `target` ([`velocity_target`]) by an impulse
+/// bounded as [`solve_velocities`] bounds a block's, `λ_v ≥ −λ_n / h` accumulated.
 fn solve_velocity(
     bones: &mut [Bone],
     m: &Manifold,
     c: &mut ContactPoint,
+    target: f32,
     h: f32,
-    restitution_threshold: f32,
     turn: &mut Option<Correction>,
 ) {
-    if c.lambda_n <= 0.0 {
-        return;
-    }
-    let a = Some(m.a());
+    let (a, n) = (Some(m.a()), m.n());
     let pa = bones[m.a()].world(c.ra);
     let pb = side_world(bones, m.b(), c.rb);
     let v = point_velocity(bones, a, pa) - point_velocity(bones, m.b(), pb);
-    let excess = v.dot(m.n) - velocity_target(m, c, restitution_threshold);
-    let corr = Correction::along(bones, (a, pa), (m.b(), pb), m.n);
+    let excess = v.dot(n) - target;
+    let corr = Correction::along(bones, (a, pa), (m.b(), pb), n);
     if corr.w > 0.0 {
         // The push `λ_v` (along `−n`) that meets the target, within the bound.
-        let push = (excess / corr.w).max(-c.lambda_n / h - c.lambda_v);
+        let push = (excess / corr.w).max(-c.lambda_n / h - c.lambda_tv);
         corr.apply_velocity(bones, -push);
-        c.lambda_v += push;
+        c.lambda_tv += push;
     }
     solve_twist(bones, m, c, h, turn);
 }
@@ -663,17 +679,17 @@ fn solve_twist(
     h: f32,
     turn: &mut Option<Correction>,
 ) {
-    let a = Some(m.a());
+    let (a, n) = (Some(m.a()), m.n());
     let twist = |bones: &[Bone], s: Side| match s {
-        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(m.n),
+        Some(i) if !bones[i].is_static() => bones[i].ang_vel.dot(n),
         _ => 0.0,
     };
     let spin = twist(bones, a) - twist(bones, m.b());
     if spin != 0.0 {
         // Both levers `I⁻¹ n` formed once, for the inverse mass and the impulse.
-        let turn = *turn.get_or_insert_with(|| Correction::turning(bones, a, m.b(), m.n));
+        let turn = *turn.get_or_insert_with(|| Correction::turning(bones, a, m.b(), n));
         if turn.w > 0.0 {
-            let cap = m.mu * PATCH_RADIUS * c.lambda_n / h;
+            let cap = m.mu() * PATCH_RADIUS * c.lambda_n / h;
             let l = spin.signum() * (spin.abs() / turn.w).min(cap);
             turn.apply_velocity(bones, -l);
         }

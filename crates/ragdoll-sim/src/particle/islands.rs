@@ -15,7 +15,7 @@
 use super::ParticleWorld;
 use super::bone::{Bone, Side};
 use super::bone_kinds::BoneKinds;
-use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs};
+use super::contacts::{BONES_PER_TASK, ContactPoint, Manifold, point_runs, range, ranges};
 use super::joint_lanes::{Entry, Lockstep};
 use super::joints::JointSet;
 use crate::method::Grab;
@@ -123,9 +123,10 @@ impl Plan {
                 work[r as usize] += 1;
             }
         }
-        for (m, &r) in w.contacts.manifolds.iter().zip(&manifold_root) {
+        let (manifolds, points) = (&w.contacts.manifolds, &w.contacts.points);
+        for (run, &r) in ranges(manifolds, points.len()).zip(&manifold_root) {
             if r != NONE {
-                work[r as usize] += (m.end - m.start) as usize;
+                work[r as usize] += run.len();
             }
         }
         let total: usize = work.iter().sum();
@@ -272,13 +273,14 @@ impl Batch {
         }
         self.manifolds.clear();
         self.points.clear();
+        let (manifolds, points) = (&w.contacts.manifolds, &w.contacts.points);
         for &k in &m.manifolds {
-            let c = w.contacts.manifolds[k as usize];
+            let c = manifolds[k as usize];
             let start = self.points.len() as u32;
-            self.points.extend_from_slice(&w.contacts.points[c.range()]);
+            self.points
+                .extend_from_slice(&points[range(manifolds, k as usize, points.len())]);
             let sides = (local_of(c.a()), renumber(c.b()));
-            self.manifolds
-                .push(c.renumbered(sides, start, self.points.len() as u32));
+            self.manifolds.push(c.renumbered(sides, start));
         }
         let joints = m.joints.iter().map(|&k| {
             let (a, b) = w.links[k as usize].sides();
@@ -334,7 +336,8 @@ fn scatter(w: &mut ParticleWorld, plan: &Plan, stepped: &[&Batch]) {
         .for_each(|(run, &(b, k))| {
             if b != NONE {
                 let batch = &stepped[b as usize];
-                run.copy_from_slice(&batch.points[batch.manifolds[k as usize].range()]);
+                let (manifolds, points) = (&batch.manifolds, &batch.points);
+                run.copy_from_slice(&points[range(manifolds, k as usize, points.len())]);
             }
         });
 }

@@ -102,9 +102,6 @@ pub struct ParticleWorld {
     /// The paper's particles. The improved solver keeps none: its particles are the
     /// corners of the bone frames (`Bone::corner`).
     particles: Particles,
-    /// Improved mode: each bone's frame (origin, orientation) at the start of the
-    /// current frame, for the energy metric's `(x(t) − x(t−dt))/dt`.
-    frame_starts: Vec<(Vec3, Quat)>,
     bones: Vec<Bone>,
     /// What bones share: shapes, rest corners and shape frames, materials.
     kinds: BoneKinds,
@@ -160,7 +157,6 @@ impl ParticleWorld {
             bodies: scene.bodies.len(),
             solver,
             particles: Particles::default(),
-            frame_starts: Vec::new(),
             bones: Vec::new(),
             kinds: BoneKinds::building(),
             joints: Vec::new(),
@@ -236,7 +232,6 @@ impl ParticleWorld {
         w.joints.shrink_to_fit();
         w.joint_kinds.seal();
         w.particles.shrink_to_fit();
-        w.frame_starts.shrink_to_fit();
         Ok(w)
     }
 
@@ -314,18 +309,10 @@ impl ParticleWorld {
         let movable = !desc.is_fixed();
         if self.solver == ParticleSolver::RigidFrames {
             // The velocity form of Verlet keeps its velocity half a substep back,
-            // `v − ½ g h` (see `Particles::push`), which makes free fall exact. The
-            // frame a step earlier, for the first frame's energy, is the motion run
-            // backwards: `x − v dt + ½ g dt²`, turned back by `ω dt`.
+            // `v − ½ g h` (see `Particles::push`), which makes free fall exact.
             let h = dt / rigid_frames::substeps(s) as f32;
             if movable {
                 bone.lin_vel -= Vec3A::from(g * (0.5 * h));
-                let start = Vec3::from(bone.com) - desc.linear_velocity * dt + g * (0.5 * dt * dt);
-                let turn = Quat::from_scaled_axis(-desc.angular_velocity * dt);
-                self.frame_starts
-                    .push((start, (turn * bone.rot).normalize()));
-            } else {
-                self.frame_starts.push((Vec3::from(bone.com), bone.rot));
             }
             return Ok(bone);
         }
@@ -676,14 +663,18 @@ impl Method for ParticleWorld {
                 });
             }
         }
-        for m in &self.contacts.manifolds {
-            for c in &self.contacts.points[m.range()] {
+        let (manifolds, points) = (&self.contacts.manifolds, &self.contacts.points);
+        for (m, run) in manifolds
+            .iter()
+            .zip(contacts::ranges(manifolds, points.len()))
+        {
+            for c in &points[run] {
                 let pa = self.bones[m.a()].world(c.ra);
                 let pb = bone::side_world(&self.bones, m.b(), c.rb);
                 out.contacts.push(ContactInstance {
                     point: Vec3::from(pa),
-                    normal: Vec3::from(m.n),
-                    depth: (pa - pb).dot(m.n),
+                    normal: Vec3::from(m.n()),
+                    depth: (pa - pb).dot(m.n()),
                 });
             }
         }
@@ -819,7 +810,6 @@ impl Method for ParticleWorld {
     fn drop_by_owner(self: Box<Self>, dropped: &mut dyn FnMut(&'static str)) {
         let ParticleWorld {
             particles,
-            frame_starts,
             bones,
             kinds,
             joints,
@@ -843,8 +833,8 @@ impl Method for ParticleWorld {
         dropped("contact points");
         drop((pairs, manifolds));
         dropped("contact pairs");
-        drop((particles, frame_starts));
-        dropped("particles, frame starts");
+        drop(particles);
+        dropped("particles");
         drop(paper);
         dropped("paper: sticks, limits");
         if let Some(st) = xpbd {

@@ -29,7 +29,7 @@ use super::bone::{Aim, Bone, advance_moving};
 use super::bone_kinds::BoneKinds;
 use super::contacts::{
     BONES_PER_TASK, ContactPoint, ContactSet, Manifold, broad_phase_on, give_back_room,
-    ground_pair, ground_plane, point_runs, reaches_ground, shape_pair,
+    ground_pair, ground_plane, point_runs, range, ranges, reaches_ground, shape_pair,
 };
 use super::friction::{
     BLOCK, PushOut, point_velocity, solve_friction, solve_normal, solve_normals, solve_velocities,
@@ -222,36 +222,35 @@ fn narrow_phase<T: Sync>(
     }
 }
 
-/// Records each bone's frame at the start of the frame, for the energy metric's
-/// `(x(t) − x(t−dt))/dt` (`measure`).
-fn record_frame_starts(w: &mut ParticleWorld) {
-    w.frame_starts.clear();
-    w.frame_starts.par_extend(
-        w.bones
-            .par_iter()
-            .with_min_len(BONES_PER_TASK)
-            .map(|b| (Vec3::from(b.com), b.rot)),
-    );
+/// Each bone's frame (origin, orientation) at the start of the frame, by bone: what
+/// the frame's detections measure an old overlap's push-out allowance from
+/// ([`overlaps_at_frame_start`]). Read only within the frame, so the step holds it
+/// and a world between steps does not (32 B a bone).
+fn frame_starts(w: &ParticleWorld) -> Vec<(Vec3, Quat)> {
+    w.bones
+        .par_iter()
+        .with_min_len(BONES_PER_TASK)
+        .map(|b| (Vec3::from(b.com), b.rot))
+        .collect()
 }
 
 /// Each contact point's overlap where its bones stood as the frame began
-/// (`ContactPoint::frame_overlap`, from [`record_frame_starts`]): the push-out
-/// allowance of an overlap is measured from there (`friction::normal_target`, with
-/// the frame's substeps so far, [`PushOut`]).
-fn overlaps_at_frame_start(w: &mut ParticleWorld) {
-    let starts = &w.frame_starts;
+/// (`ContactPoint::frame_overlap`, from the frame's `starts`, [`frame_starts`]): the
+/// push-out allowance of an overlap is measured from there (`friction::normal_target`,
+/// with the frame's substeps so far, [`PushOut`]).
+fn overlaps_at_frame_start(w: &mut ParticleWorld, starts: &[(Vec3, Quat)]) {
     let at_start = |i: usize, local: Vec3| {
         let (com, rot) = starts[i];
         Vec3A::from(com) + rot * Vec3A::from(local)
     };
     let (manifolds, points) = (&w.contacts.manifolds, &mut w.contacts.points);
-    for m in manifolds {
-        for c in &mut points[m.range()] {
+    for (m, run) in manifolds.iter().zip(ranges(manifolds, points.len())) {
+        for c in &mut points[run] {
             let pb = match m.b() {
                 Some(j) => at_start(j, c.rb),
                 None => Vec3A::from(c.rb),
             };
-            c.frame_overlap = (at_start(m.a(), c.ra) - pb).dot(m.n);
+            c.frame_overlap = (at_start(m.a(), c.ra) - pb).dot(m.n());
         }
     }
 }
@@ -328,14 +327,18 @@ fn contact_pass(
         }
         let group = &manifolds[k..end];
         let mut solves: [Option<ManifoldSolve>; SIDE_BY_SIDE] = Default::default();
-        let runs = point_runs(group, &mut points[group[0].start as usize..]);
+        let group_points = group[0].start as usize..range(manifolds, end - 1, points.len()).end;
+        let runs = point_runs(group, &mut points[group_points]);
         for ((slot, m), run) in solves.iter_mut().zip(group).zip(runs) {
             *slot = Some(ManifoldSolve::new(m, run));
         }
         for s in solves.iter_mut().flatten() {
             s.normals(bones, push);
         }
-        let longest = group.iter().map(|m| m.range().len()).max().unwrap_or(0);
+        let longest = (solves.iter().flatten())
+            .map(|s| s.points.len())
+            .max()
+            .unwrap_or(0);
         for i in 0..longest {
             for s in solves.iter_mut().flatten() {
                 s.friction(bones, i, push);
@@ -388,7 +391,7 @@ struct ManifoldSolve<'a> {
 
 impl<'a> ManifoldSolve<'a> {
     fn new(m: &'a Manifold, points: &'a mut [ContactPoint]) -> Self {
-        let spent = points.iter().map(|c| c.lambda_t).sum();
+        let spent = points.iter().map(|c| c.lambda_tv).sum();
         ManifoldSolve {
             m,
             points,
@@ -494,6 +497,28 @@ pub(crate) fn substeps(s: &crate::scene::Settings) -> u32 {
 
 /// Runs the frame's substeps `subs` (counted from 0) of length `h` on a part.
 pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings) {
+    // Each point's relative normal velocity before a substep's solve (m/s, > 0
+    // approaching), by point, for restitution: measured on the manifolds that bounce at
+    // all, and only held when some does. With `e = 0` the velocity pass's target is zero
+    // whatever the approach (every shipped scene), and evaluating it (four rotations
+    // and two cross products a point, most of a moving pile's points speculative ones
+    // never pressed) would be wasted.
+    let mut approach = if p.manifolds.iter().any(|m| m.e > 0.0) {
+        vec![0.0; p.points.len()]
+    } else {
+        Vec::new()
+    };
+    substeps_with(p, subs, h, s, &mut approach);
+}
+
+/// [`run_substeps`] with its points' approach speeds held in `approach` (by point, or
+/// empty when no manifold bounces). Out of line, the substeps' loop owns no array: with
+/// the array a local of the loop's function, LLVM keeps the joint lanes' gather
+/// (`SideLanes::gather`) and a block's levers (`BlockSide::new`) as calls that copy
+/// their results out, 0.2 % more instructions in `pile_frames 30 1 60 --no-sleep --solver
+/// rigid-frames` (callgrind).
+#[inline(never)]
+fn substeps_with(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings, approach: &mut [f32]) {
     // How far an old overlap may be pushed out in a substep (`friction::solve_normals`).
     let push_out = s.max_push_out_speed * h;
     for sub in subs {
@@ -507,13 +532,9 @@ pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings)
             b.dcom = Vec3A::ZERO;
         }
         advance_moving(p.bones, h, s.gravity);
-        // A new substep for every contact point; the relative normal velocity before
-        // the solve for restitution, on manifolds that bounce at all: with `e = 0` the
-        // velocity pass's target is zero whatever the approach (every shipped scene),
-        // and evaluating it (four rotations and two cross products a point, most of a
-        // moving pile's points speculative ones never pressed) was wasted.
-        for m in p.manifolds {
-            for c in &mut p.points[m.range()] {
+        // A new substep for every contact point, and the approach of those that bounce.
+        for (m, run) in p.manifolds.iter().zip(ranges(p.manifolds, p.points.len())) {
+            for (i, c) in run.clone().zip(&mut p.points[run]) {
                 if c.lambda_n == 0.0 {
                     // Not pressed in the last substep: a new run of touching ones may
                     // start here (`ContactPoint::touched_at`).
@@ -521,17 +542,15 @@ pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings)
                 }
                 roll_contact(p.bones, p.kinds, m, c);
                 c.lambda_n = 0.0;
-                c.lambda_t = 0.0;
-                c.lambda_v = 0.0;
+                c.lambda_tv = 0.0;
                 c.left_before = c.left;
-                c.vn_before = if m.e > 0.0 {
+                if m.e > 0.0 {
                     let pa = p.bones[m.a()].world(c.ra);
                     let pb = super::bone::side_world(p.bones, m.b(), c.rb);
-                    (point_velocity(p.bones, Some(m.a()), pa) - point_velocity(p.bones, m.b(), pb))
-                        .dot(m.n)
-                } else {
-                    0.0
-                };
+                    let v = point_velocity(p.bones, Some(m.a()), pa)
+                        - point_velocity(p.bones, m.b(), pb);
+                    approach[i] = v.dot(m.n());
+                }
             }
         }
         // 3. constraints: contacts then joints, `PASSES` times (the joints' anchors aimed
@@ -555,16 +574,17 @@ pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings)
             b.com += b.dcom;
             b.dcom = Vec3A::ZERO;
         }
-        // 5. velocity pass (contact points are relative to the updated frames)
+        // 5. velocity pass (contact points are relative to the updated frames), whose
+        // normal impulses `λ_v` start from zero where the passes' friction `λ_t` was
+        // (`ContactPoint::lambda_tv`)
+        for c in p.points.iter_mut() {
+            c.lambda_tv = 0.0;
+        }
         for _ in 0..VELOCITY_PASSES {
-            for m in p.manifolds {
-                solve_velocities(
-                    p.bones,
-                    m,
-                    &mut p.points[m.range()],
-                    h,
-                    s.restitution_threshold,
-                );
+            for (m, run) in p.manifolds.iter().zip(ranges(p.manifolds, p.points.len())) {
+                let points = &mut p.points[run.clone()];
+                let approach = approach.get(run).unwrap_or(&[]);
+                solve_velocities(p.bones, m, points, approach, h, s.restitution_threshold);
             }
         }
         // Rolling resistance, on the substep's net normal impulses (`rolling`).
@@ -598,15 +618,15 @@ pub(super) fn run_substeps(p: &mut Part, subs: Range<u32>, h: f32, s: &Settings)
 /// points threw the capsule human at 19 m/s (1/20 s frames of 1000 substeps).
 fn roll_contact(bones: &[Bone], kinds: &BoneKinds, m: &Manifold, c: &mut ContactPoint) {
     let start = |b: &Bone, local: Vec3| b.rot * Vec3A::from(local);
-    let mut jump = Vec3A::ZERO;
+    let (n, mut jump) = (m.n(), Vec3A::ZERO);
     if m.b().is_none()
-        && let Some(ra) = super::bone::rolled_point(&bones[m.a()], kinds, c.ra, m.n)
+        && let Some(ra) = super::bone::rolled_point(&bones[m.a()], kinds, c.ra, n)
     {
         jump += start(&bones[m.a()], ra) - start(&bones[m.a()], c.ra);
         c.ra = ra;
     }
     if let Some(t) = c.touched_at() {
-        c.set_touched_at(Some(t + Vec3::from(jump - m.n * jump.dot(m.n))));
+        c.set_touched_at(Some(t + Vec3::from(jump - n * jump.dot(n))));
     }
 }
 
@@ -672,7 +692,6 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     // A world at rest (every bone fixed or asleep; a grab wakes its bone when it is set)
     // has nothing to detect or solve: its substeps would leave every bone where it is.
     if w.grab.is_none() && w.bones.iter().all(|b| b.is_static()) {
-        record_frame_starts(w);
         sleeping::advance_at_rest(&mut w.bones, w.settings.timestep);
         clock.lap(&mut times, "sleep");
         clock.finish(&mut times);
@@ -684,7 +703,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
     let n_sub = substeps(&s);
     let h = dt / n_sub as f32;
     close_start_slack(w, h);
-    record_frame_starts(w);
+    let starts = frame_starts(w);
     let every = n_sub.div_ceil(DETECTIONS_PER_FRAME);
     let threads = rayon::current_num_threads();
     // The broad phase's trees and candidate pairs, from the first detection's boxes
@@ -705,7 +724,7 @@ pub(crate) fn step(w: &mut ParticleWorld) {
             tree.forget();
             detect(w, &mut tree, rest_of_frame);
         }
-        overlaps_at_frame_start(w);
+        overlaps_at_frame_start(w, &starts);
         clock.lap(&mut times, "detection");
         let count = every.min(n_sub - sub);
         match islands::Plan::new(w, threads) {

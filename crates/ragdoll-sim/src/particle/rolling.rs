@@ -16,7 +16,7 @@
 //! then needs no accumulated impulse of its own between passes.
 
 use super::bone::{Bone, Side};
-use super::contacts::{ContactPoint, Manifold};
+use super::contacts::{ContactPoint, Manifold, ranges};
 use glam::{Mat3, Vec3, Vec3A};
 
 /// The angular impulse on `b` (and its opposite on `a`) that stops a relative spin
@@ -61,13 +61,13 @@ fn spin_of(bones: &[Bone], s: Side) -> Vec3 {
 /// `manifolds` and their `points` after the velocity passes: each point's net normal
 /// impulse is `λ_n / h + λ_v` (`friction::solve_velocities`).
 pub(crate) fn solve(bones: &mut [Bone], manifolds: &[Manifold], points: &[ContactPoint], h: f32) {
-    for m in manifolds {
+    for (m, run) in manifolds.iter().zip(ranges(manifolds, points.len())) {
         if m.roll <= 0.0 {
             continue;
         }
-        let normal: f32 = points[m.range()]
+        let normal: f32 = points[run]
             .iter()
-            .map(|c| c.lambda_n / h + c.lambda_v)
+            .map(|c| c.lambda_n / h + c.lambda_tv)
             .sum();
         // No normal impulse, no rolling resistance (`impulse`'s cap is zero): most
         // manifolds of a busy pile are speculative ones no pass pressed, and forming
