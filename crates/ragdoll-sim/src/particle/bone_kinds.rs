@@ -262,19 +262,8 @@ mod tests {
     /// particles makes; each placement holds the rest corners its bone was built with.
     #[test]
     fn paper_bones_share_kinds() {
-        use super::super::{ParticleSolver, ParticleWorld};
-        use crate::scene::af::{AfOptions, parse};
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/pile.af");
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
-        let opts = AfOptions {
-            count: Some(2),
-            ..AfOptions::default()
-        };
-        let scene = parse(&text, &path, &opts)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
-        let w = ParticleWorld::new(&scene, ParticleSolver::Paper).unwrap_or_else(|e| panic!("{e}"));
+        use super::super::ParticleSolver;
+        let w = super::super::solver_scene_world("pile.af", Some(2), ParticleSolver::Paper);
         assert_eq!(w.bones.len(), 32);
         let (first, second) = w.bones.split_at(16);
         for (i, (a, b)) in first.iter().zip(second).enumerate() {

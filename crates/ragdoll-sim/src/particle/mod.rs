@@ -440,17 +440,38 @@ fn broad_all(bones: &[Bone], kinds: &BoneKinds, margin: &[f32], out: &mut Vec<(u
 /// tests.
 #[cfg(test)]
 pub(crate) fn scene_world(file: &str, count: Option<u32>) -> ParticleWorld {
+    solver_scene_world(file, count, ParticleSolver::RigidFrames)
+}
+
+/// [`scene_world`] with the particle solver `solver`.
+#[cfg(test)]
+pub(crate) fn solver_scene_world(
+    file: &str,
+    count: Option<u32>,
+    solver: ParticleSolver,
+) -> ParticleWorld {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../assets/scenes")
         .join(file);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
-    text_world(&text, &path, count)
+    solver_text_world(&text, &path, count, solver)
 }
 
 /// The improved solver's world of the `.af` text `text` (`path` names it and anchors
 /// its relative paths), `count` figures where the scene repeats one; panics on error.
 #[cfg(test)]
 pub(crate) fn text_world(text: &str, path: &std::path::Path, count: Option<u32>) -> ParticleWorld {
+    solver_text_world(text, path, count, ParticleSolver::RigidFrames)
+}
+
+/// [`text_world`] with the particle solver `solver`.
+#[cfg(test)]
+fn solver_text_world(
+    text: &str,
+    path: &std::path::Path,
+    count: Option<u32>,
+    solver: ParticleSolver,
+) -> ParticleWorld {
     use crate::scene::af::{AfOptions, parse};
     let opts = AfOptions {
         count,
@@ -459,7 +480,7 @@ pub(crate) fn text_world(text: &str, path: &std::path::Path, count: Option<u32>)
     let scene = parse(text, path, &opts)
         .unwrap_or_else(|e| panic!("{e}"))
         .desc;
-    ParticleWorld::new(&scene, ParticleSolver::RigidFrames).unwrap_or_else(|e| panic!("{e}"))
+    ParticleWorld::new(&scene, solver).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Numbers in [0, 1] from a xorshift generator seeded with `seed`: the same every run

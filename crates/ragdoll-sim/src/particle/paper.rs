@@ -794,7 +794,7 @@ pub(crate) fn step(w: &mut ParticleWorld, st: &PaperState) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ParticleSolver, ParticleWorld, uniform};
+    use super::super::{ParticleSolver, uniform};
     use super::*;
 
     /// One relaxation pass ([`PaperState::relax_sticks`]) gives the bits of the sticks
@@ -803,19 +803,7 @@ mod tests {
     /// particles as satellites) whose particles are scattered at random.
     #[test]
     fn relaxation_keeps_the_order_of_the_build() {
-        use crate::scene::af::{AfOptions, parse};
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/scenes/pile.af");
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
-        let opts = AfOptions {
-            count: Some(2),
-            ..AfOptions::default()
-        };
-        let scene = parse(&text, &path, &opts)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
-        let mut w =
-            ParticleWorld::new(&scene, ParticleSolver::Paper).unwrap_or_else(|e| panic!("{e}"));
+        let mut w = super::super::solver_scene_world("pile.af", Some(2), ParticleSolver::Paper);
         let st = w.paper.take().unwrap_or_else(|| panic!("no paper state"));
         assert!(!st.satellites.is_empty(), "no satellite sticks to order");
         let mut next = uniform(0x0bad_cafe);
